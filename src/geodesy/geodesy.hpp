@@ -1,0 +1,61 @@
+// geodesy/geodesy: WGS84 geodetic coordinates, the local ENU world frame, UTM.
+//
+// Contract: heights are WGS84 ellipsoidal heights in metres everywhere (telemetry, DTM,
+// output); a deployment whose DTM is referred to a geoid converts it once, offline.
+// The world frame is a local East-North-Up tangent frame at a configured origin
+// (GeographicLib::LocalCartesian): x east, y north, z up, metres. LocalFrame is cheap to
+// copy, never allocates, and is safe to share read-only between threads.
+#pragma once
+
+#include <optional>
+
+#include <Eigen/Core>
+#include <GeographicLib/LocalCartesian.hpp>
+
+namespace vp::geodesy {
+
+struct GeodeticPoint {
+  double latitudeDeg = 0.0;   // WGS84, positive north
+  double longitudeDeg = 0.0;  // WGS84, positive east
+  double heightM = 0.0;       // ellipsoidal height
+};
+
+struct UtmPoint {
+  int zone = 0;             // 1..60 (0 = UPS, polar)
+  bool northp = true;       // northern hemisphere
+  double eastingM = 0.0;
+  double northingM = 0.0;
+  double heightM = 0.0;     // ellipsoidal height, carried along
+};
+
+// Returns true when the point is a finite, valid WGS84 position.
+bool isValid(const GeodeticPoint& point);
+
+class LocalFrame {
+ public:
+  LocalFrame() = default;
+  explicit LocalFrame(const GeodeticPoint& origin);
+
+  const GeodeticPoint& origin() const { return origin_; }
+
+  Eigen::Vector3d toEnu(const GeodeticPoint& point) const;
+  GeodeticPoint toGeodetic(const Eigen::Vector3d& enu) const;
+
+  // toEnu plus the rotation that maps vectors expressed in the ENU frame *at the point*
+  // into the world (origin) ENU frame. Identity at the origin; differs by the meridian
+  // convergence and the Earth's curvature away from it (about 0.009 deg per km).
+  Eigen::Vector3d toEnu(const GeodeticPoint& point, Eigen::Matrix3d* localToWorld) const;
+
+ private:
+  GeodeticPoint origin_{};
+  GeographicLib::LocalCartesian cartesian_{};
+};
+
+// UTM in the zone of the point (or a forced zone, e.g. the DTM's zone).
+UtmPoint toUtm(const GeodeticPoint& point, std::optional<int> forcedZone = std::nullopt);
+GeodeticPoint fromUtm(const UtmPoint& point);
+
+// Azimuth (deg, clockwise from true north, [0, 360)) of the geodesic from a to b.
+double azimuthDeg(const GeodeticPoint& a, const GeodeticPoint& b);
+
+}  // namespace vp::geodesy

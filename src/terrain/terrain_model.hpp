@@ -1,0 +1,101 @@
+// terrain/terrain_model: the digital terrain model (DTM) and rays meeting it.
+//
+// Contract: a TerrainModel is a regular grid of float32 ellipsoidal heights (m) whose
+// sample centres are placed by an affine geotransform in a horizontal CRS (WGS84
+// geographic degrees, or a UTM zone in metres). Queries never invent heights: a point
+// outside the grid or touching a NoData sample returns a status. Heights are bilinear
+// between the four surrounding sample centres. Ray intersection works in the world ENU
+// frame of a LocalFrame: it clips the ray to the slab between the DTM's lowest and highest
+// heights, marches in steps no longer than half a cell, and refines a sign change by
+// bisection to better than 0.1 mm, so steep slopes and grazing rays are handled and the
+// first (nearest) crossing is returned. The grid is owned (moved in at init) and never
+// reallocated; queries are const, allocation-free and thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/expected.hpp"
+#include "geodesy/geodesy.hpp"
+
+namespace vp::terrain {
+
+enum class HorizontalCrs { Wgs84Geographic, Utm };
+
+struct CrsSpec {
+  HorizontalCrs kind = HorizontalCrs::Utm;
+  int utmZone = 0;       // 1..60, for Utm
+  bool utmNorth = true;  // hemisphere, for Utm
+};
+// "wgs84" or "utm:<zone><N|S>" (e.g. "utm:16N"); nullopt when malformed.
+std::optional<CrsSpec> crsFromString(const std::string& text);
+std::string toString(const CrsSpec& crs);
+
+// Maps sample (col, row) centres to CRS coordinates:
+//   X = x0 + col * dxCol + row * dxRow,  Y = y0 + col * dyCol + row * dyRow.
+// For geographic grids X is longitude (deg) and Y latitude (deg); for UTM, easting and
+// northing (m). (col, row) = (0, 0) is the centre of the first stored sample.
+struct GeoTransform {
+  double x0 = 0.0;
+  double dxCol = 1.0;
+  double dxRow = 0.0;
+  double y0 = 0.0;
+  double dyCol = 0.0;
+  double dyRow = -1.0;
+};
+
+struct TerrainGrid {
+  int cols = 0;
+  int rows = 0;
+  std::vector<float> heightsM;  // row-major, rows * cols
+  GeoTransform transform{};
+  CrsSpec crs{};
+  std::optional<float> noData;  // samples equal to this (or NaN) are missing
+};
+
+enum class TerrainError {
+  OutsideDtm,      // the point (or the whole ray) lies outside the grid
+  NoData,          // a sample needed for interpolation is NoData
+  NoIntersection,  // the ray points away from the terrain, or leaves the grid first
+};
+const char* toString(TerrainError error);
+
+class TerrainModel {
+ public:
+  TerrainModel() = default;
+
+  // Takes ownership of the grid; validates sizes and the geotransform (invertible).
+  bool init(TerrainGrid grid, const geodesy::LocalFrame& frame, std::string* why = nullptr);
+
+  const TerrainGrid& grid() const { return grid_; }
+  float minHeightM() const { return minHeightM_; }
+  float maxHeightM() const { return maxHeightM_; }
+
+  // Bilinear ellipsoidal height at a WGS84 position.
+  Expected<double, TerrainError> heightAt(double latitudeDeg, double longitudeDeg) const;
+  // Height at the geodetic position of an ENU point (its own z is ignored).
+  Expected<double, TerrainError> heightAtEnu(const Eigen::Vector3d& enu) const;
+
+  // Ground point (ENU) of the given x, y: the point whose geodetic position is that of
+  // (x, y, z) with z adjusted until it lies on the DTM. Used to place simulated objects.
+  Expected<Eigen::Vector3d, TerrainError> groundPointEnu(double xEastM, double yNorthM) const;
+
+  // First intersection of the ray origin + t * direction (t > 0, ENU, direction need not
+  // be unit length) with the terrain.
+  Expected<Eigen::Vector3d, TerrainError> intersectRay(const Eigen::Vector3d& originEnu,
+                                                       const Eigen::Vector3d& directionEnu) const;
+
+ private:
+  TerrainGrid grid_{};
+  geodesy::LocalFrame frame_{};
+  GeoTransform inverse_{};  // CRS -> (col, row)
+  float minHeightM_ = 0.0F;
+  float maxHeightM_ = 0.0F;
+  double cellSizeM_ = 1.0;  // approximate ground size of one cell, m
+};
+
+}  // namespace vp::terrain
