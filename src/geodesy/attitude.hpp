@@ -28,7 +28,7 @@ struct EulerAnglesDeg {
 enum class GimbalReference { Body, Earth };
 
 struct CameraMount {
-  EulerAnglesDeg bodyToBase{};    // fixed mount rotation, body FRD -> gimbal base FRD
+  EulerAnglesDeg bodyToBase{};               // fixed mount rotation, body FRD -> gimbal base FRD
   Eigen::Vector3d leverArmM{0.0, 0.0, 0.0};  // camera centre in the body frame, m (FRD)
 };
 
@@ -42,7 +42,7 @@ Eigen::Matrix3d rotationFromEuler(const EulerAnglesDeg& angles);
 EulerAnglesDeg eulerFromRotation(const Eigen::Matrix3d& rotation);
 
 // Fixed frame changes.
-Eigen::Matrix3d enuFromNed();        // vectors NED -> ENU (its own inverse)
+Eigen::Matrix3d enuFromNed();         // vectors NED -> ENU (its own inverse)
 Eigen::Matrix3d headFrdFromCamera();  // vectors OpenCV camera -> camera head FRD
 
 // Orientation of the OpenCV camera frame in the local ENU frame at the drone's position:

@@ -21,11 +21,11 @@ struct GeodeticPoint {
 };
 
 struct UtmPoint {
-  int zone = 0;             // 1..60 (0 = UPS, polar)
-  bool northp = true;       // northern hemisphere
+  int zone = 0;        // 1..60 (0 = UPS, polar)
+  bool northp = true;  // northern hemisphere
   double eastingM = 0.0;
   double northingM = 0.0;
-  double heightM = 0.0;     // ellipsoidal height, carried along
+  double heightM = 0.0;  // ellipsoidal height, carried along
 };
 
 // Returns true when the point is a finite, valid WGS84 position.
@@ -50,6 +50,9 @@ class LocalFrame {
   GeodeticPoint origin_{};
   GeographicLib::LocalCartesian cartesian_{};
 };
+
+// Rotation whose columns are the east, north and up unit vectors at the point in ECEF.
+Eigen::Matrix3d enuToEcef(const GeodeticPoint& point);
 
 // UTM in the zone of the point (or a forced zone, e.g. the DTM's zone).
 UtmPoint toUtm(const GeodeticPoint& point, std::optional<int> forcedZone = std::nullopt);
