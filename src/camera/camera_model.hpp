@@ -46,9 +46,9 @@ const char* toString(LensModel model);
 std::optional<LensModel> lensModelFromString(const std::string& name);
 
 enum class CameraError {
-  PointBehindCamera,   // ray with z <= 0
-  OutsideValidField,   // beyond the lens model's valid radius
-  NoConvergence,       // iterative undistortion did not converge
+  PointBehindCamera,  // ray with z <= 0
+  OutsideValidField,  // beyond the lens model's valid radius
+  NoConvergence,      // iterative undistortion did not converge
 };
 const char* toString(CameraError error);
 
@@ -58,8 +58,7 @@ class CameraModel {
 
   // Validates and stores the model. On failure returns false and fills *why (if given)
   // with a message naming the offending value.
-  bool init(const Intrinsics& intrinsics, const Distortion& distortion,
-            std::string* why = nullptr);
+  bool init(const Intrinsics& intrinsics, const Distortion& distortion, std::string* why = nullptr);
 
   const Intrinsics& intrinsics() const { return intrinsics_; }
   const Distortion& distortion() const { return distortion_; }
@@ -78,8 +77,16 @@ class CameraModel {
   // Point or direction in the camera frame -> distorted pixel (may lie outside the image).
   Expected<Eigen::Vector2d, CameraError> projectToPixel(const Eigen::Vector3d& pointCamera) const;
 
-  // True when the pixel lies inside the image (with an optional margin, px).
+  // True when the pixel lies inside the image (with an optional margin, px). The image
+  // covers [-0.5, width - 0.5) x [-0.5, height - 0.5): the outer edges of the border pixels.
   bool inImage(const Eigen::Vector2d& pixel, double marginPx = 0.0) const;
+
+  // Valid field of the lens model (normalised radii): ideal points beyond maxIdealRadius()
+  // and distorted points beyond maxDistortedRadius() are OutsideValidField. For
+  // Brown-Conrady it ends where the radial polynomial stops increasing (fold-over); for
+  // the spherical model just short of 90 deg off-axis; the pinhole has none (infinity).
+  double maxIdealRadius() const { return maxIdealRadius_; }
+  double maxDistortedRadius() const { return maxDistortedRadius_; }
 
  private:
   Intrinsics intrinsics_{};
