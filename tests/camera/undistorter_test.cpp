@@ -1,6 +1,5 @@
 #include "camera/undistorter.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -290,40 +289,6 @@ TEST(Undistorter, InitValidatesOutput) {
   EXPECT_NE(why.find("fy_px"), std::string::npos) << why;
   EXPECT_FALSE(undistorter.init(CameraModel{}, &why));
   EXPECT_NE(why.find("not initialised"), std::string::npos) << why;
-}
-
-TEST(Undistorter, FullResolutionFrameTime) {
-  Intrinsics k;
-  k.widthPx = 2592;
-  k.heightPx = 2048;
-  k.fxPx = 2900.0;
-  k.fyPx = 2904.0;
-  k.cxPx = 1299.3;
-  k.cyPx = 1021.8;
-  Distortion d;
-  d.model = LensModel::BrownConrady;
-  d.k1 = -0.12;
-  d.k2 = 0.08;
-  d.p1 = 1e-4;
-  d.p2 = -2e-4;
-  d.k3 = -0.01;
-  CameraModel camera;
-  ASSERT_TRUE(camera.init(k, d));
-  Undistorter undistorter;
-  ASSERT_TRUE(undistorter.init(camera));
-  cv::Mat src(k.heightPx, k.widthPx, CV_8UC1, cv::Scalar(80));
-  cv::Mat dst(undistorter.outputSize(), CV_8UC1);
-  ASSERT_TRUE(undistorter.apply(src, dst));  // warm-up
-  const auto start = std::chrono::steady_clock::now();
-  constexpr int kFrames = 5;
-  for (int i = 0; i < kFrames; ++i) {
-    ASSERT_TRUE(undistorter.apply(src, dst));
-  }
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() /
-      kFrames;
-  std::printf("[ timing ] 2592x2048 mono remap: %.2f ms/frame (informational)\n", ms);
-  EXPECT_EQ(dst.at<uint8_t>(1024, 1296), 80);
 }
 
 }  // namespace
