@@ -85,7 +85,12 @@ class TerrainModel {
   Expected<Eigen::Vector3d, TerrainError> groundPointEnu(double xEastM, double yNorthM) const;
 
   // First intersection of the ray origin + t * direction (t > 0, ENU, direction need not
-  // be unit length) with the terrain.
+  // be unit length) with the terrain. Errors: OutsideDtm when the ray never passes over the
+  // grid, or enters it from the side already below the surface (the crossing is off the
+  // grid); NoData when the crossing would lie where samples are missing; NoIntersection
+  // when the ray stays above the terrain until it leaves the grid or rises out of the
+  // height range, when the origin is below the terrain, or for a zero direction. Crossings
+  // of slivers shorter than half a cell (a grazing ray nicking a crest) may be missed.
   Expected<Eigen::Vector3d, TerrainError> intersectRay(const Eigen::Vector3d& originEnu,
                                                        const Eigen::Vector3d& directionEnu) const;
 
@@ -96,6 +101,18 @@ class TerrainModel {
   float minHeightM_ = 0.0F;
   float maxHeightM_ = 0.0F;
   double cellSizeM_ = 1.0;  // approximate ground size of one cell, m
+  // Geographic footprint (with a margin): latitude range, and longitude range relative to
+  // lonRefDeg_ (UTM zone central meridian, or the grid centre), so far points are rejected
+  // before any projection and grids across the antimeridian work.
+  double lonRefDeg_ = 0.0;
+  double latMinDeg_ = 0.0;
+  double latMaxDeg_ = 0.0;
+  double dLonMinDeg_ = 0.0;
+  double dLonMaxDeg_ = 0.0;
+  // ENU box holding the grid between its lowest and highest heights (curvature margins
+  // included): rays are clipped to it before marching.
+  Eigen::Vector3d boxMin_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d boxMax_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace vp::terrain
