@@ -1,1 +1,480 @@
-// placeholder: filled by the module's implementation
+// config/config: YAML text -> AppConfig.
+//
+// Every key goes through MapReader, which knows the key path of the section it reads (for
+// messages) and records which keys were read, so that whatever is left over becomes an
+// "unknown key" warning. Reading one key is then one line that states its type, range and
+// default, which is what docs/configuration.md documents; keep the two in step.
+#include "config/config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+#include <string_view>
+#include <system_error>
+#include <utility>
+
+namespace vp::config {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Passed as the default of a key the file must give.
+constexpr std::nullopt_t kRequired = std::nullopt;
+
+// Shortest text that reads back as the same double ("0.1", "-90", "16384").
+std::string formatNumber(double value) {
+  char buffer[32];
+  const auto result = std::to_chars(std::begin(buffer), std::end(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+// Accepted interval of a numeric key; bounds are inclusive unless marked open.
+struct Range {
+  double lo = -kInf;
+  double hi = kInf;
+  bool loOpen = false;
+
+  static Range closed(double low, double high) { return Range{low, high, false}; }
+  static Range positive() { return Range{0.0, kInf, true}; }
+
+  bool contains(double value) const { return (loOpen ? value > lo : value >= lo) && value <= hi; }
+  std::string describe() const {
+    if (std::isinf(hi)) {
+      return (loOpen ? "must be > " : "must be >= ") + formatNumber(lo);
+    }
+    return std::string("must be in ") + (loOpen ? "(" : "[") + formatNumber(lo) + ", " +
+           formatNumber(hi) + "]";
+  }
+};
+
+// Where messages go: errors throw ConfigError, remarks are collected as warnings. Both
+// start with the source name so that a log line alone says which file is meant.
+class Diagnostics {
+ public:
+  Diagnostics(std::string sourceName, std::vector<std::string>* warnings)
+      : source_(std::move(sourceName)), warnings_(warnings) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& problem) const {
+    throw ConfigError(source_ + ": " + (path.empty() ? problem : path + ": " + problem));
+  }
+  void warn(const std::string& remark) const { warnings_->push_back(source_ + ": " + remark); }
+
+ private:
+  std::string source_;
+  std::vector<std::string>* warnings_;
+};
+
+// What a node is, for "expected X, got Y" messages.
+std::string describe(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Map:
+      return "a map";
+    case YAML::NodeType::Sequence:
+      return "a sequence of " + std::to_string(node.size()) + " element(s)";
+    case YAML::NodeType::Scalar:
+      // yaml-cpp tags quoted scalars "!": they are strings even when they look like numbers.
+      return (node.Tag() == "!" ? "the quoted string '" : "'") + node.Scalar() + "'";
+    case YAML::NodeType::Null:
+    case YAML::NodeType::Undefined:
+      break;
+  }
+  return "nothing (null)";
+}
+
+// A plain YAML scalar as a number. YAML spells infinity and NaN ".inf" and ".nan"; they are
+// parsed (and then rejected as not finite) rather than reported as "not a number".
+std::optional<double> parseNumber(std::string_view text) {
+  if (text.size() > 1 && text.front() == '+' && text[1] != '-') {
+    text.remove_prefix(1);  // from_chars does not take an explicit '+'
+  }
+  const bool negative = !text.empty() && text.front() == '-';
+  const std::string_view magnitude = negative ? text.substr(1) : text;
+  for (const std::string_view inf : {".inf", ".Inf", ".INF"}) {
+    if (magnitude == inf) {
+      return negative ? -kInf : kInf;
+    }
+  }
+  for (const std::string_view nan : {".nan", ".NaN", ".NAN"}) {
+    if (text == nan) {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+  double value = 0.0;
+  const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (result.ec != std::errc() || result.ptr != text.data() + text.size()) {
+    return std::nullopt;
+  }
+  return value;
+}
+
+// A finite number from a scalar node; `what` names the expected kind for the message.
+double readFinite(const YAML::Node& node, const std::string& path, const char* what,
+                  const Diagnostics& diag) {
+  const std::optional<double> value =
+      node.IsScalar() && node.Tag() != "!" ? parseNumber(node.Scalar()) : std::nullopt;
+  if (!value) {
+    diag.fail(path, std::string("expected ") + what + ", got " + describe(node));
+  }
+  if (!std::isfinite(*value)) {
+    diag.fail(path, "must be finite, got " + node.Scalar());
+  }
+  return *value;
+}
+
+double readNumber(const YAML::Node& node, const std::string& path, const Range& range,
+                  const Diagnostics& diag) {
+  const double value = readFinite(node, path, "a number", diag);
+  if (!range.contains(value)) {
+    diag.fail(path, range.describe() + ", got " + node.Scalar());
+  }
+  return value;
+}
+
+int readInteger(const YAML::Node& node, const std::string& path, const Range& range,
+                const Diagnostics& diag) {
+  const double value = readFinite(node, path, "an integer", diag);
+  if (value != std::floor(value)) {
+    diag.fail(path, "expected an integer, got " + describe(node));
+  }
+  if (!range.contains(value)) {
+    diag.fail(path, range.describe() + ", got " + node.Scalar());
+  }
+  return static_cast<int>(value);  // in range, so it fits
+}
+
+// A non-empty string; no key of the schema has a meaningful empty value.
+std::string readText(const YAML::Node& node, const std::string& path, const Diagnostics& diag) {
+  if (!node.IsScalar()) {
+    diag.fail(path, "expected a string, got " + describe(node));
+  }
+  if (node.Scalar().empty()) {
+    diag.fail(path, "must not be empty");
+  }
+  return node.Scalar();
+}
+
+// One YAML map of the file: typed getters by key, each marking the key as read.
+class MapReader {
+ public:
+  // A missing or null node reads as an empty map, so that an optional section that is
+  // absent, or present with all its keys commented out, gives the defaults.
+  MapReader(const YAML::Node& node, std::string path, const Diagnostics& diag)
+      : path_(std::move(path)), diag_(diag) {
+    if (!node.IsDefined() || node.IsNull()) {
+      return;
+    }
+    if (!node.IsMap()) {
+      diag_.fail(path_, "expected a map, got " + describe(node));
+    }
+    for (const auto& item : node) {
+      std::string key = item.first.Scalar();
+      // yaml-cpp keeps duplicate keys and returns the first; the author meant one of them.
+      if (find(key) != nullptr) {
+        diag_.fail(childPath(key), "duplicate key");
+      }
+      entries_.push_back(Entry{std::move(key), item.second, false});
+    }
+  }
+
+  // The getters take the default as their last argument; kRequired makes the key required.
+  double number(std::string_view key, const Range& range, std::optional<double> fallback) {
+    const YAML::Node* node = take(key, !fallback);
+    return node ? readNumber(*node, childPath(key), range, diag_) : *fallback;
+  }
+  int integer(std::string_view key, const Range& range, std::optional<int> fallback) {
+    const YAML::Node* node = take(key, !fallback);
+    return node ? readInteger(*node, childPath(key), range, diag_) : *fallback;
+  }
+  std::string text(std::string_view key, std::optional<std::string> fallback) {
+    const YAML::Node* node = take(key, !fallback);
+    return node ? readText(*node, childPath(key), diag_) : *fallback;
+  }
+  // A string mapped through parse (string -> std::optional<T>); `expected` lists the
+  // accepted spellings for the message when parse rejects the value.
+  template <class T, class Parse>
+  T choice(std::string_view key, Parse parse, std::string_view expected,
+           std::optional<T> fallback) {
+    const YAML::Node* node = take(key, !fallback);
+    if (node == nullptr) {
+      return *fallback;
+    }
+    const std::string value = readText(*node, childPath(key), diag_);
+    std::optional<T> parsed = parse(value);
+    if (!parsed) {
+      diag_.fail(childPath(key),
+                 "unknown value '" + value + "' (expected " + std::string(expected) + ")");
+    }
+    return *std::move(parsed);
+  }
+  // A sequence of exactly three numbers [x, y, z], each in range.
+  Eigen::Vector3d vector3(std::string_view key, const Range& range,
+                          std::optional<Eigen::Vector3d> fallback) {
+    const YAML::Node* node = take(key, !fallback);
+    if (node == nullptr) {
+      return *fallback;
+    }
+    const std::string path = childPath(key);
+    if (!node->IsSequence() || node->size() != 3) {
+      diag_.fail(path, "expected a sequence of 3 numbers [x, y, z], got " + describe(*node));
+    }
+    Eigen::Vector3d vector;
+    for (int i = 0; i < 3; ++i) {
+      vector[i] = readNumber((*node)[i], path + "[" + std::to_string(i) + "]", range, diag_);
+    }
+    return vector;
+  }
+  // A nested section; an optional one that is absent reads as empty (all defaults).
+  MapReader section(std::string_view key) { return sectionOf(key, take(key, false)); }
+  MapReader requiredSection(std::string_view key) { return sectionOf(key, take(key, true)); }
+
+  bool has(std::string_view key) const { return find(key) != nullptr; }
+  void warn(std::string_view key, const std::string& remark) const {
+    diag_.warn(childPath(key) + ": " + remark);
+  }
+  // Call once all keys of the section were read: the rest are unknown to the schema.
+  void warnUnknownKeys() const {
+    for (const Entry& entry : entries_) {
+      if (!entry.used) {
+        diag_.warn("unknown key '" + childPath(entry.key) + "'");
+      }
+    }
+  }
+
+ private:
+  struct Entry {
+    std::string key;
+    YAML::Node value;
+    bool used = false;
+  };
+
+  const Entry* find(std::string_view key) const {
+    for (const Entry& entry : entries_) {
+      if (entry.key == key) {
+        return &entry;
+      }
+    }
+    return nullptr;
+  }
+  // The value of key, marked as read; nullptr when absent (an error when required).
+  const YAML::Node* take(std::string_view key, bool required) {
+    for (Entry& entry : entries_) {
+      if (entry.key == key) {
+        entry.used = true;
+        return &entry.value;
+      }
+    }
+    if (required) {
+      diag_.fail(childPath(key), "missing (required)");
+    }
+    return nullptr;
+  }
+  MapReader sectionOf(std::string_view key, const YAML::Node* node) const {
+    return MapReader(node ? *node : YAML::Node(), childPath(key), diag_);
+  }
+  std::string childPath(std::string_view key) const {
+    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+  }
+
+  std::string path_;
+  const Diagnostics& diag_;
+  std::vector<Entry> entries_;
+};
+
+// --- the schema (docs/configuration.md) ----------------------------------------------------
+
+const Range kLatitudeRangeDeg = Range::closed(-90.0, 90.0);
+const Range kLongitudeRangeDeg = Range::closed(-180.0, 180.0);
+// Ellipsoidal height of the ENU origin: below the Dead Sea shore to above any launch site.
+const Range kOriginHeightRangeM = Range::closed(-500.0, 9000.0);
+const Range kImageSizeRangePx = Range::closed(16.0, 16384.0);
+// Not a physical limit: |coefficient| > 100 means a unit or copy mistake, not a lens.
+const Range kDistortionRange = Range::closed(-100.0, 100.0);
+const Range kRollYawRangeDeg = Range::closed(-180.0, 180.0);
+const Range kMountPitchRangeDeg = Range::closed(-90.0, 90.0);
+// Gimbal heads reach a little past nadir (-90) and somewhat above the horizon.
+const Range kGimbalPitchRangeDeg = Range::closed(-120.0, 30.0);
+// The camera sits on the airframe: a lever arm of metres more means a unit mistake.
+const Range kLeverArmRangeM = Range::closed(-10.0, 10.0);
+
+constexpr std::string_view kLensModelNames = "pinhole, brown_conrady, equivalent_spherical";
+constexpr std::string_view kGimbalReferenceNames = "body, earth";
+constexpr std::string_view kCrsForms = "auto, wgs84, or utm:<zone 1-60><N|S> such as utm:16N";
+
+std::optional<geodesy::GimbalReference> gimbalReferenceFromString(const std::string& text) {
+  if (text == "body") {
+    return geodesy::GimbalReference::Body;
+  }
+  if (text == "earth") {
+    return geodesy::GimbalReference::Earth;
+  }
+  return std::nullopt;
+}
+
+// "auto" -> an engaged empty CRS (let the DTM say); nullopt only when malformed. Case-blind,
+// as terrain::crsFromString is for the other spellings.
+std::optional<std::optional<terrain::CrsSpec>> crsSettingFromString(const std::string& text) {
+  const auto lower = [](unsigned char c) { return std::tolower(c); };
+  constexpr std::string_view kAuto = "auto";
+  if (std::equal(text.begin(), text.end(), kAuto.begin(), kAuto.end(),
+                 [&](char a, char b) { return lower(a) == lower(b); })) {
+    return std::optional<terrain::CrsSpec>();
+  }
+  const std::optional<terrain::CrsSpec> crs = terrain::crsFromString(text);
+  if (!crs) {
+    return std::nullopt;
+  }
+  return crs;
+}
+
+geodesy::GeodeticPoint readOrigin(MapReader section) {
+  geodesy::GeodeticPoint origin;
+  origin.latitudeDeg = section.number("latitude_deg", kLatitudeRangeDeg, kRequired);
+  origin.longitudeDeg = section.number("longitude_deg", kLongitudeRangeDeg, kRequired);
+  origin.heightM = section.number("height_m", kOriginHeightRangeM, kRequired);
+  section.warnUnknownKeys();
+  return origin;
+}
+
+CameraConfig readCamera(MapReader section) {
+  CameraConfig config;
+  camera::Intrinsics& in = config.intrinsics;
+  in.widthPx = section.integer("width_px", kImageSizeRangePx, kRequired);
+  in.heightPx = section.integer("height_px", kImageSizeRangePx, kRequired);
+  in.fxPx = section.number("fx_px", Range::positive(), kRequired);
+  in.fyPx = section.number("fy_px", Range::positive(), kRequired);
+  // Pixel centres are integers, so the image spans [-0.5, size - 0.5] and its centre is
+  // (size - 1) / 2; a principal point outside the image is a calibration error.
+  in.cxPx = section.number("cx_px", Range::closed(-0.5, in.widthPx - 0.5), (in.widthPx - 1) / 2.0);
+  in.cyPx =
+      section.number("cy_px", Range::closed(-0.5, in.heightPx - 0.5), (in.heightPx - 1) / 2.0);
+
+  camera::Distortion& lens = config.distortion;
+  lens.model = section.choice<camera::LensModel>("lens_model", camera::lensModelFromString,
+                                                 kLensModelNames, camera::LensModel::Pinhole);
+  MapReader coefficients = section.section("distortion");
+  lens.k1 = coefficients.number("k1", kDistortionRange, 0.0);
+  lens.k2 = coefficients.number("k2", kDistortionRange, 0.0);
+  lens.p1 = coefficients.number("p1", kDistortionRange, 0.0);
+  lens.p2 = coefficients.number("p2", kDistortionRange, 0.0);
+  lens.k3 = coefficients.number("k3", kDistortionRange, 0.0);
+  coefficients.warnUnknownKeys();
+  if (lens.model != camera::LensModel::BrownConrady && section.has("distortion")) {
+    // Probably a lens_model left at its default: say so instead of silently dropping them.
+    section.warn("distortion", "ignored: only lens_model brown_conrady uses it");
+    lens = camera::Distortion{lens.model};
+  }
+  section.warnUnknownKeys();
+  return config;
+}
+
+geodesy::EulerAnglesDeg readAngles(MapReader& section, const Range& pitchRangeDeg,
+                                   const geodesy::EulerAnglesDeg& fallback) {
+  geodesy::EulerAnglesDeg angles;
+  angles.rollDeg = section.number("roll_deg", kRollYawRangeDeg, fallback.rollDeg);
+  angles.pitchDeg = section.number("pitch_deg", pitchRangeDeg, fallback.pitchDeg);
+  angles.yawDeg = section.number("yaw_deg", kRollYawRangeDeg, fallback.yawDeg);
+  return angles;
+}
+
+MountConfig readMount(MapReader section) {
+  // The defaults are those of the structs, so code and file agree on "nothing configured".
+  const MountConfig defaults;
+  MountConfig config;
+  config.mount.bodyToBase = readAngles(section, kMountPitchRangeDeg, defaults.mount.bodyToBase);
+  config.mount.leverArmM =
+      section.vector3("lever_arm_m", kLeverArmRangeM, defaults.mount.leverArmM);
+  MapReader gimbal = section.section("gimbal");
+  config.gimbal.reference = gimbal.choice<geodesy::GimbalReference>(
+      "reference", gimbalReferenceFromString, kGimbalReferenceNames, defaults.gimbal.reference);
+  config.gimbal.angles = readAngles(gimbal, kGimbalPitchRangeDeg, defaults.gimbal.angles);
+  gimbal.warnUnknownKeys();
+  section.warnUnknownKeys();
+  return config;
+}
+
+// Relative paths are relative to the configuration file, not to the working directory, so
+// that a file and its DTM can be moved together. Lexical: existence is the loader's check.
+std::string resolvePath(const std::string& text, const std::string& baseDir) {
+  fs::path path(text);
+  if (path.is_relative()) {
+    path = fs::path(baseDir) / path;
+  }
+  std::error_code error;
+  const fs::path absolute = fs::absolute(path, error);
+  return (error ? path : absolute).lexically_normal().string();
+}
+
+TerrainConfig readTerrain(MapReader section, const std::string& baseDir) {
+  TerrainConfig config;
+  config.dtmPath = resolvePath(section.text("dtm_path", kRequired), baseDir);
+  config.crs = section.choice<std::optional<terrain::CrsSpec>>(
+      "crs", crsSettingFromString, kCrsForms, std::optional<terrain::CrsSpec>());
+  section.warnUnknownKeys();
+  return config;
+}
+
+YAML::Node loadDocument(const std::string& text, const Diagnostics& diag) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::Exception& error) {
+    if (error.mark.is_null()) {
+      diag.fail("", "YAML error: " + error.msg);
+    }
+    diag.fail("", "YAML syntax error at line " + std::to_string(error.mark.line + 1) + ", column " +
+                      std::to_string(error.mark.column + 1) + ": " + error.msg);
+  }
+}
+
+}  // namespace
+
+AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName,
+                      const std::string& baseDir) {
+  AppConfig config;
+  config.sourcePath = sourceName;
+  const Diagnostics diag(sourceName, &config.warnings);
+
+  const YAML::Node document = loadDocument(yamlText, diag);
+  if (!document.IsDefined() || document.IsNull()) {
+    diag.fail("", "the configuration is empty (expected the sections origin, camera, terrain)");
+  }
+  if (!document.IsMap()) {
+    diag.fail("", "expected a map of sections at the top level, got " + describe(document));
+  }
+  MapReader root(document, "", diag);
+  config.origin = readOrigin(root.requiredSection("origin"));
+  config.camera = readCamera(root.requiredSection("camera"));
+  config.mount = readMount(root.section("mount"));
+  config.terrain = readTerrain(root.requiredSection("terrain"), baseDir);
+  root.warnUnknownKeys();
+  return config;
+}
+
+AppConfig loadConfig(const std::string& path) {
+  std::error_code error;
+  if (fs::is_directory(path, error)) {
+    throw ConfigError(path + ": cannot open configuration file (it is a directory)");
+  }
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    throw ConfigError(path + ": cannot open configuration file");
+  }
+  std::ostringstream text;
+  text << file.rdbuf();
+  if (file.bad()) {
+    throw ConfigError(path + ": cannot read configuration file");
+  }
+  const fs::path absolute = fs::absolute(path, error);
+  const fs::path baseDir = (error ? fs::path(path) : absolute).parent_path();
+  return parseConfig(text.str(), path, baseDir.string());
+}
+
+}  // namespace vp::config

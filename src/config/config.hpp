@@ -37,17 +37,17 @@ struct MountConfig {
 };
 
 struct TerrainConfig {
-  std::string dtmPath;                      // absolute after loading
-  std::optional<terrain::CrsSpec> crs;      // required only for world-file DTMs
+  std::string dtmPath;                  // absolute after loading
+  std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
 };
 
 struct AppConfig {
-  std::string sourcePath;               // the file it came from
-  geodesy::GeodeticPoint origin{};      // world ENU origin
+  std::string sourcePath;           // the file it came from
+  geodesy::GeodeticPoint origin{};  // world ENU origin
   CameraConfig camera{};
   MountConfig mount{};
   TerrainConfig terrain{};
-  std::vector<std::string> warnings;    // unknown keys and other non-fatal remarks
+  std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
 };
 
 // Throws ConfigError on a missing file, a YAML syntax error, or a bad key.
