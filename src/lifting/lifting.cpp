@@ -1,1 +1,150 @@
-// placeholder: filled by the module's implementation
+#include "lifting/lifting.hpp"
+
+#include <cmath>
+
+namespace vp::lifting {
+
+namespace {
+
+LiftError fromTerrain(terrain::TerrainError error) {
+  switch (error) {
+    case terrain::TerrainError::OutsideDtm:
+      return LiftError::OutsideDtm;
+    case terrain::TerrainError::NoData:
+      return LiftError::NoData;
+    case terrain::TerrainError::NoIntersection:
+      break;
+  }
+  return LiftError::NoIntersection;
+}
+
+LiftError fromCamera(camera::CameraError error) {
+  return error == camera::CameraError::PointBehindCamera ? LiftError::BehindCamera
+                                                         : LiftError::OutsideLens;
+}
+
+}  // namespace
+
+const char* toString(LiftError error) {
+  switch (error) {
+    case LiftError::InvalidPose:
+      return "invalid pose";
+    case LiftError::OutsideLens:
+      return "outside the lens model's valid field";
+    case LiftError::BehindCamera:
+      return "behind the camera";
+    case LiftError::OutsideDtm:
+      return "outside the DTM";
+    case LiftError::NoData:
+      return "DTM has no data there";
+    case LiftError::NoIntersection:
+      return "ray does not meet the terrain";
+  }
+  return "unknown lift error";
+}
+
+bool Lifter::init(const camera::CameraModel& camera, const geodesy::CameraMount& mount,
+                  const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
+                  std::string* why) {
+  if (camera.intrinsics().widthPx <= 0 || camera.intrinsics().fxPx <= 0.0) {
+    if (why != nullptr) {
+      *why = "lifting: the camera model is not initialised";
+    }
+    return false;
+  }
+  if (terrain.grid().cols < 2 || terrain.grid().rows < 2) {
+    if (why != nullptr) {
+      *why = "lifting: the terrain model is not initialised";
+    }
+    return false;
+  }
+  if (!mount.leverArmM.allFinite()) {
+    if (why != nullptr) {
+      *why = "lifting: the camera lever arm is not finite";
+    }
+    return false;
+  }
+  camera_ = &camera;
+  terrain_ = &terrain;
+  frame_ = &frame;
+  mount_ = mount;
+  return true;
+}
+
+Expected<CameraPoseWorld, LiftError> Lifter::cameraPose(const DronePose& pose) const {
+  const Eigen::Vector4d q = pose.bodyToNed.coeffs();
+  const auto finite = [](const geodesy::EulerAnglesDeg& e) {
+    return std::isfinite(e.rollDeg) && std::isfinite(e.pitchDeg) && std::isfinite(e.yawDeg);
+  };
+  if (!geodesy::isValid(pose.position) || !q.allFinite() || q.norm() < 1e-6 ||
+      !finite(pose.gimbal.angles)) {
+    return unexpected(LiftError::InvalidPose);
+  }
+  // The attitude is relative to NED at the drone; the world frame is ENU at the origin.
+  // localToWorld carries vectors between the two tangent planes (meridian convergence).
+  Eigen::Matrix3d localToWorld;
+  const Eigen::Vector3d bodyOriginEnu = frame_->toEnu(pose.position, &localToWorld);
+  const Eigen::Matrix3d bodyToNed = pose.bodyToNed.normalized().toRotationMatrix();
+  CameraPoseWorld out;
+  out.centreEnu =
+      bodyOriginEnu + localToWorld * geodesy::enuFromNed() * bodyToNed * mount_.leverArmM;
+  out.cameraToEnu = localToWorld * geodesy::cameraToLocalEnu(pose.bodyToNed, mount_, pose.gimbal);
+  return out;
+}
+
+Expected<Eigen::Vector3d, LiftError> Lifter::pixelToWorld(const CameraPoseWorld& pose,
+                                                          const Eigen::Vector2d& pixel) const {
+  const auto ray = camera_->pixelToRay(pixel);
+  if (!ray) {
+    return unexpected(fromCamera(ray.error()));
+  }
+  const auto hit = terrain_->intersectRay(pose.centreEnu, pose.cameraToEnu * *ray);
+  if (!hit) {
+    return unexpected(fromTerrain(hit.error()));
+  }
+  return *hit;
+}
+
+Expected<Eigen::Vector2d, LiftError> Lifter::worldToPixel(const CameraPoseWorld& pose,
+                                                          const Eigen::Vector3d& pointEnu) const {
+  const Eigen::Vector3d inCamera = pose.cameraToEnu.transpose() * (pointEnu - pose.centreEnu);
+  const auto pixel = camera_->projectToPixel(inCamera);
+  if (!pixel) {
+    return unexpected(fromCamera(pixel.error()));
+  }
+  return *pixel;
+}
+
+Expected<GroundBox, LiftError> Lifter::boxToGround(const CameraPoseWorld& pose,
+                                                   const geometry::RotatedBox& box) const {
+  GroundBox out;
+  const std::array<Eigen::Vector2d, 4> corners = geometry::corners(box);
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const auto corner = pixelToWorld(pose, corners[i]);
+    if (!corner) {
+      return unexpected(corner.error());
+    }
+    out.cornersEnu[i] = *corner;
+  }
+  const auto centre = pixelToWorld(pose, {box.cx, box.cy});
+  if (!centre) {
+    return unexpected(centre.error());
+  }
+  out.centreEnu = *centre;
+  out.centreWgs84 = frame_->toGeodetic(out.centreEnu);
+
+  // Edge midpoints on the ground: the box's axes as they lie on the terrain.
+  const Eigen::Vector3d front = 0.5 * (out.cornersEnu[0] + out.cornersEnu[1]);
+  const Eigen::Vector3d rear = 0.5 * (out.cornersEnu[2] + out.cornersEnu[3]);
+  const Eigen::Vector3d sideA = 0.5 * (out.cornersEnu[0] + out.cornersEnu[3]);
+  const Eigen::Vector3d sideB = 0.5 * (out.cornersEnu[1] + out.cornersEnu[2]);
+  out.lengthM = (front - rear).norm();
+  out.widthM = (sideA - sideB).norm();
+  const Eigen::Vector3d forward = front - rear;
+  out.headingEnuRad = geometry::wrapTwoPi(std::atan2(forward.y(), forward.x()));
+  out.headingTrueNorthDeg =
+      geodesy::azimuthDeg(frame_->toGeodetic(rear), frame_->toGeodetic(front));
+  return out;
+}
+
+}  // namespace vp::lifting

@@ -1,1 +1,89 @@
-// placeholder
+// lifting/lifting: from image to world and back, with the drone's pose and the DTM.
+//
+// Contract: a Lifter borrows the camera model, the camera mount, the terrain model and the
+// world frame given to init(); they must outlive it and stay unchanged. Once per frame,
+// cameraPose() turns the drone's pose (WGS84 position of the body origin, autopilot
+// attitude, gimbal state) into the camera's centre and orientation in the world ENU frame;
+// the per-detection calls then use that result. pixelToWorld() intersects the pixel's
+// viewing ray with the DTM; worldToPixel() projects a world point through the lens;
+// boxToGround() lifts an image rotated box lying on the ground to its footprint, heading
+// and size. Every failure is a LiftError value (never an exception, never a made-up
+// point); all calls are const, allocation-free and thread-safe.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "camera/camera_model.hpp"
+#include "core/expected.hpp"
+#include "geodesy/attitude.hpp"
+#include "geodesy/geodesy.hpp"
+#include "geometry/rotated_box.hpp"
+#include "terrain/terrain_model.hpp"
+
+namespace vp::lifting {
+
+struct DronePose {
+  geodesy::GeodeticPoint position{};                             // body origin, WGS84
+  Eigen::Quaterniond bodyToNed{Eigen::Quaterniond::Identity()};  // autopilot attitude q_nb
+  geodesy::GimbalState gimbal{};
+};
+
+struct CameraPoseWorld {
+  Eigen::Vector3d centreEnu{Eigen::Vector3d::Zero()};        // projection centre, m
+  Eigen::Matrix3d cameraToEnu{Eigen::Matrix3d::Identity()};  // OpenCV camera -> world ENU
+};
+
+enum class LiftError {
+  InvalidPose,     // NaN/inf or out-of-range position, or a zero quaternion
+  OutsideLens,     // pixel or point beyond the lens model's valid field
+  BehindCamera,    // world point behind the image plane
+  OutsideDtm,      // the ray misses the DTM's extent
+  NoData,          // the ray meets the DTM where it has no data
+  NoIntersection,  // the ray points above the horizon or leaves the DTM first
+};
+const char* toString(LiftError error);
+
+// A rotated box lifted to the ground.
+struct GroundBox {
+  std::array<Eigen::Vector3d, 4> cornersEnu{};  // in geometry::corners() order
+  Eigen::Vector3d centreEnu{Eigen::Vector3d::Zero()};
+  geodesy::GeodeticPoint centreWgs84{};
+  double headingEnuRad = 0.0;        // forward axis, counter-clockwise from east, [0, 2 pi)
+  double headingTrueNorthDeg = 0.0;  // forward axis, clockwise from true north, [0, 360)
+  double lengthM = 0.0;              // along the ground between the rear and front edges
+  double widthM = 0.0;               // along the ground between the side edges
+};
+
+class Lifter {
+ public:
+  Lifter() = default;
+
+  // Borrows all four; fails when the camera has no valid intrinsics or the DTM is empty.
+  bool init(const camera::CameraModel& camera, const geodesy::CameraMount& mount,
+            const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
+            std::string* why = nullptr);
+
+  Expected<CameraPoseWorld, LiftError> cameraPose(const DronePose& pose) const;
+
+  // Distorted pixel -> first point of the DTM its viewing ray meets (world ENU).
+  Expected<Eigen::Vector3d, LiftError> pixelToWorld(const CameraPoseWorld& pose,
+                                                    const Eigen::Vector2d& pixel) const;
+  // World ENU point -> distorted pixel (may lie outside the image; check inImage()).
+  Expected<Eigen::Vector2d, LiftError> worldToPixel(const CameraPoseWorld& pose,
+                                                    const Eigen::Vector3d& pointEnu) const;
+  // Image rotated box (its outline on the ground) -> ground footprint, heading, size.
+  Expected<GroundBox, LiftError> boxToGround(const CameraPoseWorld& pose,
+                                             const geometry::RotatedBox& box) const;
+
+ private:
+  const camera::CameraModel* camera_ = nullptr;
+  const terrain::TerrainModel* terrain_ = nullptr;
+  const geodesy::LocalFrame* frame_ = nullptr;
+  geodesy::CameraMount mount_{};
+};
+
+}  // namespace vp::lifting
