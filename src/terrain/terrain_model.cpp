@@ -381,11 +381,17 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
     return unexpected(TerrainError::NoIntersection);
   }
 
+  // A descending ray that leaves the grid still above the ground would meet it outside
+  // the DTM: OutsideDtm. A level or rising one never meets it (over these distances the
+  // Earth's curvature does not change that): NoIntersection.
+  const TerrainError leftTheGrid =
+      directionEnu.z() < 0.0 ? TerrainError::OutsideDtm : TerrainError::NoIntersection;
+
   // 1. Clip to the grid's ENU box (slab method). The box spans the footprint and the
   // heights [minH, maxH] with curvature margins (see init), so every crossing lies inside.
   // Missing the footprint horizontally means the ray never enters the grid: OutsideDtm.
-  // Meeting the footprint but not the height slab (passing above it, pointing up):
-  // NoIntersection.
+  // Meeting the footprint but not the height slab: passing over it descending, see
+  // leftTheGrid; pointing up, level above it, or starting below it: NoIntersection.
   double tEnter = 0.0;
   double tExit = std::numeric_limits<double>::infinity();
   for (int axis = 0; axis < 3; ++axis) {
@@ -405,7 +411,10 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
     tEnter = std::max(tEnter, t0);
     tExit = std::min(tExit, t1);
     if (tEnter > tExit) {
-      return unexpected(axis < 2 ? TerrainError::OutsideDtm : TerrainError::NoIntersection);
+      if (axis < 2) {
+        return unexpected(TerrainError::OutsideDtm);
+      }
+      return unexpected(o >= boxMin_.z() ? leftTheGrid : TerrainError::NoIntersection);
     }
   }
 
@@ -443,7 +452,7 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
   //  - after samples outside the grid: the ray entered through the grid's side wall below
   //    the surface, so the real crossing lies outside the DTM: OutsideDtm;
   //  - after NoData samples: the crossing is in the hole: NoData.
-  // Leaving the grid ends the march (its footprint is convex): NoIntersection, or NoData
+  // Leaving the grid ends the march (its footprint is convex): see leftTheGrid, or NoData
   // if the ray crossed NoData since the last valid sample.
   enum class Previous { Start, Outside, NoData, Above };
   Previous previous = Previous::Start;
@@ -456,8 +465,7 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
     const SampleKind kind = evaluate(t, &g);
     if (kind == SampleKind::Outside) {
       if (everInside) {
-        return unexpected(previous == Previous::NoData ? TerrainError::NoData
-                                                       : TerrainError::NoIntersection);
+        return unexpected(previous == Previous::NoData ? TerrainError::NoData : leftTheGrid);
       }
       previous = Previous::Outside;
       continue;
@@ -519,8 +527,7 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
   if (!everInside) {
     return unexpected(TerrainError::OutsideDtm);
   }
-  return unexpected(previous == Previous::NoData ? TerrainError::NoData
-                                                 : TerrainError::NoIntersection);
+  return unexpected(previous == Previous::NoData ? TerrainError::NoData : leftTheGrid);
 }
 
 }  // namespace vp::terrain

@@ -58,9 +58,9 @@ struct TerrainGrid {
 };
 
 enum class TerrainError {
-  OutsideDtm,      // the point (or the whole ray) lies outside the grid
+  OutsideDtm,      // the point (or the ray's ground point) lies outside the grid
   NoData,          // a sample needed for interpolation is NoData
-  NoIntersection,  // the ray points away from the terrain, or leaves the grid first
+  NoIntersection,  // the ray never meets the terrain (level or rising, or starts below it)
 };
 const char* toString(TerrainError error);
 
@@ -85,11 +85,11 @@ class TerrainModel {
   Expected<Eigen::Vector3d, TerrainError> groundPointEnu(double xEastM, double yNorthM) const;
 
   // First intersection of the ray origin + t * direction (t > 0, ENU, direction need not
-  // be unit length) with the terrain. Errors: OutsideDtm when the ray never passes over the
-  // grid, or enters it from the side already below the surface (the crossing is off the
-  // grid); NoData when the crossing would lie where samples are missing; NoIntersection
-  // when the ray stays above the terrain until it leaves the grid or rises out of the
-  // height range, when the origin is below the terrain, or for a zero direction. Crossings
+  // be unit length) with the terrain. Errors: OutsideDtm when the crossing would lie off
+  // the grid: the ray never passes over it, enters it from the side already below the
+  // surface, or leaves it descending but still above the surface; NoData when the crossing
+  // would lie where samples are missing; NoIntersection when a level or rising ray stays
+  // above the terrain, when the origin is below the terrain, or for a zero direction. Crossings
   // of slivers shorter than half a cell (a grazing ray nicking a crest) may be missed.
   Expected<Eigen::Vector3d, TerrainError> intersectRay(const Eigen::Vector3d& originEnu,
                                                        const Eigen::Vector3d& directionEnu) const;

@@ -1,11 +1,14 @@
 // Per-call costs of the geometry core at the camera's resolution (seed 000: 2592 x 2048).
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+
 #include <opencv2/core.hpp>
 
 #include "camera/camera_model.hpp"
 #include "camera/undistorter.hpp"
 #include "geometry/rotated_box.hpp"
+#include "terrain/terrain_model.hpp"
 
 namespace {
 
@@ -55,5 +58,33 @@ void rotatedIou(benchmark::State& state) {
   }
 }
 BENCHMARK(rotatedIou);
+
+// One viewing ray from 100 m onto a gently undulating 5 m DTM, 20 deg off nadir.
+void terrainRay(benchmark::State& state) {
+  const vp::geodesy::GeodeticPoint origin{43.0731, -89.4012, 260.0};
+  const vp::geodesy::LocalFrame frame(origin);
+  const vp::geodesy::UtmPoint centre = vp::geodesy::toUtm(origin);
+  vp::terrain::TerrainGrid grid;
+  grid.cols = grid.rows = 161;
+  grid.crs = {vp::terrain::HorizontalCrs::Utm, centre.zone, centre.northp};
+  grid.transform = {centre.eastingM - 400.0, 5.0, 0.0, centre.northingM + 400.0, 0.0, -5.0};
+  grid.heightsM.resize(161 * 161);
+  for (int r = 0; r < 161; ++r) {
+    for (int c = 0; c < 161; ++c) {
+      grid.heightsM[static_cast<std::size_t>(r * 161 + c)] =
+          static_cast<float>(260.0 + 3.0 * std::sin(c / 9.0) * std::cos(r / 7.0));
+    }
+  }
+  vp::terrain::TerrainModel terrain;
+  terrain.init(std::move(grid), frame);
+  const Eigen::Vector3d camera(0.0, 0.0, 100.0);
+  double azimuth = 0.0;
+  for (auto _ : state) {
+    azimuth += 0.37;
+    const Eigen::Vector3d dir(0.34 * std::cos(azimuth), 0.34 * std::sin(azimuth), -0.94);
+    benchmark::DoNotOptimize(terrain.intersectRay(camera, dir));
+  }
+}
+BENCHMARK(terrainRay);
 
 }  // namespace
