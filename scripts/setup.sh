@@ -1,15 +1,23 @@
 #!/usr/bin/env bash
 # Installs everything the project needs to build and test, from Debian 12 packages only.
 # Idempotent: safe to run again; packages already present are left as they are.
+#   scripts/setup.sh           build and test dependencies (C++)
+#   scripts/setup.sh --python  also Debian's Python stack for training, model tools and the
+#                              PyTorch side of the engine benchmark (python3-torch etc.)
 set -euo pipefail
 
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libopencv-dev libyaml-cpp-dev libgeographiclib-dev
   libtiff-dev libgeotiff-dev
+  libxnnpack-dev libpthreadpool-dev libonnx-dev libprotobuf-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   clang-format
 )
+
+if [ "${1:-}" = "--python" ]; then
+  PACKAGES+=(python3 python3-torch python3-onnx python3-numpy python3-opencv)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
