@@ -62,6 +62,15 @@ struct ShapeParams {
   int count = 0;
 };
 
+// Distribution of gamma over the training models of one car type (stored in the ASM file):
+// lets the simulator draw type-typical shapes and the trainer check type/shape consistency.
+struct TypePrior {
+  std::array<double, kMaxShapeComponents> mean{};
+  Eigen::Matrix<double, kMaxShapeComponents, kMaxShapeComponents> covariance =
+      Eigen::Matrix<double, kMaxShapeComponents, kMaxShapeComponents>::Zero();
+  int sampleCount = 0;  // 0: no prior for this type
+};
+
 // Axis-aligned extent of a keypoint model in the vehicle frame: length (x), width (y), height (z).
 Eigen::Vector3d boundingBoxSize(const KeypointModel& model);
 
@@ -86,6 +95,10 @@ class ActiveShapeModel {
   }
   double explainedVarianceShare() const { return explainedVarianceShare_; }
 
+  // Per car type (index = static_cast<int>(VehicleType), < kCarTypeCount).
+  const TypePrior& typePrior(VehicleType type) const;
+  void setTypePrior(VehicleType type, const TypePrior& prior);
+
   // Eq. 1; extra or missing gamma entries count as 0. No allocation.
   KeypointModel shape(const ShapeParams& params) const;
 
@@ -102,6 +115,7 @@ class ActiveShapeModel {
   std::array<KeypointModel, kMaxShapeComponents> eigenvectors_{};
   int componentCount_ = 0;
   double explainedVarianceShare_ = 0.0;
+  std::array<TypePrior, kCarTypeCount> typePriors_{};
 };
 
 }  // namespace vp::shape
