@@ -38,6 +38,7 @@ struct SequenceInfo {
   std::string name;
   double frameRateHz = 10.0;
   std::string source;  // "simulator <version> seed <n> scene <name>", or a recorder's name
+  std::string notes;   // optional free text; not written when empty
 };
 
 struct FrameRecord {
@@ -110,7 +111,7 @@ class SequenceReader {
 
 class SequenceWriter {
  public:
-  SequenceWriter() = default;
+  SequenceWriter();  // defined in the .cpp, where Files is complete
   ~SequenceWriter();
 
   // Creates the directory layout; rigYaml is the text of rig.yaml, dtmFile an existing DTM
@@ -126,6 +127,9 @@ class SequenceWriter {
 
   std::string imageExtension = ".png";
   int jpegQuality = 92;
+  // gamma_i columns of ground_truth/objects.csv (0..8), fixed when the file is created by the
+  // first writeObjects(); -1: the largest shape count of that call (8 if it holds no shape).
+  int gammaColumns = -1;
 
  private:
   struct Files;

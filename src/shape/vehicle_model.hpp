@@ -3,13 +3,16 @@
 //
 // Contract: the vehicle frame (docs/conventions.md) has its origin at the centre of the car's
 // footprint on the road surface, x forward (driving direction), y left, z up, metres. Every
-// car model has the same kKeypointCount keypoints in the same order (keypointNames()) and the
-// same triangle mesh over them (mesh()), each triangle labelled with the surface part it
-// belongs to (paint, glass, wheel, light), which is what makes front and back differ in an
-// image. evaluationKeypoints() are the 24 keypoints the seed evaluates (E_D2D, E_dH).
+// car model has the same kKeypointCount keypoints in the same order (keypointNames(),
+// docs/asm.md) and the same closed triangle mesh over them (mesh()), each triangle labelled
+// with the surface part it belongs to (paint, glass, wheel arch, light), which is what makes
+// front and back differ in an image. evaluationKeypoints() are the 24 keypoints the seed
+// evaluates (E_D2D, E_dH). The four wheel centres are keypoints but no mesh vertices: a
+// renderer draws each wheel as a cylinder of radius wheelRadius() whose outer face is centred
+// on the wheel-centre keypoint and which extends kWheelWidth_m towards the car's centre line.
 // ActiveShapeModel::shape() evaluates Eq. 1 without allocating; fit() returns gamma for a
-// (possibly partial) set of observed 3D keypoints. Large vehicles (bus/truck) have a type but
-// no ASM shape.
+// (possibly partial) set of observed 3D keypoints, also without allocating. Large vehicles
+// (bus/truck) have a type but no ASM shape (car_generator.hpp builds their meshes).
 #pragma once
 
 #include <array>
@@ -28,11 +31,13 @@ enum class VehicleType : std::uint8_t { Estate, Compact, Sports, Sedan, Suv, Van
 constexpr int kCarTypeCount = 6;
 constexpr int kVehicleTypeCount = 7;
 const char* toString(VehicleType type);  // "estate", "compact", ..., "large"
-std::optional<VehicleType> vehicleTypeFromString(std::string_view name);
+std::optional<VehicleType> vehicleTypeFromString(std::string_view name);  // case-insensitive
 
 constexpr int kKeypointCount = 36;  // keypoints of the topology
 constexpr int kEvaluationKeypointCount = 24;
 constexpr int kMaxShapeComponents = 8;  // upper bound on n_s (memory is fixed)
+constexpr int kWheelCount = 4;
+constexpr double kWheelWidth_m = 0.22;  // tyre width drawn inwards from the wheel-centre keypoint
 
 using KeypointModel = Eigen::Matrix<double, 3, kKeypointCount>;  // columns = keypoints
 
@@ -41,11 +46,12 @@ enum class SurfacePart : std::uint8_t {
   Windscreen,
   RearWindow,
   SideWindow,
-  Wheel,
+  Wheel,  // the wheel arches (wheel wells); the wheels themselves are cylinders, see above
   HeadLight,
   TailLight,
   Underbody
 };
+const char* toString(SurfacePart part);  // "paint", "windscreen", ...
 
 struct Triangle {
   std::array<std::uint16_t, 3> v{};  // keypoint indices, counter-clockwise seen from outside
@@ -53,8 +59,17 @@ struct Triangle {
 };
 
 const std::array<const char*, kKeypointCount>& keypointNames();
+std::optional<int> keypointIndex(std::string_view name);
 std::span<const Triangle> mesh();
 const std::array<int, kEvaluationKeypointCount>& evaluationKeypoints();
+
+// Wheel centres: front left, front right, rear left, rear right (keypoint indices).
+const std::array<int, kWheelCount>& wheelCentreKeypoints();
+// The wheels stand on the road (z = 0), so a wheel's radius is its centre's height.
+double wheelRadius(const KeypointModel& model, int wheel);  // wheel in [0, kWheelCount)
+
+// Signed volume enclosed by mesh() over the model, m^3: > 0 when the winding is outward.
+double meshVolume(const KeypointModel& model);
 
 // gamma of one vehicle; count = n_s of the model that produced it.
 struct ShapeParams {
@@ -71,7 +86,20 @@ struct TypePrior {
   int sampleCount = 0;  // 0: no prior for this type
 };
 
-// Axis-aligned extent of a keypoint model in the vehicle frame: length (x), width (y), height (z).
+// Reconstruction error of the model on held-out generated cars (reported by vp_asm_learn and
+// stored in the ASM file), over the evaluation keypoints: 3D RMS and maximum distance, and the
+// seed's planimetric (E_D2D, xy) and height (E_dH, z) RMS errors. modelCount 0 = unknown.
+struct ReconstructionError {
+  double rms_m = 0.0;
+  double max_m = 0.0;
+  double planimetricRms_m = 0.0;
+  double heightRms_m = 0.0;
+  int modelCount = 0;
+};
+
+// Extent of a keypoint model in the vehicle frame: length (x) and width (y) are the
+// axis-aligned extents of the keypoints; height (z) is measured from the road (z = 0, on
+// which the wheels stand) to the highest keypoint, since no keypoint lies on the road.
 Eigen::Vector3d boundingBoxSize(const KeypointModel& model);
 
 class ActiveShapeModel {
@@ -95,16 +123,22 @@ class ActiveShapeModel {
   }
   double explainedVarianceShare() const { return explainedVarianceShare_; }
 
-  // Per car type (index = static_cast<int>(VehicleType), < kCarTypeCount).
+  // Per car type (index = static_cast<int>(VehicleType), < kCarTypeCount). Large vehicles
+  // have no prior (sampleCount 0); setting one for them is ignored.
   const TypePrior& typePrior(VehicleType type) const;
   void setTypePrior(VehicleType type, const TypePrior& prior);
+
+  const ReconstructionError& heldOutError() const { return heldOutError_; }
+  void setHeldOutError(const ReconstructionError& error) { heldOutError_ = error; }
 
   // Eq. 1; extra or missing gamma entries count as 0. No allocation.
   KeypointModel shape(const ShapeParams& params) const;
 
   // Least-squares gamma for the observed keypoints where mask[k] is true, with a Tikhonov
-  // prior of weight `prior` on gamma (gamma ~ N(0, 1) per component; 0 = no prior).
-  // Returns nullopt when fewer than 2 keypoints are observed. No allocation.
+  // prior of weight `prior` (m^2) on gamma (gamma ~ N(0, 1) per component; 0 = no prior):
+  // minimises sum_k |M(gamma)_k - observed_k|^2 + prior * |gamma|^2. Returns nullopt when
+  // fewer than 2 keypoints are observed, an observed coordinate is not finite, or the system
+  // is singular (prior 0 with too few keypoints). No allocation.
   std::optional<ShapeParams> fit(const KeypointModel& observed,
                                  const std::array<bool, kKeypointCount>& mask,
                                  double prior = 1e-3) const;
@@ -116,6 +150,12 @@ class ActiveShapeModel {
   int componentCount_ = 0;
   double explainedVarianceShare_ = 0.0;
   std::array<TypePrior, kCarTypeCount> typePriors_{};
+  ReconstructionError heldOutError_{};
+
+  // init()/load() share this; load() keeps the file's sigmas bit for bit.
+  bool setModel(const KeypointModel& mean, std::span<const double> sigmas,
+                std::span<const KeypointModel> eigenvectors, double explainedVarianceShare,
+                std::string* why);
 };
 
 }  // namespace vp::shape
