@@ -1,0 +1,190 @@
+// simulator/scene: the static world of a simulated sequence, drawn from the seed.
+//
+// Contract: generateScene() turns a scene kind and the sequence's Rng into a SceneSpec: the
+// road layout (an intersection of two roads, a straight section, or a straight road with a
+// parking lot), lane and marking style, kerbs and pavements, asphalt patches and manholes,
+// buildings, trees, the lighting (sun elevation/azimuth, sun and sky colour) and the
+// traffic parameters. Everything is in the world ENU frame (metres, x east, y north); z is
+// taken from the terrain when the scene is built. The spec is plain data: the renderer,
+// the ground texture and the traffic read it, nothing modifies it after generation.
+// Right-hand traffic: a road's forward lanes lie to the right of its direction.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sim_random.hpp"
+
+namespace vp::sim {
+
+enum class SceneKind { Intersection, Straight, Parking };
+const char* toString(SceneKind kind);
+std::optional<SceneKind> sceneKindFromString(const std::string& name);
+
+enum class CentreLine { DoubleYellow, YellowDashed, WhiteDashed, None };
+
+struct Road {
+  Eigen::Vector2d centre{0, 0};  // a point on the centreline, ENU m
+  Eigen::Vector2d dir{1, 0};     // unit direction of the forward lanes
+  int lanesForward = 1;          // right of the centreline
+  int lanesBackward = 1;         // left of the centreline, driving against dir
+  double laneWidthM = 3.3;
+  double medianHalfM = 0.15;   // half the gap between opposing lanes
+  double parkingRightM = 0.0;  // kerb parking lane width right of the forward lanes (0: none)
+  double parkingLeftM = 0.0;   // ... left of the backward lanes
+  CentreLine centreLine = CentreLine::DoubleYellow;
+  bool edgeLines = true;  // solid line between travel and parking lanes / kerb
+  double dashLengthM = 3.0;
+  double dashGapM = 6.0;
+  double stopDistanceM = 1e9;     // |along| of the stop lines (intersection only)
+  double crosswalkCentreM = 1e9;  // |along| of the crosswalk centres (1e9: none)
+  double crosswalkWidthM = 3.0;
+  bool zebra = true;  // zebra stripes, else two transverse lines
+
+  Eigen::Vector2d leftNormal() const { return {-dir.y(), dir.x()}; }
+  double rightHalfM() const { return medianHalfM + lanesForward * laneWidthM + parkingRightM; }
+  double leftHalfM() const { return medianHalfM + lanesBackward * laneWidthM + parkingLeftM; }
+  // Lateral offset (along leftNormal) of a travel lane's centre: forward lanes are negative.
+  double laneOffsetM(bool forward, int lane) const {
+    const double o = medianHalfM + (lane + 0.5) * laneWidthM;
+    return forward ? -o : o;
+  }
+  double along(const Eigen::Vector2d& p) const { return (p - centre).dot(dir); }
+  double lateral(const Eigen::Vector2d& p) const { return (p - centre).dot(leftNormal()); }
+};
+
+struct ParkingLot {
+  Eigen::Vector2d centre{0, 0};
+  Eigen::Vector2d dir{1, 0};  // along the rows of bays
+  double lengthM = 40.0;      // along dir
+  double widthM = 30.0;
+  double bayWidthM = 2.5;
+  double bayDepthM = 5.0;
+  double aisleWidthM = 6.5;
+  int rows = 2;  // rows of bays (pairs back to back share a line)
+  bool yellowLines = false;
+  std::vector<double> rowOffsetsM;  // lateral (along leftNormal) centre of each bay row
+  std::vector<double> rowFacing;    // +1: cars in the row face +leftNormal, -1: the other way
+  int baysPerRow = 0;
+  // Bay centres and the heading a car parked in them faces (filled by the generator).
+  std::vector<Eigen::Vector3d> bays;  // x, y, heading (rad, ENU)
+  Eigen::Vector2d leftNormal() const { return {-dir.y(), dir.x()}; }
+};
+
+enum class RoofKind { Flat, Gabled };
+
+struct Building {
+  Eigen::Vector2d centre{0, 0};
+  double headingRad = 0.0;  // direction of the length axis
+  double lengthM = 20.0;
+  double widthM = 12.0;
+  double heightM = 8.0;  // eaves height above the lowest ground point of the footprint
+  RoofKind roof = RoofKind::Flat;
+  double ridgeHeightM = 0.0;  // gabled: ridge above the eaves
+  Eigen::Vector3f wallAlbedo{0.5F, 0.45F, 0.4F};
+  Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};
+  int rooftopUnits = 0;  // flat roofs: boxes of HVAC units
+  std::uint32_t seed = 0;
+};
+
+struct Tree {
+  Eigen::Vector2d position{0, 0};
+  double canopyRadiusM = 3.0;
+  double canopyVerticalRadiusM = 2.4;
+  double canopyCentreHeightM = 6.0;  // above the ground at the trunk
+  double trunkRadiusM = 0.2;
+  Eigen::Vector3f leafAlbedo{0.08F, 0.16F, 0.05F};
+  float gapFraction = 0.1F;  // share of the canopy that lets light through (bare trees: high)
+  std::uint32_t seed = 0;
+};
+
+struct Patch {  // repaired rectangle of road surface
+  Eigen::Vector2d centre{0, 0};
+  Eigen::Vector2d dir{1, 0};
+  double halfLengthM = 1.0;
+  double halfWidthM = 1.0;
+  float tone = 1.0F;  // albedo multiplier
+};
+
+struct Manhole {
+  Eigen::Vector2d position{0, 0};
+  double radiusM = 0.32;
+};
+
+struct GroundStyle {
+  bool concreteRoad = false;  // slabs with joints instead of asphalt
+  double slabLengthM = 4.5;
+  Eigen::Vector3f roadAlbedo{0.12F, 0.12F, 0.12F};
+  Eigen::Vector3f lotAlbedo{0.10F, 0.10F, 0.10F};
+  float roadMacroVariation = 0.1F;
+  float roadFineVariation = 0.1F;
+  float wheelTrackDarkening = 0.08F;  // darker (or lighter, < 0) bands where tyres run
+  float oilStripe = 0.05F;            // dark stripe along lane centres
+  float crackDensity = 0.5F;          // 0..1
+  float crackWidth = 0.02F;
+  Eigen::Vector3f sidewalkAlbedo{0.4F, 0.39F, 0.37F};
+  bool pavers = false;  // small pavers instead of concrete slabs
+  double sidewalkSlabM = 1.5;
+  Eigen::Vector3f kerbAlbedo{0.5F, 0.5F, 0.48F};
+  Eigen::Vector3f grassA{0.06F, 0.12F, 0.03F};
+  Eigen::Vector3f grassB{0.12F, 0.14F, 0.05F};
+  Eigen::Vector3f soilAlbedo{0.16F, 0.12F, 0.08F};
+  float soilShare = 0.2F;
+  Eigen::Vector3f whiteMarking{0.7F, 0.7F, 0.68F};
+  Eigen::Vector3f yellowMarking{0.6F, 0.45F, 0.08F};
+  float markingWear = 0.3F;  // 0 fresh .. 1 nearly gone
+  std::uint32_t seed = 0;
+};
+
+struct Lighting {
+  double sunElevationDeg = 45.0;
+  double sunAzimuthDeg = 180.0;              // clockwise from north
+  Eigen::Vector3d sunDirectionEnu{0, 0, 1};  // unit vector towards the sun
+  Eigen::Vector3f sunIrradiance{1.0F, 0.97F, 0.9F};
+  Eigen::Vector3f skyIrradiance{0.3F, 0.33F, 0.4F};
+  float shadowSoftnessTexels = 1.0F;  // PCF radius of the shadow map
+  bool overcast = false;
+};
+
+struct TrafficParams {
+  double arrivalRatePerLaneHz = 0.15;  // Poisson arrivals at each entry lane
+  double kerbParkingOccupancy = 0.5;   // share of kerb parking slots taken
+  double lotOccupancy = 0.7;
+  double largeVehicleShare = 0.05;
+  double speedLimitMps = 12.0;
+  double signalCycleS = 40.0;  // intersection: full cycle of the four phases
+  double signalOffsetS = 0.0;
+};
+
+struct SceneSpec {
+  SceneKind kind = SceneKind::Intersection;
+  std::vector<Road> roads;         // intersection: 2; straight / parking: 1
+  Eigen::Vector2d junction{0, 0};  // intersection centre (or the road's reference point)
+  double cornerRadiusM = 6.0;      // kerb radius at the intersection corners
+  double kerbWidthM = 0.2;
+  double sidewalkWidthM = 2.5;
+  std::vector<ParkingLot> lots;
+  std::vector<Patch> paved;  // extra drivable rectangles (lots, driveways); tone unused
+  std::vector<Building> buildings;
+  std::vector<Tree> trees;
+  std::vector<Patch> patches;
+  std::vector<Manhole> manholes;
+  GroundStyle style{};
+  Lighting light{};
+  TrafficParams traffic{};
+  Eigen::Vector2d viewCentre{0, 0};  // where the camera looks
+  double extentM = 150.0;            // objects are generated within this radius of viewCentre
+  std::string season = "summer";     // summer | autumn | winter (colours, bare trees)
+
+  // Signed distance (m) from the kerb line of the drivable area (roads and lots): < 0 on
+  // the road, > 0 off it. Rounded intersection corners use cornerRadiusM.
+  double roadDistance(const Eigen::Vector2d& p) const;
+};
+
+SceneSpec generateScene(SceneKind kind, Rng& rng);
+
+}  // namespace vp::sim

@@ -1,0 +1,395 @@
+#include "simulator.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include <unistd.h>
+#include <Eigen/Geometry>
+#include <opencv2/imgcodecs.hpp>
+
+#include "ground_truth.hpp"
+#include "io/dtm_file.hpp"
+
+#ifndef VP_SOURCE_DIR
+#define VP_SOURCE_DIR "."
+#endif
+
+namespace vp::sim {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kFrameIntervalS = 0.1;
+constexpr std::int64_t kStartNs = 1'700'000'000'000'000'000;
+constexpr std::int64_t kFrameNs = 100'000'000;
+
+std::string num(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+
+double wrapDeg(double a) {
+  a = std::fmod(a + 180.0, 360.0);
+  if (a < 0) {
+    a += 360.0;
+  }
+  return a - 180.0;
+}
+
+bool fail(std::string* why, const std::string& message) {
+  if (why != nullptr) {
+    *why = message;
+  }
+  return false;
+}
+
+Eigen::Quaterniond quaternionFromEuler(double rollDeg, double pitchDeg, double yawDeg) {
+  return Eigen::Quaterniond(geodesy::rotationFromEuler({rollDeg, pitchDeg, yawDeg}));
+}
+
+}  // namespace
+
+Simulator::Simulator() = default;
+Simulator::~Simulator() = default;
+
+void Simulator::drawRig() {
+  Rng& rng = *rng_;
+  RigSpec& r = rig_;
+  const double scale = options_.width / 2592.0;
+  for (int attempt = 0; attempt < 50; ++attempt) {
+    camera::Intrinsics k;
+    k.widthPx = options_.width;
+    k.heightPx = options_.height;
+    k.fxPx = 2900.0 * scale * rng.uniform(0.95, 1.05);
+    k.fyPx = k.fxPx * (1.0 + rng.normal(0.0, 0.0005));
+    k.cxPx = 0.5 * (k.widthPx - 1) + rng.normal(0.0, 0.005 * k.widthPx);
+    k.cyPx = 0.5 * (k.heightPx - 1) + rng.normal(0.0, 0.005 * k.heightPx);
+    camera::Distortion d;
+    if (rng.chance(0.2)) {
+      d.model = camera::LensModel::EquivalentSpherical;
+    } else {
+      d.model = camera::LensModel::BrownConrady;
+      d.k1 = rng.uniform(-0.16, 0.04);
+      d.k2 = rng.uniform(-0.04, 0.1);
+      d.p1 = rng.normal(0.0, 3e-4);
+      d.p2 = rng.normal(0.0, 3e-4);
+      d.k3 = rng.uniform(-0.02, 0.02);
+    }
+    camera::CameraModel candidate;
+    Canvas canvas;
+    if (candidate.init(k, d) && makeCanvas(candidate, options_.supersampling, &canvas, nullptr)) {
+      r.intrinsics = k;
+      r.distortion = d;
+      camera_ = candidate;
+      canvas_ = canvas;
+      break;
+    }
+  }
+  r.mount.bodyToBase = {0.0, 0.0, 0.0};
+  r.mount.leverArmM = Eigen::Vector3d(rng.uniform(-0.1, 0.15), 0.0, rng.uniform(0.05, 0.25));
+  r.gimbalReference =
+      rng.chance(0.65) ? geodesy::GimbalReference::Earth : geodesy::GimbalReference::Body;
+  r.altitudeM = rng.chance(0.7) ? rng.uniform(75.0, 115.0) : rng.uniform(60.0, 150.0);
+  r.tiltDeg = rng.chance(0.6) ? rng.uniform(0.0, 8.0) : rng.uniform(8.0, 35.0);
+  r.viewAzimuthDeg = rng.uniform(-180.0, 180.0);
+  r.bodyYawOffsetDeg = rng.uniform(-180.0, 180.0);
+  r.positionSigmaM = rng.uniform(0.05, 0.4);
+  r.positionTauS = rng.uniform(3.0, 10.0);
+  if (r.gimbalReference == geodesy::GimbalReference::Earth) {
+    r.attitudeSigmaDeg = rng.uniform(0.5, 2.5);
+    r.gimbalSigmaDeg = rng.uniform(0.01, 0.08);
+  } else {
+    r.attitudeSigmaDeg = rng.uniform(0.03, 0.3);
+    r.gimbalSigmaDeg = 0.0;
+  }
+  r.attitudeTauS = rng.uniform(1.0, 4.0);
+  if (options_.altitudeM) {
+    r.altitudeM = *options_.altitudeM;
+  }
+  if (options_.tiltDeg) {
+    r.tiltDeg = *options_.tiltDeg;
+  }
+}
+
+lifting::DronePose Simulator::hoverPose() {
+  Rng& rng = *rng_;
+  const RigSpec& r = rig_;
+  const double aPos = std::exp(-kFrameIntervalS / r.positionTauS);
+  const double aAtt = std::exp(-kFrameIntervalS / r.attitudeTauS);
+  const double bPos = std::sqrt(1.0 - aPos * aPos);
+  const double bAtt = std::sqrt(1.0 - aAtt * aAtt);
+  const bool first = frameIndex_ == 0;
+  for (int i = 0; i < 3; ++i) {
+    const double zPos = rng.normal();
+    const double zAtt = rng.normal();
+    const double zGim = rng.normal();
+    const double sPos = r.positionSigmaM * (i == 2 ? 0.5 : 1.0);
+    const double sAtt = r.attitudeSigmaDeg * (i == 2 ? 0.5 : 1.0);
+    // The first frame starts from the stationary distribution.
+    positionOffset_[i] = first ? sPos * zPos : aPos * positionOffset_[i] + bPos * sPos * zPos;
+    attitudeOffset_[i] = first ? sAtt * zAtt : aAtt * attitudeOffset_[i] + bAtt * sAtt * zAtt;
+    gimbalOffset_[i] =
+        first ? r.gimbalSigmaDeg * zGim : aAtt * gimbalOffset_[i] + bAtt * r.gimbalSigmaDeg * zGim;
+  }
+  const double az = r.viewAzimuthDeg * kPi / 180.0;
+  const double tilt = r.tiltDeg * kPi / 180.0;
+  const Eigen::Vector3d horizontal(std::sin(az), std::cos(az), 0.0);
+  const Eigen::Vector3d centre = target_ + Eigen::Vector3d(0, 0, r.altitudeM) -
+                                 horizontal * (r.altitudeM * std::tan(tilt)) + positionOffset_;
+  lifting::DronePose pose;
+  const bool earth = r.gimbalReference == geodesy::GimbalReference::Earth;
+  const double bodyYaw =
+      wrapDeg(r.viewAzimuthDeg + (earth ? r.bodyYawOffsetDeg : 0.0) + attitudeOffset_.z());
+  pose.bodyToNed = quaternionFromEuler(attitudeOffset_.x(), attitudeOffset_.y(), bodyYaw);
+  pose.gimbal.reference = r.gimbalReference;
+  pose.gimbal.angles.rollDeg = gimbalOffset_.x();
+  pose.gimbal.angles.pitchDeg = -90.0 + r.tiltDeg + gimbalOffset_.y();
+  pose.gimbal.angles.yawDeg = earth ? wrapDeg(r.viewAzimuthDeg + gimbalOffset_.z()) : 0.0;
+  const Eigen::Vector3d lever =
+      geodesy::enuFromNed() * (pose.bodyToNed.toRotationMatrix() * r.mount.leverArmM);
+  pose.position = world_.frame().toGeodetic(centre - lever);
+  return pose;
+}
+
+bool Simulator::init(const SimOptions& options, std::string* why) {
+  options_ = options;
+  if (options.width < 16 || options.height < 16) {
+    return fail(why, "image size must be at least 16 x 16");
+  }
+  rng_ = std::make_unique<Rng>(options.seed);
+  Rng& rng = *rng_;
+  origin_ = drawOrigin(rng);
+  terrainSpec_ = drawTerrain(rng);
+  scene_ = generateScene(options.scene, rng);
+  drawRig();
+  if (canvas_.width == 0) {
+    return fail(why, "could not draw a valid lens model");
+  }
+  sensorSpec_ = drawSensor(rng);
+
+  // Ground region seen over the whole sequence (with margins for drift and for tall objects
+  // beyond the field's edge), and the DTM around it.
+  const double halfFov =
+      std::atan(std::hypot(0.5 * canvas_.width, 0.5 * canvas_.height) / rig_.intrinsics.fxPx);
+  const double reach =
+      rig_.altitudeM * std::tan(std::min(rig_.tiltDeg * kPi / 180.0 + halfFov, 1.35)) + 45.0;
+  const Eigen::Vector2d lo = scene_.viewCentre - Eigen::Vector2d(reach, reach);
+  const Eigen::Vector2d hi = scene_.viewCentre + Eigen::Vector2d(reach, reach);
+  const double pathHalf = reach + 30.0;
+  if (!world_.build(origin_, terrainSpec_, scene_.viewCentre, pathHalf + 15.0, why)) {
+    return false;
+  }
+  target_ = world_.ground(scene_.viewCentre.x(), scene_.viewCentre.y());
+  if (!lifter_.init(camera_, rig_.mount, world_.terrain(), world_.frame(), why)) {
+    return false;
+  }
+  const std::string asmPath = options.asmPath.empty()
+                                  ? std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml"
+                                  : options.asmPath;
+  if (!asm_.load(asmPath, why)) {
+    return false;
+  }
+  factory_ = std::make_unique<VehicleFactory>(asm_);
+  traffic_.init(scene_, *factory_, pathHalf, options.warmUpS, kFrameIntervalS, rng);
+  sensor_.init(camera_, canvas_, sensorSpec_);
+  renderer_.init(scene_, world_, lo, hi, rig_.altitudeM / rig_.intrinsics.fxPx, options.threads);
+  frameIndex_ = 0;
+  return true;
+}
+
+bool Simulator::nextFrame(FrameOutput& out, std::string* why) {
+  Rng& rng = *rng_;
+  if (frameIndex_ > 0) {
+    traffic_.step(rng);
+  }
+  out.frameId = frameIndex_;
+  out.timestampNs = kStartNs + frameIndex_ * kFrameNs;
+  out.truePose = hoverPose();
+  const auto camPose = lifter_.cameraPose(out.truePose);
+  if (!camPose) {
+    return fail(why, std::string("camera pose: ") + lifting::toString(camPose.error()));
+  }
+  const int ss = canvas_.supersampling;
+  view_.worldToCamera = camPose->cameraToEnu.transpose();
+  view_.centre = camPose->centreEnu;
+  view_.fx = rig_.intrinsics.fxPx * ss;
+  view_.fy = rig_.intrinsics.fyPx * ss;
+  view_.cx = (rig_.intrinsics.cxPx + canvas_.offsetX + 0.5) * ss - 0.5;
+  view_.cy = (rig_.intrinsics.cyPx + canvas_.offsetY + 0.5) * ss - 0.5;
+  view_.width = canvas_.width * ss;
+  view_.height = canvas_.height * ss;
+
+  cv::Mat linear;
+  const std::vector<SimVehicle>& vehicles = traffic_.vehicles();
+  renderer_.render(vehicles, view_, canvas_, linear);
+  sensor_.outputIds(renderer_, out.ids);
+
+  GroundTruthContext ctx;
+  ctx.lifter = &lifter_;
+  ctx.pose = *camPose;
+  ctx.camera = &camera_;
+  ctx.renderer = &renderer_;
+  ctx.sensor = &sensor_;
+  ctx.world = &world_;
+  ctx.view = view_;
+  ctx.ids = &out.ids;
+  out.objects.clear();
+  out.keypoints.clear();
+  computeGroundTruth(out.frameId, vehicles, ctx, out.objects, out.keypoints);
+
+  // Auto exposure: set on the first frame, then a slow drift with occasional steps.
+  if (exposureBase_ < 0.0) {
+    exposureBase_ = sensorSpec_.exposureTargetGrey / std::max(1e-3, sensor_.meanLevel(linear));
+  }
+  logExposure_ += rng.normal(0.0, sensorSpec_.exposureDrift);
+  if (rng.chance(sensorSpec_.exposureStepChance)) {
+    logExposure_ += rng.normal(0.0, 0.08);
+  }
+  logExposure_ = std::clamp(logExposure_, -0.3, 0.3);
+  const double exposure = exposureBase_ * std::exp(logExposure_);
+
+  std::vector<MotionStreak> streaks;
+  for (const sequence::ObjectTruth& o : out.objects) {
+    if (o.speedMps < 0.1) {
+      continue;
+    }
+    const Eigen::Vector3d f(std::cos(o.headingEnuRad), std::sin(o.headingEnuRad), 0.0);
+    const double half = 0.5 * o.speedMps * sensorSpec_.exposureTimeS;
+    const auto a = lifter_.worldToPixel(*camPose, o.positionEnu - half * f);
+    const auto b = lifter_.worldToPixel(*camPose, o.positionEnu + half * f);
+    if (a && b) {
+      streaks.push_back({o.trackId, *b - *a});
+    }
+  }
+  const std::uint32_t noiseKey = rng.nextU32();
+  sensor_.develop(linear, out.ids, streaks, exposure, noiseKey, out.image);
+
+  out.recordedPose = out.truePose;
+  if (options_.telemetryNoise) {
+    Eigen::Vector3d enu = world_.frame().toEnu(out.truePose.position);
+    enu += Eigen::Vector3d(rng.normal(0.0, 0.03), rng.normal(0.0, 0.03), rng.normal(0.0, 0.05));
+    out.recordedPose.position = world_.frame().toGeodetic(enu);
+    const Eigen::Quaterniond noise =
+        quaternionFromEuler(rng.normal(0.0, 0.03), rng.normal(0.0, 0.03), rng.normal(0.0, 0.05));
+    out.recordedPose.bodyToNed = (out.truePose.bodyToNed * noise).normalized();
+    out.recordedPose.gimbal.angles.rollDeg += rng.normal(0.0, 0.02);
+    out.recordedPose.gimbal.angles.pitchDeg += rng.normal(0.0, 0.02);
+    out.recordedPose.gimbal.angles.yawDeg =
+        wrapDeg(out.recordedPose.gimbal.angles.yawDeg + rng.normal(0.0, 0.02));
+  }
+  ++frameIndex_;
+  return true;
+}
+
+std::string Simulator::rigYaml() const {
+  std::ostringstream y;
+  const auto& k = rig_.intrinsics;
+  const auto& d = rig_.distortion;
+  y << "# Camera rig of a simulated sequence (vp_simulate), application configuration schema.\n";
+  y << "origin:\n  latitude_deg: " << num(origin_.latitudeDeg)
+    << "\n  longitude_deg: " << num(origin_.longitudeDeg)
+    << "\n  height_m: " << num(origin_.heightM) << "\n";
+  y << "camera:\n  width_px: " << k.widthPx << "\n  height_px: " << k.heightPx
+    << "\n  fx_px: " << num(k.fxPx) << "\n  fy_px: " << num(k.fyPx) << "\n  cx_px: " << num(k.cxPx)
+    << "\n  cy_px: " << num(k.cyPx) << "\n  lens_model: " << camera::toString(d.model) << "\n";
+  if (d.model == camera::LensModel::BrownConrady) {
+    y << "  distortion:\n    k1: " << num(d.k1) << "\n    k2: " << num(d.k2)
+      << "\n    p1: " << num(d.p1) << "\n    p2: " << num(d.p2) << "\n    k3: " << num(d.k3)
+      << "\n";
+  }
+  y << "mount:\n  roll_deg: 0\n  pitch_deg: 0\n  yaw_deg: 0\n  lever_arm_m: ["
+    << num(rig_.mount.leverArmM.x()) << ", " << num(rig_.mount.leverArmM.y()) << ", "
+    << num(rig_.mount.leverArmM.z()) << "]\n";
+  const bool earth = rig_.gimbalReference == geodesy::GimbalReference::Earth;
+  y << "  gimbal:\n    reference: " << (earth ? "earth" : "body")
+    << "\n    roll_deg: 0\n    pitch_deg: " << num(-90.0 + rig_.tiltDeg)
+    << "\n    yaw_deg: " << num(earth ? wrapDeg(rig_.viewAzimuthDeg) : 0.0) << "\n";
+  y << "terrain:\n  dtm_path: dtm.tif\n  crs: auto\n";
+  return y.str();
+}
+
+std::string Simulator::summary() const {
+  std::ostringstream s;
+  s << "scene " << toString(scene_.kind) << ", season " << scene_.season << ", relief "
+    << toString(terrainSpec_.kind) << ", lens " << camera::toString(rig_.distortion.model)
+    << ", altitude " << num(std::round(rig_.altitudeM * 10) / 10) << " m, tilt "
+    << num(std::round(rig_.tiltDeg * 10) / 10) << " deg, sun elevation "
+    << num(std::round(scene_.light.sunElevationDeg)) << " deg"
+    << (scene_.light.overcast ? " (overcast)" : "") << ", " << scene_.buildings.size()
+    << " buildings, " << scene_.trees.size() << " trees, gimbal "
+    << (rig_.gimbalReference == geodesy::GimbalReference::Earth ? "earth" : "body")
+    << (options_.telemetryNoise ? ", telemetry with noise" : ", telemetry = true pose");
+  return s.str();
+}
+
+bool Simulator::write(std::string* why, const std::function<void(const FrameOutput&)>& onFrame) {
+  namespace fs = std::filesystem;
+  const fs::path staging =
+      fs::temp_directory_path() / ("vp_simulate_dtm_" + std::to_string(::getpid()) + ".tif");
+  if (!io::writeDtmGeoTiff(staging.string(), world_.terrain().grid(), why)) {
+    return false;
+  }
+  sequence::SequenceInfo info;
+  info.name = std::string(toString(options_.scene)) + "_seed" + std::to_string(options_.seed);
+  info.frameRateHz = 1.0 / kFrameIntervalS;
+  info.source = "vp_simulate 1.0 seed " + std::to_string(options_.seed) + " scene " +
+                toString(options_.scene);
+  info.notes = summary();
+  sequence::SequenceWriter writer;
+  writer.imageExtension = options_.png ? ".png" : ".jpg";
+  writer.jpegQuality = options_.jpegQuality;
+  writer.gammaColumns = asm_.componentCount();
+  const bool opened = writer.open(options_.outDir, info, rigYaml(), staging.string(), why);
+  std::error_code ignored;
+  fs::remove(staging, ignored);
+  if (!opened) {
+    return false;
+  }
+  if (options_.instanceMasks) {
+    fs::create_directories(fs::path(options_.outDir) / "instances");
+  }
+  FrameOutput frame;
+  for (int i = 0; i < options_.frames; ++i) {
+    if (!nextFrame(frame, why)) {
+      return false;
+    }
+    sequence::FrameRecord record;
+    record.frameId = frame.frameId;
+    record.timestampNs = frame.timestampNs;
+    sequence::TelemetryRecord telemetry;
+    telemetry.timestampNs = frame.timestampNs;
+    telemetry.position = frame.recordedPose.position;
+    telemetry.bodyToNed = frame.recordedPose.bodyToNed;
+    telemetry.gimbal = frame.recordedPose.gimbal;
+    if (!writer.writeFrame(record, frame.image, why) || !writer.writeTelemetry(telemetry, why) ||
+        !writer.writeObjects(frame.objects, why) || !writer.writeKeypoints(frame.keypoints, why)) {
+      return false;
+    }
+    if (options_.instanceMasks) {
+      cv::Mat mask(frame.ids.size(), CV_16UC1);
+      for (int v = 0; v < mask.rows; ++v) {
+        for (int u = 0; u < mask.cols; ++u) {
+          const int id = frame.ids.at<std::int32_t>(v, u);
+          mask.at<std::uint16_t>(v, u) =
+              static_cast<std::uint16_t>(id < 0 ? 65535 : std::min(id, 65534));
+        }
+      }
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06lld.png", static_cast<long long>(frame.frameId));
+      const std::vector<int> params = {cv::IMWRITE_PNG_COMPRESSION, 3};
+      if (!cv::imwrite((fs::path(options_.outDir) / "instances" / name).string(), mask, params)) {
+        return fail(why, "cannot write instance mask " + std::string(name));
+      }
+    }
+    if (onFrame) {
+      onFrame(frame);
+    }
+  }
+  return writer.close(why);
+}
+
+}  // namespace vp::sim

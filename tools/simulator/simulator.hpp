@@ -1,0 +1,140 @@
+// simulator/simulator: one simulated sequence, from the seed to the recorded-sequence
+// directory: world, scene, camera rig, traffic, rendering, sensor and ground truth.
+//
+// Contract: init() draws everything from one std::mt19937_64 seeded by options.seed, in a
+// fixed order (origin, terrain, scene, camera, sensor, hover, traffic warm-up); nextFrame()
+// advances the drone and the traffic by one frame (10 Hz) and renders it. The same options
+// give byte-identical output, independent of the thread count; no wall clock is read.
+// Command-line overrides (altitude, tilt) replace drawn values without changing the draw
+// order, so the rest of the scene stays the same. write() produces the documented
+// recorded-sequence format (docs/recorded_sequence.md) through sequence::SequenceWriter.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "camera/camera_model.hpp"
+#include "geodesy/attitude.hpp"
+#include "lifting/lifting.hpp"
+#include "renderer.hpp"
+#include "scene.hpp"
+#include "sensor.hpp"
+#include "sequence/recorded_sequence.hpp"
+#include "shape/vehicle_model.hpp"
+#include "traffic.hpp"
+#include "vehicles.hpp"
+#include "world.hpp"
+
+namespace vp::sim {
+
+struct SimOptions {
+  SceneKind scene = SceneKind::Intersection;
+  std::uint64_t seed = 0;
+  int frames = 10;
+  std::string outDir;
+  int width = 2592;
+  int height = 2048;
+  std::optional<double> altitudeM;  // above the ground at the view centre, 60..150
+  std::optional<double> tiltDeg;    // optical axis from nadir, 0..35
+  bool png = false;
+  int jpegQuality = 92;
+  int threads = 1;
+  int supersampling = 2;
+  std::string asmPath;          // default: models/asm/default_asm.yaml of the source tree
+  bool telemetryNoise = false;  // recorded pose = true pose + small noise
+  bool instanceMasks = false;   // also write instances/<frame>.png (16-bit object ids)
+  double warmUpS = 30.0;
+};
+
+struct RigSpec {
+  camera::Intrinsics intrinsics{};
+  camera::Distortion distortion{};
+  geodesy::CameraMount mount{};
+  geodesy::GimbalReference gimbalReference = geodesy::GimbalReference::Earth;
+  double altitudeM = 90.0;
+  double tiltDeg = 0.0;
+  double viewAzimuthDeg = 0.0;    // horizontal direction of the optical axis, clockwise from north
+  double bodyYawOffsetDeg = 0.0;  // earth gimbal: the airframe's heading relative to the view
+  double positionSigmaM = 0.3;
+  double positionTauS = 5.0;
+  double attitudeSigmaDeg = 1.0;
+  double attitudeTauS = 2.0;
+  double gimbalSigmaDeg = 0.05;
+};
+
+struct FrameOutput {
+  std::int64_t frameId = 0;
+  std::int64_t timestampNs = 0;
+  cv::Mat image;  // CV_8UC3 BGR, camera size
+  cv::Mat ids;    // CV_32SC1 object ids (0 ground, > 0 vehicle track ids, < 0 static objects)
+  lifting::DronePose truePose{};
+  lifting::DronePose recordedPose{};
+  std::vector<sequence::ObjectTruth> objects;
+  std::vector<sequence::KeypointTruth> keypoints;
+};
+
+class Simulator {
+ public:
+  Simulator();
+  ~Simulator();
+
+  bool init(const SimOptions& options, std::string* why);
+  bool nextFrame(FrameOutput& out, std::string* why);
+  // Renders options.frames frames into options.outDir; onFrame (optional) sees each frame
+  // after it is written (tests use the object-id buffer).
+  bool write(std::string* why, const std::function<void(const FrameOutput&)>& onFrame = {});
+
+  const SimOptions& options() const { return options_; }
+  const SceneSpec& scene() const { return scene_; }
+  const World& world() const { return world_; }
+  const RigSpec& rig() const { return rig_; }
+  const camera::CameraModel& camera() const { return camera_; }
+  const lifting::Lifter& lifter() const { return lifter_; }
+  const Renderer& renderer() const { return renderer_; }
+  const Sensor& sensor() const { return sensor_; }
+  const Traffic& traffic() const { return traffic_; }
+  const shape::ActiveShapeModel& asmModel() const { return asm_; }
+  const PinholeView& view() const { return view_; }
+  // rig.yaml text (application configuration schema) naming dtm.tif.
+  std::string rigYaml() const;
+  // One-line summary of the drawn parameters (sequence.yaml notes).
+  std::string summary() const;
+
+ private:
+  void drawRig();
+  lifting::DronePose hoverPose();
+
+  SimOptions options_{};
+  std::unique_ptr<Rng> rng_;
+  geodesy::GeodeticPoint origin_{};
+  TerrainSpec terrainSpec_{};
+  SceneSpec scene_{};
+  World world_{};
+  RigSpec rig_{};
+  SensorSpec sensorSpec_{};
+  camera::CameraModel camera_{};
+  lifting::Lifter lifter_{};
+  shape::ActiveShapeModel asm_{};
+  std::unique_ptr<VehicleFactory> factory_;
+  Traffic traffic_{};
+  Renderer renderer_{};
+  Sensor sensor_{};
+  Canvas canvas_{};
+  PinholeView view_{};
+  Eigen::Vector3d target_{0, 0, 0};
+  // Hover state: Ornstein-Uhlenbeck offsets of position (m) and attitude (deg).
+  Eigen::Vector3d positionOffset_{0, 0, 0};
+  Eigen::Vector3d attitudeOffset_{0, 0, 0};  // roll, pitch, yaw of the body
+  Eigen::Vector3d gimbalOffset_{0, 0, 0};
+  double logExposure_ = 0.0;
+  double exposureBase_ = -1.0;
+  std::int64_t frameIndex_ = 0;
+};
+
+}  // namespace vp::sim
