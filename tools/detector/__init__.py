@@ -1,0 +1,1 @@
+"""Vehicle detector: data, model, losses, training, export and evaluation (see README.md)."""

@@ -1,0 +1,83 @@
+"""A 20-step training run on a synthetic recorded sequence: the loss decreases, checkpoints are
+written and a resumed run continues from them."""
+
+import json
+import math
+import os
+import tempfile
+import unittest
+
+import cv2
+import numpy as np
+
+import _common  # noqa: F401
+from detector import geometry, train
+from detector.datasets import OBJECT_COLUMNS_AFTER_GAMMA
+
+
+def write_synthetic_sequence(root, frames=3, size=128, seed=0):
+    """Minimal frames.csv + ground_truth/objects.csv (what the reader needs): grey road,
+    bright 'cars' (24 x 10 px boxes, darker rear half) with random headings."""
+    rng = np.random.default_rng(seed)
+    os.makedirs(os.path.join(root, "frames"))
+    os.makedirs(os.path.join(root, "ground_truth"))
+    fr = ["frame_id,timestamp_ns,file"]
+    ob = ["frame_id,track_id,type,gamma_0,gamma_1,gamma_2," + ",".join(OBJECT_COLUMNS_AFTER_GAMMA)]
+    types = ["estate", "compact", "sports", "sedan", "suv", "van"]
+    for f in range(frames):
+        img = np.full((size, size, 3), 90, np.uint8)
+        img += rng.integers(0, 20, img.shape, dtype=np.uint8)
+        for t in range(4):
+            cx, cy = rng.uniform(20, size - 20, 2)
+            a = rng.uniform(0, 2 * math.pi)
+            box = np.array([cx, cy, 24.0, 10.0, a])
+            cv2.fillPoly(img, [np.round(geometry.box_corners(box)[0]).astype(np.int32)], (230, 230, 230))
+            rear = box.copy()
+            rear[:2] -= 6 * np.array([math.cos(a), math.sin(a)])
+            rear[2] = 12
+            cv2.fillPoly(img, [np.round(geometry.box_corners(rear)[0]).astype(np.int32)], (150, 150, 160))
+            g = rng.normal(0, 1, 3)
+            vals = [4.5, 1.8, 1.5, 0, 0, 0, 0, 0, 0, cx, cy, 24, 10, a, 0, 0, 0]
+            ob.append(f"{f},{t},{types[t % 6]},{g[0]},{g[1]},{g[2]}," + ",".join(repr(float(v)) for v in vals))
+        cv2.imwrite(os.path.join(root, "frames", f"{f:06d}.png"), img)
+        fr.append(f"{f},{1000 + f},frames/{f:06d}.png")
+    with open(os.path.join(root, "frames.csv"), "w") as fh:
+        fh.write("\n".join(fr) + "\n")
+    with open(os.path.join(root, "ground_truth", "objects.csv"), "w") as fh:
+        fh.write("\n".join(ob) + "\n")
+
+
+class SmokeTraining(unittest.TestCase):
+    def test_loss_decreases_and_resume(self):
+        with tempfile.TemporaryDirectory() as d:
+            seq = os.path.join(d, "seq")
+            write_synthetic_sequence(seq)
+            run = os.path.join(d, "run")
+            common = ["--data", seq, "--out", run, "--batch", "4", "--tile", "64",
+                      "--crop-batch", "4", "--working-width", "128", "--warmup-steps", "2",
+                      "--lr", "3e-3", "--threads", "2", "--device", "cpu", "--log-every", "100",
+                      "--no-eval", "--shape-loss", "l2", "--single-stage"]
+            res = train.train(train.parse_args(common + ["--max-steps", "20"]))
+            h = res["history"]
+            self.assertEqual(len(h), 20)
+            first = np.mean([r["det_loss"] for r in h[:5]])
+            last = np.mean([r["det_loss"] for r in h[-5:]])
+            self.assertLess(last, first)
+            cfirst = np.mean([r["crop_loss"] for r in h[:5]])
+            clast = np.mean([r["crop_loss"] for r in h[-5:]])
+            self.assertLess(clast, cfirst)
+            self.assertTrue(os.path.isfile(os.path.join(run, "checkpoint.pt")))
+            # resume: continues at step 20 and runs 2 more
+            res2 = train.train(train.parse_args(common + ["--max-steps", "22", "--resume"]))
+            self.assertEqual(res2["steps"], 22)
+            self.assertEqual(len(res2["history"]), 2)
+            with open(os.path.join(run, "train_log.jsonl")) as fh:
+                self.assertEqual(len(fh.readlines()), 22)
+
+    def test_refuses_run_dir_inside_repo(self):
+        with self.assertRaises(SystemExit):
+            train._check_out_dir(os.path.join(_common.REPO, "runs", "x"))
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -1,0 +1,418 @@
+#!/usr/bin/python3
+"""Trains the detector (and the second-stage crop classifier) on recorded sequences, real
+axis-aligned images and DOTA-format data. Run with Debian's Python (/usr/bin/python3).
+
+    tools/detector/train.py --data SEQDIR [SEQDIR ...] [--real DIR] [--dota DIR ...]
+        --out RUNDIR [--epochs N] [--budget-minutes M] [--resume] [--shape-loss l1|l2]
+        [--single-stage] [--val-data SEQDIR ...]
+
+Contract
+--------
+* Inputs: ``--data`` recorded sequences (docs/recorded_sequence.md, simulator or field
+  recordings with ground_truth/); ``--real`` a YOLO folder (images/, labels/; split without
+  near-duplicates, datasets.split_near_duplicate_free, report in RUNDIR/split.json);
+  ``--dota`` DOTA folders (images/, labelTxt/; heading unknown). A user trains on their own
+  data with these flags only, no code change.
+* Working scale: recorded frames are resized so their width becomes ``--working-width``
+  (648 = 2592/4, what the application feeds the engine) times a +-15 % jitter; images without
+  a camera model (real, DOTA) are resized to a working GSD drawn from
+  ``--working-gsd-range`` (their GSD: the DOTA header, else estimated from the median box
+  long side taken as a 4.5 m car). Training tiles are ``--tile`` px squares.
+* Every step trains the Detector on a batch of tiles and (unless ``--no-crop``) the CropNet on
+  a batch of jittered ground-truth crops (crops.py); losses in losses.py; the shape loss is
+  V_L1 or V_L2 (``--shape-loss``).
+* Output (never inside the repository): RUNDIR/checkpoint.pt (every
+  ``--checkpoint-minutes`` and at the end; atomic replace), RUNDIR/train_log.jsonl (losses),
+  RUNDIR/split.json, RUNDIR/metrics.json (validation at the end), RUNDIR/args.json.
+* ``--resume`` continues from RUNDIR/checkpoint.pt: models, optimisers, step, RNG states and
+  the elapsed training time (``--budget-minutes`` is the total over all runs). Runs are
+  deterministic for a seed on one device and thread count (data sampling happens in the main
+  process from one numpy Generator).
+* CUDA is used when available (``--device auto``), else the CPU.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from typing import Dict, List, Optional
+
+if __package__ in (None, ""):
+    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import numpy as np
+import torch
+
+from detector import augment, crops, targets
+from detector.asm import DEFAULT_ASM_PATH, REPO_ROOT, load_asm
+from detector.datasets import (Sample, read_dota, read_sequence, read_yolo,
+                               split_near_duplicate_free)
+from detector.losses import crop_loss, detector_loss, make_shape_loss
+from detector.model import CropNet, Detector, normalize
+
+CAR_LENGTH_M = 4.5
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--data", nargs="*", default=[], help="recorded sequence directories")
+    p.add_argument("--real", default=None, help="YOLO folder (images/, labels/) of real images")
+    p.add_argument("--real-max", type=int, default=0, help="use at most N real training images (0: all)")
+    p.add_argument("--real-val-max", type=int, default=0, help="evaluate at most N real validation images (0: all)")
+    p.add_argument("--real-share", type=float, default=0.3, help="share of tiles from real images")
+    p.add_argument("--dota", nargs="*", default=[], help="DOTA folders (images/, labelTxt/)")
+    p.add_argument("--val-data", nargs="*", default=[], help="held-out recorded sequences")
+    p.add_argument("--out", required=True, help="run directory (checkpoints, logs)")
+    p.add_argument("--epochs", type=int, default=50)
+    p.add_argument("--budget-minutes", type=float, default=60.0, help="total training time")
+    p.add_argument("--checkpoint-minutes", type=float, default=10.0)
+    p.add_argument("--resume", action="store_true")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--device", default="auto", help="auto, cpu, cuda")
+    p.add_argument("--threads", type=int, default=2, help="torch CPU threads")
+    p.add_argument("--batch", type=int, default=8)
+    p.add_argument("--crop-batch", type=int, default=32)
+    p.add_argument("--tile", type=int, default=256)
+    p.add_argument("--lr", type=float, default=2e-3)
+    p.add_argument("--warmup-steps", type=int, default=100)
+    p.add_argument("--working-width", type=int, default=648)
+    p.add_argument("--working-gsd-range", type=float, nargs=2, default=(0.08, 0.18))
+    p.add_argument("--shape-loss", choices=["l1", "l2"], default="l1", help="V_L1 or V_L2")
+    p.add_argument("--single-stage", action="store_true", help="add type/shape heads to the detector")
+    p.add_argument("--no-crop", action="store_true", help="do not train the crop classifier")
+    p.add_argument("--asm", default=DEFAULT_ASM_PATH)
+    p.add_argument("--cache-frames", type=int, default=256)
+    p.add_argument("--log-every", type=int, default=10)
+    p.add_argument("--max-steps", type=int, default=0, help="stop after N steps (tests)")
+    p.add_argument("--no-eval", action="store_true")
+    return p.parse_args(argv)
+
+
+def pick_device(name: str) -> torch.device:
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    return torch.device(name)
+
+
+class FrameCache:
+    """Loaded (full-resolution) samples, least recently used dropped beyond ``capacity``."""
+
+    def __init__(self, capacity: int):
+        self.capacity = capacity
+        self.items: Dict[int, Sample] = {}
+
+    def get(self, key: int, sample: Sample) -> Sample:
+        if key in self.items:
+            s = self.items.pop(key)
+        else:
+            s = sample.loaded()
+        self.items[key] = s
+        while len(self.items) > self.capacity:
+            self.items.pop(next(iter(self.items)))
+        return s
+
+
+def estimate_gsd(s: Sample) -> float:
+    """GSD (m/px) of an image: known per-object values, else the median box long side as a car."""
+    if len(s) and np.isfinite(s.gsd_m).any():
+        return float(np.nanmedian(s.gsd_m))
+    if len(s):
+        return CAR_LENGTH_M / float(np.median(np.maximum(s.boxes[:, 2], s.boxes[:, 3])))
+    return math.nan
+
+
+class Data:
+    """Training and validation sources and the batch makers (all randomness from ``rng``)."""
+
+    def __init__(self, args, n_s: int, log=print):
+        self.args = args
+        self.n_s = n_s
+        self.seq: List[Sample] = []
+        for d in args.data:
+            self.seq.extend(read_sequence(d, n_s=n_s))
+        for d in args.dota:
+            self.seq.extend(read_dota(d, n_s=n_s))
+        self.val_seq: List[Sample] = []
+        for d in args.val_data:
+            self.val_seq.extend(read_sequence(d, n_s=n_s))
+        self.real: List[Sample] = []
+        self.real_val: List[Sample] = []
+        self.split_report = None
+        if args.real:
+            all_real = read_yolo(args.real, n_s=n_s)
+            self.real, self.real_val, self.split_report = split_near_duplicate_free(
+                all_real, seed=args.seed)
+            if args.real_max:
+                sel = np.random.default_rng(args.seed).permutation(len(self.real))[:args.real_max]
+                self.real = [self.real[i] for i in sorted(sel)]
+            if args.real_val_max:
+                sel = np.random.default_rng(args.seed + 1).permutation(len(self.real_val))[:args.real_val_max]
+                self.real_val = [self.real_val[i] for i in sorted(sel)]
+        if not self.seq and not self.real:
+            raise SystemExit("no training data: give --data, --real or --dota")
+        self.crop_pool = [(i, j) for i, s in enumerate(self.seq) for j in range(len(s))
+                          if not s.ignore[j] and s.types[j] >= 0 and not s.aa_only[j]
+                          and s.direction_known[j] and math.isfinite(s.gsd_m[j])]
+        self.cache = FrameCache(args.cache_frames)
+        log(f"data: {len(self.seq)} sequence/DOTA frames ({sum(len(s) for s in self.seq)} objects), "
+            f"{len(self.real)} real training images, {len(self.real_val)} real validation images, "
+            f"{len(self.val_seq)} validation frames, {len(self.crop_pool)} typed objects for crops")
+
+    def frames_per_epoch(self) -> int:
+        return len(self.seq) + len(self.real)
+
+    def _load(self, pool: str, i: int) -> Sample:
+        src = self.seq if pool == "seq" else self.real
+        key = i if pool == "seq" else -1 - i
+        return self.cache.get(key, src[i])
+
+    def tile(self, rng: np.random.Generator) -> Sample:
+        a = self.args
+        use_real = self.real and (not self.seq or rng.random() < a.real_share)
+        pool = "real" if use_real else "seq"
+        src = self.real if use_real else self.seq
+        i = int(rng.integers(0, len(src)))
+        s = self._load(pool, i)
+        if pool == "seq" and np.isfinite(s.gsd_m).any() and s.keypoints is not None:
+            f = a.working_width / s.image.shape[1]
+        else:
+            gsd = estimate_gsd(s)
+            target = rng.uniform(*a.working_gsd_range)
+            f = gsd / target if math.isfinite(gsd) else a.working_width / s.image.shape[1]
+        f *= math.exp(rng.uniform(-0.15, 0.15))
+        s = augment.scale(s, f)
+        s = augment.random_crop(s, (a.tile, a.tile), rng)
+        s = augment.random_geometric(s, rng)
+        return augment.photometric(s, rng)
+
+    def detector_batch(self, rng, device) -> Dict[str, torch.Tensor]:
+        items, imgs = [], []
+        for _ in range(self.args.batch):
+            s = self.tile(rng)
+            items.append(targets.encode(s, n_s=self.n_s))
+            imgs.append(s.image)
+        batch = {k: torch.from_numpy(v).to(device) for k, v in targets.collate(items).items()}
+        x = torch.from_numpy(np.stack(imgs)).permute(0, 3, 1, 2).to(device)
+        batch["input"] = normalize(x)
+        return batch
+
+    def crop_batch(self, rng, device) -> Optional[Dict[str, torch.Tensor]]:
+        if not self.crop_pool:
+            return None
+        imgs, types, gammas, flips, refines = [], [], [], [], []
+        for _ in range(self.args.crop_batch):
+            i, j = self.crop_pool[int(rng.integers(0, len(self.crop_pool)))]
+            s = self._load("seq", i)
+            box, gsd = s.boxes[j], float(s.gsd_m[j])
+            cen, ang, gsd_used, flip, refine = crops.jittered_crop_target(box, gsd, rng)
+            patch = crops.extract_crop(s.image, cen, ang, gsd_used)
+            if rng.random() < 0.5:  # mirror about the length axis: left/right swap
+                patch = np.ascontiguousarray(patch[::-1])
+                refine = refine.copy()
+                refine[1] = -refine[1]
+                refine[2] = -refine[2]
+            tmp = Sample(image_path=None, image=patch, **{k: v for k, v in _empty(self.n_s).items()})
+            patch = augment.photometric(tmp, rng).image
+            imgs.append(patch)
+            types.append(s.types[j])
+            gammas.append(s.gammas[j])
+            flips.append(flip)
+            refines.append(refine)
+        x = torch.from_numpy(np.stack(imgs)).permute(0, 3, 1, 2).to(device)
+        return {"input": normalize(x), "type": torch.tensor(np.array(types), device=device),
+                "gamma": torch.tensor(np.stack(gammas), device=device),
+                "flip": torch.tensor(np.array(flips), device=device),
+                "refine": torch.tensor(np.stack(refines), device=device)}
+
+
+def _empty(n_s):
+    from detector.datasets import empty_like_arrays
+
+    return empty_like_arrays(0, n_s)
+
+
+def lr_at(step: int, total: int, base: float, warmup: int = 100) -> float:
+    if step < warmup:
+        return base * (step + 1) / warmup
+    t = min(1.0, (step - warmup) / max(1, total - warmup))
+    return base * (0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * t)))
+
+
+def save_checkpoint(path: str, state: dict) -> None:
+    tmp = path + ".tmp"
+    torch.save(state, tmp)
+    os.replace(tmp, path)
+
+
+def _check_out_dir(out: str) -> None:
+    real = os.path.realpath(out)
+    if real == REPO_ROOT or real.startswith(REPO_ROOT + os.sep):
+        raise SystemExit(f"--out {out}: run directories must be outside the repository")
+
+
+def train(args) -> dict:
+    _check_out_dir(args.out)
+    os.makedirs(args.out, exist_ok=True)
+    log_path = os.path.join(args.out, "train_log.jsonl")
+
+    def log(msg):
+        print(msg, flush=True)
+
+    device = pick_device(args.device)
+    torch.set_num_threads(args.threads)
+    torch.manual_seed(args.seed)
+    if device.type == "cuda":
+        torch.backends.cudnn.benchmark = False
+        torch.backends.cudnn.deterministic = True
+    asm = load_asm(args.asm)
+    data = Data(args, asm.n_s, log)
+    if data.split_report:
+        with open(os.path.join(args.out, "split.json"), "w") as f:
+            json.dump(data.split_report, f, indent=1)
+        r = data.split_report
+        log(f"real split: {r['train']} train / {r['val']} val images ({r['train_boxes']} / "
+            f"{r['val_boxes']} boxes); dropped from val: {r['val_dropped_gap']} (frame gap), "
+            f"{r['val_dropped_hash']} (dHash <= {r['hash_threshold_bits']} bits); min val-train "
+            f"hash distance {r['min_val_train_hash_distance']}")
+    det = Detector(n_s=asm.n_s, single_stage=args.single_stage).to(device)
+    crop_net = None if args.no_crop else CropNet(n_s=asm.n_s).to(device)
+    opt_d = torch.optim.AdamW(det.parameters(), lr=args.lr, weight_decay=1e-4)
+    opt_c = torch.optim.AdamW(crop_net.parameters(), lr=args.lr, weight_decay=1e-4) if crop_net else None
+    shape_loss = make_shape_loss(args.shape_loss, asm)
+    steps_per_epoch = max(1, math.ceil(data.frames_per_epoch() / args.batch))
+    total_steps = args.epochs * steps_per_epoch
+    if args.max_steps:
+        total_steps = min(total_steps, args.max_steps)
+    rng = np.random.default_rng(args.seed)
+    step, elapsed = 0, 0.0
+    ckpt_path = os.path.join(args.out, "checkpoint.pt")
+    if args.resume and os.path.isfile(ckpt_path):
+        ck = torch.load(ckpt_path, map_location=device)
+        det.load_state_dict(ck["detector"])
+        opt_d.load_state_dict(ck["opt_detector"])
+        if crop_net is not None and ck.get("crop") is not None:
+            crop_net.load_state_dict(ck["crop"])
+            opt_c.load_state_dict(ck["opt_crop"])
+        step, elapsed = ck["step"], ck["elapsed_s"]
+        rng.bit_generator.state = ck["numpy_rng"]
+        torch.set_rng_state(ck["torch_rng"])
+        log(f"resumed at step {step} ({elapsed / 60:.1f} min trained)")
+    elif args.resume:
+        log(f"--resume: no {ckpt_path}, starting fresh")
+    with open(os.path.join(args.out, "args.json"), "w") as f:
+        json.dump(vars(args), f, indent=1)
+
+    def state():
+        return {"detector": det.state_dict(), "opt_detector": opt_d.state_dict(),
+                "crop": crop_net.state_dict() if crop_net else None,
+                "opt_crop": opt_c.state_dict() if opt_c else None,
+                "step": step, "elapsed_s": elapsed, "numpy_rng": rng.bit_generator.state,
+                "torch_rng": torch.get_rng_state(), "args": vars(args), "n_s": asm.n_s,
+                "single_stage": args.single_stage, "shape_loss": args.shape_loss}
+
+    budget_s = args.budget_minutes * 60
+    log(f"device {device}, {steps_per_epoch} steps/epoch, planned {total_steps} steps, "
+        f"budget {args.budget_minutes} min")
+    det.train()
+    if crop_net:
+        crop_net.train()
+    last_ckpt = time.monotonic()
+    t_run = time.monotonic()
+    elapsed0 = elapsed
+    history = []
+    with open(log_path, "a") as logf:
+        while step < total_steps and elapsed < budget_s:
+            t0 = time.monotonic()
+            lr = lr_at(step, total_steps, args.lr, args.warmup_steps)
+            for g in opt_d.param_groups:
+                g["lr"] = lr
+            batch = data.detector_batch(rng, device)
+            t_data = time.monotonic() - t0
+            out = det(batch["input"])
+            loss_d, terms_d = detector_loss(out, batch, shape_loss)
+            opt_d.zero_grad(set_to_none=True)
+            loss_d.backward()
+            torch.nn.utils.clip_grad_norm_(det.parameters(), 10.0)
+            opt_d.step()
+            rec = {"step": step, "lr": lr, "det_loss": float(loss_d.detach()),
+                   **{f"det_{k}": v for k, v in terms_d.items()}}
+            if crop_net is not None:
+                cb = data.crop_batch(rng, device)
+                if cb is not None:
+                    for g in opt_c.param_groups:
+                        g["lr"] = lr
+                    loss_c, terms_c = crop_loss(crop_net(cb["input"]), cb, shape_loss)
+                    opt_c.zero_grad(set_to_none=True)
+                    loss_c.backward()
+                    torch.nn.utils.clip_grad_norm_(crop_net.parameters(), 10.0)
+                    opt_c.step()
+                    rec.update({"crop_loss": float(loss_c.detach()),
+                                **{f"crop_{k}": v for k, v in terms_c.items()}})
+            step += 1
+            elapsed = elapsed0 + (time.monotonic() - t_run)
+            rec.update({"elapsed_s": elapsed, "step_s": time.monotonic() - t0, "data_s": t_data})
+            history.append(rec)
+            logf.write(json.dumps(rec) + "\n")
+            if step % args.log_every == 0 or step == 1:
+                logf.flush()
+                log(f"step {step}/{total_steps} ep {step / steps_per_epoch:.2f} "
+                    f"{elapsed / 60:.1f} min det {rec['det_loss']:.3f} "
+                    + " ".join(f"{k[4:]} {v:.3f}" for k, v in rec.items() if k.startswith("det_") and k != "det_loss")
+                    + (f" | crop {rec['crop_loss']:.3f}" if "crop_loss" in rec else "")
+                    + f" | {rec['step_s']:.2f} s/step (data {t_data:.2f})")
+            if time.monotonic() - last_ckpt > args.checkpoint_minutes * 60:
+                save_checkpoint(ckpt_path, state())
+                last_ckpt = time.monotonic()
+                log(f"checkpoint at step {step}")
+    save_checkpoint(ckpt_path, state())
+    log(f"stopped at step {step} ({elapsed / 60:.1f} min); checkpoint {ckpt_path}")
+    result = {"steps": step, "elapsed_s": elapsed, "history": history}
+    if not args.no_eval and (data.val_seq or data.real_val):
+        det.eval()
+        if crop_net:
+            crop_net.eval()
+        metrics = validate(det, crop_net, data, args, device)
+        with open(os.path.join(args.out, "metrics.json"), "w") as f:
+            json.dump(metrics, f, indent=1)
+        log("validation: " + json.dumps(metrics))
+        result["metrics"] = metrics
+    return result
+
+
+def validate(det, crop_net, data: Data, args, device) -> dict:
+    from detector.evaluate import Predictor, evaluate_samples
+
+    out = {}
+    if data.val_seq:
+        w = data.val_seq[0].loaded().image.shape[1]
+        pred = Predictor(det, crop_net, scale=args.working_width / w, device=str(device))
+        out["sim_val"] = evaluate_samples(pred, data.val_seq)
+    if data.real_val:
+        accs = []
+        from detector.evaluate import Accumulator
+
+        acc = Accumulator()
+        for s in data.real_val:
+            s = s.loaded()
+            gsd = estimate_gsd(s)
+            scale = gsd / 0.12 if math.isfinite(gsd) else 0.4
+            pred = Predictor(det, None, device=str(device))
+            res = pred(s.image, scale=scale)
+            acc.add(res["boxes"], s.boxes, s.ignore, axis_aligned=True)
+        out["real_val_axis_aligned"] = acc.result()
+    return out
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    train(args)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
