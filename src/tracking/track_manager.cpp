@@ -1,0 +1,379 @@
+#include "tracking/track_manager.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "geometry/rotated_box.hpp"
+
+namespace vp::tracking {
+namespace {
+
+constexpr double kNsPerS = 1e9;
+// Without an ASM: a car's wheelbase is ~60 % of its length, its rear axle ~28 % of the
+// length behind the centre (typical overhangs).
+constexpr double kWheelbasePerLength = 0.60;
+constexpr double kRearAxlePerLength = 0.28;
+
+bool valid(const WorldDetection& d) {
+  if (!std::isfinite(d.centreEnu.x()) || !std::isfinite(d.centreEnu.y()) ||
+      !std::isfinite(d.headingEnuRad) || !std::isfinite(d.lengthM) || !std::isfinite(d.widthM) ||
+      !(d.lengthM > 0.0) || !(d.widthM > 0.0) || !(d.score >= 0.0f) || !(d.score <= 1.0f)) {
+    return false;
+  }
+  for (float p : d.typeProbabilities) {
+    if (!std::isfinite(p) || p < 0.0f) {
+      return false;
+    }
+  }
+  for (int s = 0; s < d.shape.count && s < shape::kMaxShapeComponents; ++s) {
+    if (!std::isfinite(d.shape.gamma[static_cast<std::size_t>(s)])) {
+      return false;
+    }
+  }
+  return d.shape.count >= 0 && d.shape.count <= shape::kMaxShapeComponents;
+}
+
+}  // namespace
+
+const char* toString(TrackStatus status) {
+  switch (status) {
+    case TrackStatus::Tentative:
+      return "tentative";
+    case TrackStatus::Confirmed:
+      return "confirmed";
+    case TrackStatus::Lost:
+      return "lost";
+  }
+  return "?";
+}
+
+const char* toString(TrackError error) {
+  switch (error) {
+    case TrackError::NotInitialised:
+      return "tracker not initialised";
+    case TrackError::TimeWentBackwards:
+      return "frame time went backwards";
+    case TrackError::AssociationFailed:
+      return "association failed (capacity)";
+  }
+  return "?";
+}
+
+bool TrackManager::init(const TrackerConfig& config, std::string* why) {
+  auto fail = [&](const char* message) {
+    if (why != nullptr) {
+      *why = message;
+    }
+    return false;
+  };
+  if (config.maxTracks <= 0 || config.maxDetections <= 0) {
+    return fail("tracking: maxTracks and maxDetections must be > 0");
+  }
+  if (config.confirmHits < 1 || config.flipVotes < 1) {
+    return fail("tracking: confirmHits and flipVotes must be >= 1");
+  }
+  if (!(config.maxLost_s >= 0.0) || !(config.maxTentativeGap_s >= 0.0) ||
+      !(config.noise.measurementPosition_m > 0.0) || !(config.noise.measurementHeading_rad > 0.0) ||
+      !(config.noise.accelerationDecay_s > 0.0) || !(config.typeFloor > 0.0) ||
+      !(config.shapeMaxWeight > 0.0)) {
+    return fail("tracking: times, noise sigmas, typeFloor and shapeMaxWeight must be > 0");
+  }
+  config_ = config;
+  if (!associator_.init(config.maxTracks, config.maxDetections, config.association)) {
+    return fail("tracking: association parameters invalid (lowScore > highScore?)");
+  }
+  const auto nt = static_cast<std::size_t>(config.maxTracks);
+  const auto nd = static_cast<std::size_t>(config.maxDetections);
+  slots_.assign(nt, Slot{});
+  detections_.assign(nd, WorldDetection{});
+  views_.assign(nt, TrackView{});
+  viewSlot_.assign(nt, -1);
+  trackToDet_.assign(nt, -1);
+  detToTrack_.assign(nd, -1);
+  published_.assign(nt, TrackState{});
+  publishedCount_ = 0;
+  started_ = false;
+  nextId_ = 1;
+  initialised_ = true;
+  return true;
+}
+
+void TrackManager::updateGeometry(Slot& slot) {
+  TrackState& out = slot.out;
+  double wheelbase = kWheelbasePerLength * out.lengthM;
+  double rearToCentre = kRearAxlePerLength * out.lengthM;
+  if (config_.asmModel != nullptr && out.type != shape::VehicleType::Large &&
+      config_.asmModel->componentCount() > 0 && out.shape.count > 0) {
+    const shape::KeypointModel model = config_.asmModel->shape(out.shape);
+    const auto& wheels = shape::wheelCentreKeypoints();
+    const double front = 0.5 * (model(0, wheels[0]) + model(0, wheels[1]));
+    const double rear = 0.5 * (model(0, wheels[2]) + model(0, wheels[3]));
+    if (front - rear > 1.0) {
+      wheelbase = front - rear;
+      rearToCentre = -rear;
+    }
+  }
+  if (std::abs(wheelbase - slot.motion.wheelbase()) > 0.01 ||
+      std::abs(rearToCentre - slot.motion.rearToCentre()) > 0.01) {
+    slot.motion.setGeometry(wheelbase, rearToCentre);
+  }
+}
+
+void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t timestampNs) {
+  slot = Slot{};
+  slot.live = true;
+  slot.lastUpdateNs = timestampNs;
+  TrackState& out = slot.out;
+  out.id = nextId_++;
+  out.status = TrackStatus::Tentative;
+  out.hits = 1;
+  out.updated = true;
+  out.lengthM = d.lengthM;
+  out.widthM = d.widthM;
+  slot.sizeWeight = std::max(1e-3, static_cast<double>(d.score));
+  for (std::size_t k = 0; k < slot.typeLog.size(); ++k) {
+    slot.typeLog[k] =
+        config_.typeEvidenceWeight *
+        std::log(std::max(config_.typeFloor, static_cast<double>(d.typeProbabilities[k])));
+  }
+  if (d.shape.count > 0) {
+    slot.gammaWeight = slot.sizeWeight;
+    for (int s = 0; s < d.shape.count; ++s) {
+      slot.gammaSum[static_cast<std::size_t>(s)] =
+          slot.sizeWeight * static_cast<double>(d.shape.gamma[static_cast<std::size_t>(s)]);
+    }
+    out.shape = d.shape;
+  }
+  // The type decides whether the ASM applies; set it before the geometry.
+  const auto best = std::max_element(slot.typeLog.begin(), slot.typeLog.end());
+  out.type = static_cast<shape::VehicleType>(best - slot.typeLog.begin());
+  slot.motion.initialise(d.centreEnu, d.headingEnuRad, kWheelbasePerLength * d.lengthM,
+                         kRearAxlePerLength * d.lengthM, config_.noise);
+  updateGeometry(slot);
+}
+
+void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timestampNs,
+                        StepReport& report) {
+  TrackState& out = slot.out;
+  const MotionModel& m = slot.motion;
+  const double v = m.state()[kV];
+  const double sigmaV = std::sqrt(std::max(0.0, m.covariance()(kV, kV)));
+  const bool movingForward = v > config_.movingSpeed_mps && v > 3.0 * sigmaV;
+
+  double heading = d.headingEnuRad;
+  if (d.headingKnown) {
+    if (geometry::absAngleDifference(heading, m.heading()) > 0.5 * geometry::kPi) {
+      heading = geometry::wrapTwoPi(heading + geometry::kPi);
+      ++out.headingCorrections;
+      ++report.headingCorrections;
+      // Disagreement counts against the track only while motion cannot vouch for it.
+      slot.disagreeRun = movingForward ? 0 : slot.disagreeRun + 1;
+    } else {
+      slot.disagreeRun = 0;
+    }
+  }
+  slot.motion.update(d.centreEnu, heading, d.headingKnown, config_.noise);
+
+  // Direction of travel decides the heading of a moving car; a run of disagreeing
+  // detections decides it for a standing one (its first detection may have been flipped).
+  const double vNow = slot.motion.state()[kV];
+  const double sigmaNow = std::sqrt(std::max(0.0, slot.motion.covariance()(kV, kV)));
+  const bool movingBackward = vNow < -config_.movingSpeed_mps && -vNow > 3.0 * sigmaNow;
+  if (movingBackward || slot.disagreeRun >= config_.flipVotes) {
+    slot.motion.flipDirection();
+    slot.disagreeRun = 0;
+  }
+
+  // Type: tempered naive Bayes in log space, renormalised so the logs stay bounded.
+  double maxLog = -1e300;
+  for (std::size_t k = 0; k < slot.typeLog.size(); ++k) {
+    slot.typeLog[k] +=
+        config_.typeEvidenceWeight *
+        std::log(std::max(config_.typeFloor, static_cast<double>(d.typeProbabilities[k])));
+    maxLog = std::max(maxLog, slot.typeLog[k]);
+  }
+  for (double& l : slot.typeLog) {
+    l = std::max(l - maxLog, -50.0);
+  }
+
+  // Shape and size: score-weighted running means with a capped weight.
+  const double w = std::max(1e-3, static_cast<double>(d.score));
+  const double keep = std::min(1.0, config_.shapeMaxWeight / (slot.sizeWeight + w));
+  out.lengthM = (slot.sizeWeight * out.lengthM + w * d.lengthM) / (slot.sizeWeight + w);
+  out.widthM = (slot.sizeWeight * out.widthM + w * d.widthM) / (slot.sizeWeight + w);
+  slot.sizeWeight = (slot.sizeWeight + w) * keep;
+  if (d.shape.count > 0) {
+    const double keepG = std::min(1.0, config_.shapeMaxWeight / (slot.gammaWeight + w));
+    for (int s = 0; s < d.shape.count; ++s) {
+      auto& sum = slot.gammaSum[static_cast<std::size_t>(s)];
+      sum = (sum + w * static_cast<double>(d.shape.gamma[static_cast<std::size_t>(s)])) * keepG;
+    }
+    slot.gammaWeight = (slot.gammaWeight + w) * keepG;
+    out.shape.count = std::max(out.shape.count, d.shape.count);
+    for (int s = 0; s < out.shape.count; ++s) {
+      out.shape.gamma[static_cast<std::size_t>(s)] =
+          static_cast<float>(slot.gammaSum[static_cast<std::size_t>(s)] / slot.gammaWeight);
+    }
+  }
+  updateGeometry(slot);
+
+  slot.lastUpdateNs = timestampNs;
+  out.updated = true;
+  ++out.hits;
+  if (out.status == TrackStatus::Lost) {
+    out.status = TrackStatus::Confirmed;
+    ++report.reacquisitions;
+  } else if (out.status == TrackStatus::Tentative && out.hits >= config_.confirmHits) {
+    out.status = TrackStatus::Confirmed;
+  }
+}
+
+void TrackManager::publish(Slot& slot, std::int64_t timestampNs) {
+  TrackState& out = slot.out;
+  const MotionModel& m = slot.motion;
+  const StateVector& x = m.state();
+  const StateMatrix& p = m.covariance();
+  out.timestampNs = timestampNs;
+  out.lastUpdateNs = slot.lastUpdateNs;
+  out.centreEnu = m.centre();
+  out.rearAxleEnu = m.rearAxle();
+  out.headingEnuRad = m.heading();
+  out.speedMps = x[kV];
+  out.speedSigmaMps = std::sqrt(std::max(0.0, p(kV, kV)));
+  out.accelerationMps2 = x[kA];
+  out.accelerationSigmaMps2 = std::sqrt(std::max(0.0, p(kA, kA)));
+  out.yawRateRadps = m.yawRate();
+  out.steeringRad = x[kDelta];
+  out.wheelbaseM = m.wheelbase();
+  const Eigen::Matrix2d c = m.centreCovariance();
+  const double tr = 0.5 * (c(0, 0) + c(1, 1));
+  const double det = c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0);
+  out.positionSigmaM = std::sqrt(std::max(0.0, tr + std::sqrt(std::max(0.0, tr * tr - det))));
+  double total = 0.0;
+  for (double l : slot.typeLog) {
+    total += std::exp(l);
+  }
+  std::size_t best = 0;
+  for (std::size_t k = 0; k < slot.typeLog.size(); ++k) {
+    out.typeProbabilities[k] = static_cast<float>(std::exp(slot.typeLog[k]) / total);
+    if (slot.typeLog[k] > slot.typeLog[best]) {
+      best = k;
+    }
+  }
+  out.type = static_cast<shape::VehicleType>(best);
+}
+
+Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestampNs,
+                                                    std::span<const WorldDetection> detections) {
+  if (!initialised_) {
+    return unexpected(TrackError::NotInitialised);
+  }
+  if (started_ && timestampNs < lastTimeNs_) {
+    return unexpected(TrackError::TimeWentBackwards);
+  }
+  const double dt = started_ ? static_cast<double>(timestampNs - lastTimeNs_) / kNsPerS : 0.0;
+  started_ = true;
+  lastTimeNs_ = timestampNs;
+  StepReport report;
+
+  int nDet = 0;
+  for (const WorldDetection& d : detections) {
+    if (!valid(d)) {
+      ++report.rejectedDetections;
+    } else if (nDet >= config_.maxDetections) {
+      ++report.droppedDetections;
+    } else {
+      detections_[static_cast<std::size_t>(nDet++)] = d;
+    }
+  }
+  report.detectionsUsed = nDet;
+
+  // Predict every live track to this frame and show it to the associator.
+  int nViews = 0;
+  for (std::size_t i = 0; i < slots_.size(); ++i) {
+    Slot& slot = slots_[i];
+    if (!slot.live) {
+      continue;
+    }
+    slot.motion.predict(dt, config_.noise);
+    slot.out.updated = false;
+    TrackView& view = views_[static_cast<std::size_t>(nViews)];
+    view.centre = slot.motion.centre();
+    view.headingRad = slot.motion.heading();
+    view.lengthM = slot.out.lengthM;
+    view.widthM = slot.out.widthM;
+    view.centreInnovationCov = slot.motion.centreCovariance() +
+                               Eigen::Matrix2d::Identity() * config_.noise.measurementPosition_m *
+                                   config_.noise.measurementPosition_m;
+    view.secondPass = slot.out.status != TrackStatus::Tentative;
+    viewSlot_[static_cast<std::size_t>(nViews)] = static_cast<int>(i);
+    ++nViews;
+  }
+
+  const std::span<const WorldDetection> dets(detections_.data(), static_cast<std::size_t>(nDet));
+  if (!associator_.associate(
+          std::span<const TrackView>(views_.data(), static_cast<std::size_t>(nViews)), dets,
+          std::span<int>(trackToDet_.data(), static_cast<std::size_t>(nViews)),
+          std::span<int>(detToTrack_.data(), static_cast<std::size_t>(nDet)),
+          &report.association)) {
+    return unexpected(TrackError::AssociationFailed);
+  }
+
+  for (int v = 0; v < nViews; ++v) {
+    Slot& slot = slots_[static_cast<std::size_t>(viewSlot_[static_cast<std::size_t>(v)])];
+    const int d = trackToDet_[static_cast<std::size_t>(v)];
+    if (d >= 0) {
+      fuse(slot, detections_[static_cast<std::size_t>(d)], timestampNs, report);
+      continue;
+    }
+    const double since = static_cast<double>(timestampNs - slot.lastUpdateNs) / kNsPerS;
+    switch (slot.out.status) {
+      case TrackStatus::Tentative:
+        if (since > config_.maxTentativeGap_s) {
+          slot.live = false;
+        }
+        break;
+      case TrackStatus::Confirmed:
+        slot.out.status = TrackStatus::Lost;
+        [[fallthrough]];
+      case TrackStatus::Lost:
+        if (since > config_.maxLost_s) {
+          slot.live = false;
+        }
+        break;
+    }
+    if (!slot.live) {
+      ++report.deletions;
+    }
+  }
+
+  // Births from unmatched confident detections, into free slots.
+  std::size_t freeSearch = 0;
+  for (int d = 0; d < nDet; ++d) {
+    const WorldDetection& det = detections_[static_cast<std::size_t>(d)];
+    if (detToTrack_[static_cast<std::size_t>(d)] >= 0 ||
+        det.score < config_.association.highScore) {
+      continue;
+    }
+    while (freeSearch < slots_.size() && slots_[freeSearch].live) {
+      ++freeSearch;
+    }
+    if (freeSearch == slots_.size()) {
+      ++report.droppedBirths;
+      continue;
+    }
+    birth(slots_[freeSearch], det, timestampNs);
+    ++report.births;
+  }
+
+  publishedCount_ = 0;
+  for (Slot& slot : slots_) {
+    if (slot.live) {
+      publish(slot, timestampNs);
+      published_[static_cast<std::size_t>(publishedCount_++)] = slot.out;
+    }
+  }
+  return report;
+}
+
+}  // namespace vp::tracking

@@ -1,0 +1,162 @@
+// tracking/track_manager: the multi-vehicle tracker: lifecycle, heading disambiguation and
+// fusion of type, shape and size over each track's frames.
+//
+// Contract: TrackManager() never fails; init() checks the configuration and allocates every
+// buffer for config.maxTracks tracks and config.maxDetections detections per step; after
+// that step() performs no heap allocation. step() takes one frame's world detections (all
+// with the frame's timestamp) and returns a StepReport or a TrackError value, never throws.
+// Bad detections (non-finite, size <= 0, score outside [0, 1]) are skipped and counted;
+// detections beyond maxDetections and births beyond maxTracks are dropped and counted. Time
+// must not go backwards (TrackError::TimeWentBackwards; nothing changes).
+//
+// Lifecycle (times in seconds of the detections' clock):
+//   birth: an unmatched detection with score >= association.highScore -> Tentative
+//   Tentative -> Confirmed after confirmHits matched frames; deleted when unmatched for
+//              longer than maxTentativeGap_s
+//   Confirmed -> Lost when a frame brings no match; Lost -> Confirmed (same id) when a
+//              detection matches again (re-acquisition after an occlusion); Lost -> deleted
+//              after maxLost_s without a match. Lost tracks are predicted (a parked car
+//              stays put), so the gates find the vehicle where it reappears.
+// Heading: a matched detection whose heading differs from the track's by more than 90
+// degrees is turned by 180 degrees before the update (counted). The track itself turns
+// when it moves backwards faster than movingSpeed_mps with confidence (cars drive forwards),
+// or, when it is not moving, when flipVotes detections in a row disagreed with it.
+// Type: p(type) ~ prod_frames p_det(type)^typeEvidenceWeight (a tempered naive Bayes in log
+// space, floored at typeFloor: frames of one car are not independent). Shape gamma, length
+// and width: score-weighted means with the total weight capped at shapeMaxWeight, so a slow
+// change is still followed. The wheelbase and rear-axle offset come from the fused gamma
+// through the ASM (when one is given and the type is a car), else from the length.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/expected.hpp"
+#include "shape/vehicle_model.hpp"
+#include "tracking/association.hpp"
+#include "tracking/motion_model.hpp"
+#include "tracking/world_detection.hpp"
+
+namespace vp::tracking {
+
+enum class TrackStatus : std::uint8_t { Tentative, Confirmed, Lost };
+const char* toString(TrackStatus status);
+
+enum class TrackError : std::uint8_t {
+  NotInitialised,
+  TimeWentBackwards,
+  AssociationFailed,  // a capacity check failed inside the associator (a bug, reported)
+};
+const char* toString(TrackError error);
+
+struct TrackerConfig {
+  int maxTracks = 256;
+  int maxDetections = 512;
+  MotionNoise noise{};
+  AssociationParams association{};
+  int confirmHits = 3;
+  double maxTentativeGap_s = 0.25;
+  double maxLost_s = 3.0;
+  double movingSpeed_mps = 1.5;
+  int flipVotes = 3;
+  double typeEvidenceWeight = 0.5;
+  double typeFloor = 0.02;
+  double shapeMaxWeight = 30.0;
+  const shape::ActiveShapeModel* asmModel = nullptr;  // borrowed; wheelbase from gamma
+};
+
+// One track as published (a copy; valid until the next step).
+struct TrackState {
+  std::uint32_t id = 0;
+  TrackStatus status = TrackStatus::Tentative;
+  bool updated = false;                   // a detection was fused in this step
+  std::int64_t timestampNs = 0;           // time of the state (this step)
+  int hits = 0;                           // matched frames over the track's life
+  std::int64_t lastUpdateNs = 0;          // time of the last fused detection
+  Eigen::Vector2d centreEnu{0.0, 0.0};    // footprint centre, m
+  Eigen::Vector2d rearAxleEnu{0.0, 0.0};  // rear-axle centre (seed 002's reference), m
+  double headingEnuRad = 0.0;
+  double speedMps = 0.0;
+  double speedSigmaMps = 0.0;
+  double accelerationMps2 = 0.0;
+  double accelerationSigmaMps2 = 0.0;
+  double yawRateRadps = 0.0;
+  double steeringRad = 0.0;
+  double positionSigmaM = 0.0;  // sqrt of the larger eigenvalue of the centre covariance
+  double lengthM = 0.0;
+  double widthM = 0.0;
+  double wheelbaseM = 0.0;
+  std::array<float, shape::kVehicleTypeCount> typeProbabilities{};
+  shape::VehicleType type = shape::VehicleType::Sedan;  // argmax of typeProbabilities
+  shape::ShapeParams shape{};
+  int headingCorrections = 0;  // detections turned by 180 degrees over the track's life
+};
+
+struct StepReport {
+  int detectionsUsed = 0;
+  int rejectedDetections = 0;  // non-finite, bad size or score
+  int droppedDetections = 0;   // beyond maxDetections
+  int droppedBirths = 0;       // no free track slot
+  int births = 0;
+  int deletions = 0;
+  int reacquisitions = 0;
+  int headingCorrections = 0;
+  AssociationStats association{};
+};
+
+class TrackManager {
+ public:
+  TrackManager() = default;
+  TrackManager(const TrackManager&) = delete;
+  TrackManager& operator=(const TrackManager&) = delete;
+
+  bool init(const TrackerConfig& config, std::string* why = nullptr);
+  Expected<StepReport, TrackError> step(std::int64_t timestampNs,
+                                        std::span<const WorldDetection> detections);
+
+  // Every live track (tentative, confirmed, lost), in slot order.
+  std::span<const TrackState> tracks() const {
+    return {published_.data(), static_cast<std::size_t>(publishedCount_)};
+  }
+  const TrackerConfig& config() const { return config_; }
+
+ private:
+  struct Slot {
+    bool live = false;
+    TrackState out{};
+    MotionModel motion{};
+    std::array<double, shape::kVehicleTypeCount> typeLog{};
+    std::array<double, shape::kMaxShapeComponents> gammaSum{};
+    double gammaWeight = 0.0;
+    double sizeWeight = 0.0;
+    std::int64_t lastUpdateNs = 0;
+    int disagreeRun = 0;
+  };
+
+  void birth(Slot& slot, const WorldDetection& detection, std::int64_t timestampNs);
+  void fuse(Slot& slot, const WorldDetection& detection, std::int64_t timestampNs,
+            StepReport& report);
+  void updateGeometry(Slot& slot);
+  void publish(Slot& slot, std::int64_t timestampNs);
+
+  TrackerConfig config_{};
+  bool initialised_ = false;
+  bool started_ = false;
+  std::int64_t lastTimeNs_ = 0;
+  std::uint32_t nextId_ = 1;
+  Associator associator_{};
+  std::vector<Slot> slots_;
+  std::vector<WorldDetection> detections_;  // this step's valid detections
+  std::vector<TrackView> views_;
+  std::vector<int> viewSlot_;
+  std::vector<int> trackToDet_, detToTrack_;
+  std::vector<TrackState> published_;
+  int publishedCount_ = 0;
+};
+
+}  // namespace vp::tracking

@@ -1,0 +1,100 @@
+#include "tracking/trajectory_csv.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "geometry/rotated_box.hpp"
+
+namespace vp::tracking {
+namespace {
+
+// Appends with snprintf; remembers overflow so the caller gets one -1 at the end.
+class LineWriter {
+ public:
+  explicit LineWriter(std::span<char> out) : out_(out) {}
+
+  template <class... Args>
+  void add(const char* format, Args... args) {
+    if (failed_ || out_.empty()) {
+      failed_ = true;
+      return;
+    }
+    const std::size_t room = out_.size() - used_;
+    // The format strings are the literals below (checked by the callers' -Wformat).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wformat-nonliteral"
+    const int n = std::snprintf(out_.data() + used_, room, format, args...);
+#pragma GCC diagnostic pop
+    if (n < 0 || static_cast<std::size_t>(n) >= room) {
+      failed_ = true;
+      return;
+    }
+    used_ += static_cast<std::size_t>(n);
+  }
+  int result() const {
+    return failed_ ? -1 : static_cast<int>(used_);
+  }
+
+ private:
+  std::span<char> out_;
+  std::size_t used_ = 0;
+  bool failed_ = false;
+};
+
+constexpr const char* kTypeColumns[shape::kVehicleTypeCount] = {
+    "p_estate", "p_compact", "p_sports", "p_sedan", "p_suv", "p_van", "p_large"};
+
+}  // namespace
+
+int trajectoryCsvHeader(std::span<char> out, int shapeComponents) {
+  const int ns = std::clamp(shapeComponents, 0, shape::kMaxShapeComponents);
+  LineWriter w(out);
+  w.add("%s",
+        "frame_id,class_id,track_id,velocity,coordinate_world_x_opt,coordinate_world_y_opt,"
+        "coordinate_world_x,coordinate_world_y,time_s,status,latitude_deg,longitude_deg,"
+        "height_m,heading_enu_deg,velocity_sigma,acceleration,acceleration_sigma,yaw_rate_dps,"
+        "length_m,width_m,wheelbase_m");
+  for (const char* name : kTypeColumns) {
+    w.add(",%s", name);
+  }
+  for (int s = 0; s < ns; ++s) {
+    w.add(",gamma_%d", s + 1);
+  }
+  w.add("%s", "\n");
+  return w.result();
+}
+
+int trajectoryCsvRow(std::span<char> out, std::int64_t frameId, const TrackState& t,
+                     const Wgs84Position* centreWgs84, int shapeComponents) {
+  const int ns = std::clamp(shapeComponents, 0, shape::kMaxShapeComponents);
+  constexpr double kDeg = 180.0 / geometry::kPi;
+  LineWriter w(out);
+  w.add("%lld,%d,%u,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%s", static_cast<long long>(frameId),
+        static_cast<int>(t.type), static_cast<unsigned>(t.id), t.speedMps, t.rearAxleEnu.x(),
+        t.rearAxleEnu.y(), t.centreEnu.x(), t.centreEnu.y(),
+        static_cast<double>(t.timestampNs) * 1e-9, toString(t.status));
+  if (centreWgs84 != nullptr) {
+    w.add(",%.8f,%.8f,%.3f", centreWgs84->latitudeDeg, centreWgs84->longitudeDeg,
+          centreWgs84->heightM);
+  } else {
+    w.add("%s", ",,,");
+  }
+  w.add(",%.2f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f", t.headingEnuRad * kDeg, t.speedSigmaMps,
+        t.accelerationMps2, t.accelerationSigmaMps2, t.yawRateRadps * kDeg, t.lengthM, t.widthM,
+        t.wheelbaseM);
+  for (float p : t.typeProbabilities) {
+    w.add(",%.4f", static_cast<double>(p));
+  }
+  for (int s = 0; s < ns; ++s) {
+    const bool has = s < t.shape.count;
+    if (has) {
+      w.add(",%.4f", static_cast<double>(t.shape.gamma[static_cast<std::size_t>(s)]));
+    } else {
+      w.add("%s", ",");
+    }
+  }
+  w.add("%s", "\n");
+  return w.result();
+}
+
+}  // namespace vp::tracking

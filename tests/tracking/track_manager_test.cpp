@@ -1,0 +1,273 @@
+// Tests for tracking/track_manager: lifecycle, re-acquisition keeping the id, heading flip
+// correction, type fusion, bad input as values, the CSV line, and zero heap allocations per
+// step with 200 tracks.
+#include "tracking/track_manager.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "geometry/rotated_box.hpp"
+#include "synthetic_scene.hpp"
+#include "tracking/trajectory_csv.hpp"
+
+namespace vp::tracking {
+namespace {
+
+constexpr std::int64_t kFrameNs = 100'000'000;  // 10 Hz
+
+WorldDetection car(double x, double y, double heading, std::int64_t t, float score = 0.9f) {
+  WorldDetection d;
+  d.timestampNs = t;
+  d.centreEnu = {x, y};
+  d.headingEnuRad = heading;
+  d.lengthM = 4.5;
+  d.widthM = 1.8;
+  d.score = score;
+  d.typeProbabilities.fill(1.0f / 7.0f);
+  return d;
+}
+
+TrackerConfig smallConfig() {
+  TrackerConfig c;
+  c.maxTracks = 8;
+  c.maxDetections = 8;
+  return c;
+}
+
+TEST(TrackManager, InitRejectsBadConfigAndStepBeforeInitIsAnError) {
+  TrackManager m;
+  EXPECT_EQ(m.step(0, {}).error(), TrackError::NotInitialised);
+  TrackerConfig c = smallConfig();
+  c.maxTracks = 0;
+  std::string why;
+  EXPECT_FALSE(m.init(c, &why));
+  EXPECT_NE(why.find("maxTracks"), std::string::npos);
+  c = smallConfig();
+  c.association.lowScore = 0.8f;
+  EXPECT_FALSE(m.init(c, &why));
+}
+
+TEST(TrackManager, LifecycleTentativeConfirmedLostReacquiredDeleted) {
+  TrackManager m;
+  ASSERT_TRUE(m.init(smallConfig()));
+  std::int64_t t = 0;
+  auto stepAt = [&](double x, bool detected) {
+    std::vector<WorldDetection> d;
+    if (detected) {
+      d.push_back(car(x, 0.0, 0.0, t));
+    }
+    auto r = m.step(t, d);
+    EXPECT_TRUE(r.hasValue());
+    t += kFrameNs;
+    return r;
+  };
+  double x = 0.0;
+  stepAt(x, true);
+  ASSERT_EQ(m.tracks().size(), 1u);
+  const std::uint32_t id = m.tracks()[0].id;
+  EXPECT_EQ(m.tracks()[0].status, TrackStatus::Tentative);
+  stepAt(x += 1.0, true);
+  EXPECT_EQ(m.tracks()[0].status, TrackStatus::Tentative);
+  stepAt(x += 1.0, true);
+  EXPECT_EQ(m.tracks()[0].status, TrackStatus::Confirmed);
+  for (int k = 0; k < 20; ++k) {
+    stepAt(x += 1.0, true);
+  }
+  EXPECT_NEAR(m.tracks()[0].speedMps, 10.0, 0.3);
+  // Occluded for 1 s: lost but predicted on.
+  for (int k = 0; k < 10; ++k) {
+    stepAt(x += 1.0, false);
+    ASSERT_EQ(m.tracks().size(), 1u);
+    EXPECT_EQ(m.tracks()[0].status, TrackStatus::Lost);
+  }
+  auto r = stepAt(x += 1.0, true);
+  ASSERT_EQ(m.tracks().size(), 1u);
+  EXPECT_EQ(m.tracks()[0].id, id);
+  EXPECT_EQ(m.tracks()[0].status, TrackStatus::Confirmed);
+  EXPECT_EQ(r->reacquisitions, 1);
+  // Gone for good: deleted after maxLost_s.
+  for (int k = 0; k < 40; ++k) {
+    stepAt(x += 1.0, false);
+  }
+  EXPECT_TRUE(m.tracks().empty());
+  // A single false positive dies tentative.
+  stepAt(-50.0, true);
+  EXPECT_EQ(m.tracks().size(), 1u);
+  stepAt(0.0, false);
+  stepAt(0.0, false);
+  stepAt(0.0, false);
+  EXPECT_TRUE(m.tracks().empty());
+}
+
+TEST(TrackManager, ParkedCarReacquiredAfterLongOcclusionKeepsId) {
+  TrackManager m;
+  ASSERT_TRUE(m.init(smallConfig()));
+  std::int64_t t = 0;
+  for (int k = 0; k < 20; ++k, t += kFrameNs) {
+    m.step(t, std::vector{car(3.0, 4.0, 1.0, t)});
+  }
+  const std::uint32_t id = m.tracks()[0].id;
+  for (int k = 0; k < 25; ++k, t += kFrameNs) {
+    m.step(t, {});
+  }
+  m.step(t, std::vector{car(3.05, 4.0, 1.0, t)});
+  ASSERT_EQ(m.tracks().size(), 1u);
+  EXPECT_EQ(m.tracks()[0].id, id);
+  EXPECT_LT(std::abs(m.tracks()[0].speedMps), 0.3);
+}
+
+TEST(TrackManager, FlippedDetectionsAreCorrectedByMotion) {
+  TrackManager m;
+  ASSERT_TRUE(m.init(smallConfig()));
+  std::int64_t t = 0;
+  int corrections = 0;
+  // Driving north at 8 m/s; the first detection and every 4th are flipped.
+  for (int k = 0; k < 40; ++k, t += kFrameNs) {
+    const bool flip = k % 4 == 0;
+    const double heading = 0.5 * geometry::kPi + (flip ? geometry::kPi : 0.0);
+    auto r = m.step(t, std::vector{car(0.0, 0.8 * k, heading, t)});
+    ASSERT_TRUE(r.hasValue());
+    corrections += r->headingCorrections;
+    ASSERT_EQ(m.tracks().size(), 1u);
+  }
+  const TrackState& s = m.tracks()[0];
+  EXPECT_LT(geometry::absAngleDifference(s.headingEnuRad, 0.5 * geometry::kPi), 0.05);
+  EXPECT_NEAR(s.speedMps, 8.0, 0.3);
+  EXPECT_GE(corrections, 9);
+  // Rear axle behind the centre (south of it) when driving north.
+  EXPECT_LT(s.rearAxleEnu.y(), s.centreEnu.y());
+}
+
+TEST(TrackManager, StandingCarBornFlippedTurnsOnAgreeingDetections) {
+  TrackManager m;
+  ASSERT_TRUE(m.init(smallConfig()));
+  std::int64_t t = 0;
+  m.step(t, std::vector{car(0.0, 0.0, geometry::kPi, t)});  // flipped first detection
+  for (int k = 1; k < 10; ++k) {
+    t += kFrameNs;
+    m.step(t, std::vector{car(0.0, 0.0, 0.0, t)});
+  }
+  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnuRad, 0.0), 0.1);
+}
+
+TEST(TrackManager, TypeIsFusedFromProbabilities) {
+  TrackManager m;
+  ASSERT_TRUE(m.init(smallConfig()));
+  std::int64_t t = 0;
+  // Per frame the argmax alternates between sedan (3) and SUV (4), but the SUV probability is
+  // consistently high while sedan's swings: the product favours SUV although votes tie.
+  for (int k = 0; k < 10; ++k, t += kFrameNs) {
+    WorldDetection d = car(k * 1.0, 0.0, 0.0, t);
+    d.typeProbabilities.fill(0.02f);
+    if (k % 2 == 0) {
+      d.typeProbabilities[3] = 0.50f;
+      d.typeProbabilities[4] = 0.40f;
+    } else {
+      d.typeProbabilities[3] = 0.05f;
+      d.typeProbabilities[4] = 0.85f;
+    }
+    m.step(t, std::vector{d});
+  }
+  const TrackState& s = m.tracks()[0];
+  EXPECT_EQ(s.type, shape::VehicleType::Suv);
+  EXPECT_GT(s.typeProbabilities[4], 0.9f);
+  float sum = 0.0f;
+  for (float p : s.typeProbabilities) {
+    sum += p;
+  }
+  EXPECT_NEAR(sum, 1.0f, 1e-5f);
+}
+
+TEST(TrackManager, BadInputIsCountedNotUsed) {
+  TrackManager m;
+  ASSERT_TRUE(m.init(smallConfig()));
+  std::vector<WorldDetection> d = {car(0, 0, 0, 0), car(5, 0, 0, 0), car(10, 0, 0, 0)};
+  d[1].centreEnu.x() = std::nan("");
+  d[2].lengthM = 0.0;
+  auto r = m.step(0, d);
+  ASSERT_TRUE(r.hasValue());
+  EXPECT_EQ(r->rejectedDetections, 2);
+  EXPECT_EQ(m.tracks().size(), 1u);
+  EXPECT_EQ(m.step(-1, {}).error(), TrackError::TimeWentBackwards);
+  // Over capacity: counted.
+  std::vector<WorldDetection> many;
+  for (int i = 0; i < 12; ++i) {
+    many.push_back(car(20.0 * i, 50.0, 0.0, kFrameNs));
+  }
+  r = m.step(kFrameNs, many);
+  ASSERT_TRUE(r.hasValue());
+  EXPECT_EQ(r->droppedDetections, 4);
+  EXPECT_GT(r->droppedBirths, 0);
+}
+
+TEST(TrajectoryCsv, HeaderAndRowCarrySeedColumnsFirst) {
+  std::array<char, kTrajectoryCsvMaxLine> line{};
+  ASSERT_GT(trajectoryCsvHeader(line, 3), 0);
+  EXPECT_EQ(std::strncmp(line.data(),
+                         "frame_id,class_id,track_id,velocity,coordinate_world_x_opt,"
+                         "coordinate_world_y_opt,coordinate_world_x,coordinate_world_y,",
+                         120),
+            0);
+  EXPECT_NE(std::string(line.data()).find("gamma_3\n"), std::string::npos);
+  TrackState s;
+  s.id = 42;
+  s.type = shape::VehicleType::Suv;
+  s.speedMps = 8.5;
+  s.rearAxleEnu = {1.0, 2.0};
+  s.centreEnu = {2.25, 2.0};
+  s.status = TrackStatus::Confirmed;
+  s.shape.count = 3;
+  const Wgs84Position p{47.1, 8.5, 420.0};
+  const int n = trajectoryCsvRow(line, 17, s, &p, 3);
+  ASSERT_GT(n, 0);
+  const std::string row(line.data(), static_cast<std::size_t>(n));
+  EXPECT_EQ(row.rfind("17,4,42,8.500,1.000,2.000,2.250,2.000,0.000,confirmed,47.10000000", 0), 0u)
+      << row;
+  // Column count = header column count.
+  std::array<char, kTrajectoryCsvMaxLine> header{};
+  trajectoryCsvHeader(header, 3);
+  auto commas = [](const char* text) { return std::count(text, text + std::strlen(text), ','); };
+  EXPECT_EQ(commas(line.data()), commas(header.data()));
+  std::array<char, 16> tiny{};
+  EXPECT_EQ(trajectoryCsvRow(tiny, 1, s, nullptr, 3), -1);
+}
+
+TEST(TrackManager, NoHeapAllocationPerStepWith200Tracks) {
+  TrackerConfig c;
+  c.maxTracks = 256;
+  c.maxDetections = 256;
+  TrackManager m;
+  ASSERT_TRUE(m.init(c));
+  std::vector<std::vector<WorldDetection>> frames;
+  for (int k = 0; k < 40; ++k) {
+    frames.push_back(test::makeConvoyFrame(200, k, 10.0));
+  }
+  for (int k = 0; k < 10; ++k) {
+    ASSERT_TRUE(m.step(frames[static_cast<std::size_t>(k)][0].timestampNs,
+                       frames[static_cast<std::size_t>(k)])
+                    .hasValue());
+  }
+  ASSERT_EQ(m.tracks().size(), 200u);
+  vp::test::AllocationCounter counter;
+  for (int k = 10; k < 40; ++k) {
+    // Every fifth frame drops a tenth of the cars (lost tracks, re-acquisitions).
+    auto& f = frames[static_cast<std::size_t>(k)];
+    const std::size_t n = k % 5 == 0 ? 180 : f.size();
+    auto r = m.step(f[0].timestampNs, std::span(f).first(n));
+    ASSERT_TRUE(r.hasValue());
+  }
+  counter.stop();
+  EXPECT_EQ(counter.count(), 0u);
+  EXPECT_EQ(m.tracks().size(), 200u);
+  for (const TrackState& s : m.tracks()) {
+    EXPECT_NEAR(s.speedMps, 10.0, 0.5);
+  }
+}
+
+}  // namespace
+}  // namespace vp::tracking
