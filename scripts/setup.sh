@@ -13,6 +13,7 @@ PACKAGES=(
   libxnnpack-dev libpthreadpool-dev libonnx-dev libprotobuf-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   clang-format
+  cyclonedds-dev cyclonedds-tools libcycloneddsidl0
 )
 
 if [ "${1:-}" = "--python" ]; then

@@ -1,0 +1,108 @@
+// platform/dds/dds_handles: RAII owners of Cyclone DDS entities and QoS objects, and the QoS
+// built from the typed configuration (messages/dds_config.hpp).
+//
+// Contract: every class here owns exactly one handle and releases it in its destructor
+// (dds_delete for entities, which also deletes their children; dds_delete_qos for QoS);
+// they are move-only. Constructors never fail; open() does, returning a DdsResult that carries
+// the failing call and Cyclone's return code (describe() spells it with dds_strretcode).
+// No product logic lives here. The participant reads the network configuration from
+// CYCLONEDDS_URI as Cyclone always does; DDS Security, when enabled in the configuration, is
+// set through the participant's QoS properties, loading the plugins from
+// SecurityConfig::pluginDir (Debian: /usr/lib/<triplet>/libddsc0debian).
+#pragma once
+
+#include <dds/dds.h>
+
+#include <string>
+
+#include "messages/dds_config.hpp"
+
+namespace vp::platform::dds {
+
+// Outcome of a DDS call: rc >= 0 is success; `call` names what failed (a string literal).
+struct DdsResult {
+  dds_return_t rc = DDS_RETCODE_OK;
+  const char* call = "";
+  bool ok() const { return rc >= 0; }
+  static DdsResult failure(const char* what, dds_return_t code) { return DdsResult{code, what}; }
+};
+std::string describe(const DdsResult& result);  // "dds_create_participant: Bad Parameter"
+
+class Qos {
+ public:
+  Qos() : qos_(dds_create_qos()) {}
+  ~Qos() { dds_delete_qos(qos_); }
+  Qos(const Qos&) = delete;
+  Qos& operator=(const Qos&) = delete;
+  dds_qos_t* get() const { return qos_; }
+
+ private:
+  dds_qos_t* qos_;
+};
+
+// Reliability, durability, history, deadline, lifespan, liveliness of one topic.
+void applyProfile(const messages::QosProfile& profile, Qos& qos);
+// Participant QoS: the DDS Security properties when security is enabled.
+void applySecurity(const messages::SecurityConfig& security, Qos& qos);
+
+class Entity {
+ public:
+  Entity() = default;
+  ~Entity() { reset(); }
+  Entity(Entity&& other) noexcept : handle_(other.handle_) { other.handle_ = 0; }
+  Entity& operator=(Entity&& other) noexcept;
+  Entity(const Entity&) = delete;
+  Entity& operator=(const Entity&) = delete;
+
+  dds_entity_t get() const { return handle_; }
+  bool isOpen() const { return handle_ > 0; }
+  void reset();
+  // Takes ownership of a freshly created handle, or returns the failure it encodes.
+  DdsResult adopt(dds_entity_t handle, const char* call);
+
+ private:
+  dds_entity_t handle_ = 0;
+};
+
+class Participant : public Entity {
+ public:
+  DdsResult open(const messages::DdsConfig& config);
+};
+
+class Topic : public Entity {
+ public:
+  DdsResult open(const Participant& participant, const dds_topic_descriptor_t& descriptor,
+                 const std::string& name, const messages::QosProfile& profile);
+};
+
+// A writer under its own publisher, so that the partition applies to it alone.
+class Writer {
+ public:
+  DdsResult open(const Participant& participant, const Topic& topic,
+                 const messages::QosProfile& profile, const std::string& partition);
+  dds_entity_t get() const { return writer_.get(); }
+  bool isOpen() const { return writer_.isOpen(); }
+
+ private:
+  Entity publisher_;  // deleting it deletes the writer too; declared first, destroyed last
+  Entity writer_;
+};
+
+class Reader {
+ public:
+  DdsResult open(const Participant& participant, const Topic& topic,
+                 const messages::QosProfile& profile, const std::string& partition);
+  dds_entity_t get() const { return reader_.get(); }
+  bool isOpen() const { return reader_.isOpen(); }
+
+ private:
+  Entity subscriber_;
+  Entity reader_;
+};
+
+// Topic names: <prefix>/vehicle_state, <prefix>/drone_status, <prefix>/occupancy.
+std::string vehicleStateTopicName(const messages::DdsConfig& config);
+std::string droneStatusTopicName(const messages::DdsConfig& config);
+std::string occupancyTopicName(const messages::DdsConfig& config);
+
+}  // namespace vp::platform::dds

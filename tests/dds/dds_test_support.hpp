@@ -1,0 +1,70 @@
+// tests/dds/dds_test_support: loopback-only Cyclone DDS configuration and per-test domain and
+// partition, so that tests (and ctest -j) never hear each other or the network.
+#pragma once
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "messages/dds_config.hpp"
+#include "messages/messages.hpp"
+
+namespace vp::test {
+
+// Unicast discovery on 127.0.0.1 only (the loopback interface has no multicast).
+inline void useLoopbackDds() {
+  static const char* const kUri =
+      "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
+      "address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
+      "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
+      "</MaxAutoParticipantIndex><Peers><Peer Address=\"127.0.0.1\"/></Peers></Discovery>"
+      "</Domain></CycloneDDS>";
+  setenv("CYCLONEDDS_URI", kUri, 1);
+}
+
+// A domain id and partition unique to this process and call.
+inline messages::DdsConfig uniqueDdsConfig() {
+  static std::atomic<int> counter{0};
+  const int k = counter++;
+  messages::DdsConfig config;
+  config.domainId = static_cast<std::uint32_t>(1 + (getpid() * 7 + k) % 200);
+  config.partition = "test_" + std::to_string(getpid()) + "_" + std::to_string(k);
+  return config;
+}
+
+// A plausible confirmed track with every field set to a distinct value.
+inline messages::VehicleState makeState(std::uint32_t trackId, std::int64_t time_ns) {
+  messages::VehicleState s;
+  const float t = static_cast<float>(trackId);
+  s.droneId = 7;
+  s.trackId = trackId;
+  s.measurementTimeNs = time_ns;
+  s.trackAge_s = 1.5F + t;
+  s.position = {43.0731 + 1e-6 * trackId, -89.4012 - 1e-6 * trackId, 250.125 + trackId};
+  s.enu_m = {1.25 * trackId, -2.5 * trackId, 0.1};
+  s.headingEnu_rad = std::fmod(0.01 * trackId, 6.28);
+  s.headingTrueNorth_deg = std::fmod(90.0 + 0.573 * trackId, 360.0);
+  s.speed_mps = 13.9F + 0.1F * t;
+  s.velocityEnu_mps = {13.8F, 0.3F * t};
+  s.yawRate_radps = 0.02F;
+  s.acceleration_mps2 = -0.5F;
+  s.length_m = 4.6F;
+  s.width_m = 1.8F;
+  s.height_m = 1.45F;
+  s.type = static_cast<shape::VehicleType>(trackId % shape::kVehicleTypeCount);
+  s.typeProbability = {0.05F, 0.1F, 0.05F, 0.6F, 0.1F, 0.05F, 0.05F};
+  s.shape.count = 3;
+  s.shape.gamma = {0.5F, -1.25F, 0.125F * t, 0, 0, 0, 0, 0};
+  s.poseCovariance = {0.04F, 0.001F, 0.0F, 0.05F, 0.0F, 0.003F};
+  s.heightVariance_m2 = 0.09F;
+  s.speedVariance_m2ps2 = 0.25F;
+  s.yawRateVariance_rad2ps2 = 0.0004F;
+  s.detectionConfidence = 0.93F;
+  s.status = messages::TrackStatus::Confirmed;
+  return s;
+}
+
+}  // namespace vp::test

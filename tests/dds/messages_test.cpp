@@ -1,0 +1,107 @@
+// Pure parts of the DDS interface: validation, occupancy rasterisation, the dds: config.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "dds_test_support.hpp"
+#include "messages/dds_config.hpp"
+#include "messages/occupancy.hpp"
+
+namespace vp::messages {
+namespace {
+
+TEST(Messages, ValidateCatchesBadStates) {
+  VehicleState s = test::makeState(3, 1);
+  EXPECT_EQ(validate(s), ValidationError::None);
+  s.speed_mps = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(validate(s), ValidationError::NotFinite);
+  s = test::makeState(3, 1);
+  s.headingTrueNorth_deg = 360.0;
+  EXPECT_EQ(validate(s), ValidationError::HeadingOutOfRange);
+  s = test::makeState(3, 1);
+  s.position.latitudeDeg = 91.0;
+  EXPECT_EQ(validate(s), ValidationError::InvalidPosition);
+  s = test::makeState(3, 1);
+  s.typeProbability[2] = 1.5F;
+  EXPECT_EQ(validate(s), ValidationError::ProbabilityOutOfRange);
+}
+
+TEST(Messages, ModelIdIsTruncatedAndTerminated) {
+  DroneStatus status;
+  status.setModelId(std::string(100, 'x'));
+  EXPECT_EQ(std::string(status.modelId.data()).size(), DroneStatus::kModelIdCapacity);
+}
+
+TEST(Occupancy, MarksObservedAreaAndFootprints) {
+  OccupancyGrid grid;
+  grid.originEast_m = -10.0;
+  grid.originNorth_m = -10.0;
+  grid.resolution_m = 0.5F;
+  grid.resize(40, 40);  // 20 m x 20 m
+  const Eigen::Vector2d polygon[] = {{-8, -8}, {8, -8}, {8, 8}, {-8, 8}};
+  VehicleState car = test::makeState(1, 0);
+  car.enu_m = {0.0, 0.0, 0.0};
+  car.headingEnu_rad = std::acos(-1.0) / 2.0;  // facing north: 4.6 m north-south, 1.8 m wide
+  VehicleState tentative = car;
+  tentative.enu_m = {5.0, 5.0, 0.0};
+  tentative.status = TrackStatus::Tentative;
+  const VehicleState cars[] = {car, tentative};
+  rasterizeOccupancy(polygon, cars, grid);
+  const auto cellAt = [&](double e, double n) {
+    return grid.at(static_cast<std::uint32_t>((n + 10.0) / 0.5),
+                   static_cast<std::uint32_t>((e + 10.0) / 0.5));
+  };
+  EXPECT_EQ(cellAt(0.1, 2.0), Occupancy::Occupied);    // inside the length
+  EXPECT_EQ(cellAt(1.6, 0.1), Occupancy::Free);        // beyond the width
+  EXPECT_EQ(cellAt(5.1, 5.1), Occupancy::Free);        // tentative track not drawn
+  EXPECT_EQ(cellAt(9.0, 9.0), Occupancy::Unobserved);  // outside the observed polygon
+  int occupied = 0;
+  for (std::uint8_t c : grid.cells) {
+    occupied += c == static_cast<std::uint8_t>(Occupancy::Occupied);
+  }
+  EXPECT_NEAR(occupied * 0.25, 4.6 * 1.8, 2.0);  // area within the cell quantisation
+}
+
+TEST(DdsConfig, DefaultsAndOverrides) {
+  const DdsConfigResult empty = parseDdsConfig("origin: {}\n", "site.yaml", "/cfg");
+  EXPECT_EQ(empty.config.vehicleState.reliability, Reliability::Reliable);
+  EXPECT_EQ(empty.config.vehicleState.historyDepth, 1);
+  EXPECT_TRUE(empty.warnings.empty());
+  const DdsConfigResult r = parseDdsConfig(
+      "dds:\n  domain_id: 12\n  partition: site_a\n  qos:\n    vehicle_state:\n"
+      "      reliability: best_effort\n      deadline_s: 0.2\n  security:\n    enabled: true\n"
+      "    identity_ca: certs/ca.pem\n    identity_certificate: certs/drone.pem\n"
+      "    private_key: certs/drone_key.pem\n    permissions_ca: certs/ca.pem\n"
+      "    governance: certs/governance.p7s\n    permissions: certs/permissions.p7s\n"
+      "  colour: blue\n",
+      "site.yaml", "/cfg");
+  EXPECT_EQ(r.config.domainId, 12U);
+  EXPECT_EQ(r.config.partition, "site_a");
+  EXPECT_EQ(r.config.vehicleState.reliability, Reliability::BestEffort);
+  EXPECT_DOUBLE_EQ(r.config.vehicleState.deadline_s, 0.2);
+  EXPECT_EQ(r.config.security.identityCa, "/cfg/certs/ca.pem");
+  ASSERT_EQ(r.warnings.size(), 1U);
+  EXPECT_EQ(r.warnings[0], "site.yaml: unknown key 'dds.colour'");
+}
+
+TEST(DdsConfig, ErrorsNameTheKey) {
+  const auto message = [](const std::string& yaml) {
+    try {
+      parseDdsConfig(yaml, "site.yaml", "/cfg");
+    } catch (const DdsConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message("dds:\n  qos:\n    occupancy:\n      history_depth: 0\n"),
+            "site.yaml: dds.qos.occupancy.history_depth: must be in [1, 1000], got 0");
+  EXPECT_EQ(message("dds:\n  qos:\n    vehicle_state:\n      reliability: maybe\n"),
+            "site.yaml: dds.qos.vehicle_state.reliability: unknown value 'maybe' (expected "
+            "reliable, best_effort)");
+  EXPECT_EQ(message("dds:\n  security:\n    enabled: true\n"),
+            "site.yaml: dds.security.identity_ca: missing (required when enabled)");
+}
+
+}  // namespace
+}  // namespace vp::messages

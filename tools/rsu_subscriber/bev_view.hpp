@@ -1,0 +1,30 @@
+// tools/rsu_subscriber/bev_view: a north-up bird's-eye picture of the received tracks (and the
+// latest occupancy grid), written as PNG.
+//
+// Contract: the view is a square of side 2 * range_m centred on `centre` (world ENU, m), drawn
+// at `size_px` pixels; east is right, north is up. Each vehicle is its footprint rectangle
+// (length x width, rotated by its ENU heading) with a line to its front and its track id;
+// confirmed tracks are green, lost ones orange. Occupied grid cells are grey, free cells
+// dark, unobserved cells black. write() returns false with a message when OpenCV cannot
+// write the file (written to a temporary name first, then renamed, so a viewer never sees a
+// half-written PNG).
+#pragma once
+
+#include <span>
+#include <string>
+
+#include "messages/messages.hpp"
+
+namespace vp::rsu {
+
+struct BevSettings {
+  double centreEast_m = 0.0;
+  double centreNorth_m = 0.0;
+  double range_m = 60.0;
+  int size_px = 800;
+};
+
+bool writeBev(const BevSettings& settings, std::span<const messages::VehicleState> vehicles,
+              const messages::OccupancyGrid* grid, const std::string& path, std::string* why);
+
+}  // namespace vp::rsu
