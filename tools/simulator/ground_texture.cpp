@@ -1,7 +1,9 @@
 #include "ground_texture.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <vector>
 
 #include "noise.hpp"
 #include "sim_random.hpp"
@@ -30,16 +32,114 @@ float band(double x, double centre, double halfWidth) {
   return std::fabs(x - centre) <= halfWidth ? 1.0F : 0.0F;
 }
 
+// Smooth fields evaluated exactly at one point.
+class DirectFields {
+ public:
+  DirectFields(const GroundTexture& texture, const Eigen::Vector2d& p)
+      : texture_(texture), x_(static_cast<float>(p.x())), y_(static_cast<float>(p.y())) {}
+  float operator()(GroundField f) const { return texture_.field(f, x_, y_); }
+
+ private:
+  const GroundTexture& texture_;
+  float x_;
+  float y_;
+};
+
+// Smooth fields of one cache tile: each evaluated (on first use) on a lattice of nodes and
+// interpolated bilinearly at the texels in between. Node spacings are about a sixth of the
+// field's finest wavelength, which reproduces it closely while sparing most noise calls.
+class TileFields {
+ public:
+  TileFields(const GroundTexture& texture, double x0, double y0, double texelM, int texels)
+      : texture_(texture), x0_(x0), y0_(y0), texelM_(texelM), texels_(texels) {}
+
+  void moveTo(int i, int j) {
+    i_ = i;
+    j_ = j;
+  }
+
+  float operator()(GroundField f) {
+    Grid& g = grids_[static_cast<std::size_t>(f)];
+    if (g.values.empty()) {
+      build(f, g);
+    }
+    const int ci = i_ / g.step;
+    const int cj = j_ / g.step;
+    const float wx = static_cast<float>(i_ - ci * g.step) * g.invStep;
+    const float wy = static_cast<float>(j_ - cj * g.step) * g.invStep;
+    const float* r0 = g.values.data() + static_cast<std::ptrdiff_t>(cj * g.nodes + ci);
+    const float* r1 = r0 + g.nodes;
+    const float a = r0[0] + wx * (r0[1] - r0[0]);
+    const float b = r1[0] + wx * (r1[1] - r1[0]);
+    return a + wy * (b - a);
+  }
+
+ private:
+  struct Grid {
+    int step = 1;  // texels between nodes
+    float invStep = 1.0F;
+    int nodes = 0;  // per side
+    std::vector<float> values;
+  };
+
+  static double spacingM(GroundField f) {
+    switch (f) {
+      case GroundField::Fine:  // 0.35 m lattice
+        return 0.06;
+      case GroundField::Mix:  // finest octave 0.48 m
+        return 0.08;
+      case GroundField::Stain:  // 0.73 m
+        return 0.12;
+      case GroundField::Oil:         // 1 m
+      case GroundField::CrackRidge:  // 2.9 m, but the cracks sit on its zero set
+      case GroundField::Soil:        // 1.1 m
+        return 0.16;
+      case GroundField::Macro:  // 1.7 m
+      case GroundField::Walk:   // 1.5 m
+        return 0.25;
+      case GroundField::CrackMask:  // 12 m
+        return 2.0;
+      case GroundField::Count:
+        break;
+    }
+    return 0.06;
+  }
+
+  void build(GroundField f, Grid& g) const {
+    g.step = std::max(1, static_cast<int>(std::lround(spacingM(f) / texelM_)));
+    g.invStep = 1.0F / static_cast<float>(g.step);
+    g.nodes = (texels_ - 1 + g.step - 1) / g.step + 2;
+    const double nodeM = texelM_ * g.step;
+    g.values.resize(static_cast<std::size_t>(g.nodes) * static_cast<std::size_t>(g.nodes));
+    for (int j = 0; j < g.nodes; ++j) {
+      for (int i = 0; i < g.nodes; ++i) {
+        g.values[static_cast<std::size_t>(j * g.nodes + i)] = texture_.field(
+            f, static_cast<float>(x0_ + i * nodeM), static_cast<float>(y0_ + j * nodeM));
+      }
+    }
+  }
+
+  const GroundTexture& texture_;
+  double x0_;
+  double y0_;
+  double texelM_;
+  int texels_;
+  int i_ = 0;
+  int j_ = 0;
+  std::array<Grid, static_cast<std::size_t>(GroundField::Count)> grids_;
+};
+
 }  // namespace
 
+template <typename Fields>
 float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double along,
-                              double lateral, bool inJunction) const {
+                              double lateral, bool inJunction, Fields& fields,
+                              const Nearby& nearby) const {
   const GroundStyle& s = scene_->style;
   const auto x = static_cast<float>(p.x());
   const auto y = static_cast<float>(p.y());
-  float tone = 1.0F + s.roadMacroVariation * (2.0F * fbm(x / 7.0F, y / 7.0F, 3, s.seed) - 1.0F);
-  tone *= 1.0F + 0.5F * s.roadFineVariation *
-                     (2.0F * valueNoise(x / 0.35F, y / 0.35F, s.seed + 1U) - 1.0F);
+  float tone = 1.0F + s.roadMacroVariation * (2.0F * fields(GroundField::Macro) - 1.0F);
+  tone *= 1.0F + 0.5F * s.roadFineVariation * (2.0F * fields(GroundField::Fine) - 1.0F);
   // Aggregate grain: independent per 1.2 cm cell, averaged by the supersampling.
   tone *= 1.0F + s.roadFineVariation *
                      (2.0F * latticeValue(static_cast<int>(std::floor(x / 0.012F)),
@@ -47,7 +147,7 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
                       1.0F);
   if (road != nullptr && !inJunction) {
     // Tyre tracks and the oil stripe follow the lanes.
-    const float oilNoise = fbm(x / 2.0F, y / 2.0F, 2, s.seed + 3U);
+    const float oilNoise = fields(GroundField::Oil);
     for (int dirSign = 0; dirSign < 2; ++dirSign) {
       const bool forward = dirSign == 0;
       const int lanes = forward ? road->lanesForward : road->lanesBackward;
@@ -78,9 +178,10 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
   }
   if (s.crackDensity > 0.0F) {
     // Thin dark cracks along the zero set of a noise field, in patches of the road.
-    const float mask = fbm(x / 25.0F, y / 25.0F, 2, s.seed + 5U);
+    const float mask = fields(GroundField::CrackMask);
     if (mask < 0.6F * s.crackDensity) {
-      const float r = ridge(x / 6.0F, y / 6.0F, s.seed + 6U);
+      // The ridge's fold is taken here, after interpolation, so cracks stay sharp.
+      const float r = 1.0F - std::fabs(2.0F * fields(GroundField::CrackRidge) - 1.0F);
       const float w = 0.5F * s.crackWidth;
       if (r > 1.0F - w) {
         const float crack = smoothstep(1.0F - w, 1.0F - 0.2F * w, r);
@@ -88,9 +189,10 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
       }
     }
   }
-  const float stain = fbm(x / 3.0F + 40.0F, y / 3.0F, 3, s.seed + 7U);
+  const float stain = fields(GroundField::Stain);
   tone *= 1.0F - 0.25F * smoothstep(0.68F, 0.8F, stain);
-  for (const Patch& patch : scene_->patches) {
+  for (const Patch* pp : nearby.patches) {
+    const Patch& patch = *pp;
     const Eigen::Vector2d d = p - patch.centre;
     const double u = std::fabs(d.dot(patch.dir)) - patch.halfLengthM;
     const double v = std::fabs(d.x() * -patch.dir.y() + d.y() * patch.dir.x()) - patch.halfWidthM;
@@ -102,7 +204,8 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
       tone *= 0.65F;  // sealant along the seam
     }
   }
-  for (const Manhole& m : scene_->manholes) {
+  for (const Manhole* mp : nearby.manholes) {
+    const Manhole& m = *mp;
     const double r = (p - m.position).norm();
     if (r < m.radiusM + 0.06) {
       if (r > m.radiusM) {
@@ -237,7 +340,9 @@ float GroundTexture::lotMarkings(const ParkingLot& lot, const Eigen::Vector2d& p
   return 0.0F;
 }
 
-Eigen::Vector3f GroundTexture::sidewalk(const Eigen::Vector2d& p, double kerbDistance) const {
+template <typename Fields>
+Eigen::Vector3f GroundTexture::sidewalk(const Eigen::Vector2d& p, double kerbDistance,
+                                        Fields& fields) const {
   const GroundStyle& s = scene_->style;
   const Road* nearest = &scene_->roads[0];
   double best = 1e9;
@@ -253,7 +358,7 @@ Eigen::Vector3f GroundTexture::sidewalk(const Eigen::Vector2d& p, double kerbDis
   const double q = kerbDistance - scene_->kerbWidthM;
   const auto x = static_cast<float>(p.x());
   const auto y = static_cast<float>(p.y());
-  float tone = 1.0F + 0.12F * (2.0F * fbm(x / 3.0F, y / 3.0F, 2, s.seed + 20U) - 1.0F);
+  float tone = 1.0F + 0.12F * (2.0F * fields(GroundField::Walk) - 1.0F);
   tone *=
       1.0F + 0.08F * (2.0F * latticeValue(static_cast<int>(std::floor(x / 0.015F)),
                                           static_cast<int>(std::floor(y / 0.015F)), s.seed + 21U) -
@@ -278,14 +383,17 @@ Eigen::Vector3f GroundTexture::sidewalk(const Eigen::Vector2d& p, double kerbDis
   return s.sidewalkAlbedo * tone;
 }
 
-Eigen::Vector3f GroundTexture::verge(const Eigen::Vector2d& p) const {
+template <typename Fields>
+Eigen::Vector3f GroundTexture::verge(const Eigen::Vector2d& p, Fields& fields,
+                                     const Nearby& nearby) const {
   const GroundStyle& s = scene_->style;
   const auto x = static_cast<float>(p.x());
   const auto y = static_cast<float>(p.y());
   // Concrete apron around buildings.
-  for (const Building& b : scene_->buildings) {
+  for (const std::size_t i : nearby.buildings) {
+    const Building& b = scene_->buildings[i];
     const Eigen::Vector2d d = p - b.centre;
-    const Eigen::Vector2d f(std::cos(b.headingRad), std::sin(b.headingRad));
+    const Eigen::Vector2d& f = buildingAxes_[i];
     const double u = std::fabs(d.dot(f)) - 0.5 * b.lengthM;
     const double v = std::fabs(d.x() * -f.y() + d.y() * f.x()) - 0.5 * b.widthM;
     if (std::max(u, v) < 1.5) {
@@ -295,12 +403,12 @@ Eigen::Vector3f GroundTexture::verge(const Eigen::Vector2d& p) const {
       return s.sidewalkAlbedo * 0.9F * t;
     }
   }
-  const float mix = fbm(x / 4.0F, y / 4.0F, 4, s.seed + 31U);
+  const float mix = fields(GroundField::Mix);
   Eigen::Vector3f c = s.grassA * (1.0F - mix) + s.grassB * mix;
   const float blades = latticeValue(static_cast<int>(std::floor(x / 0.025F)),
                                     static_cast<int>(std::floor(y / 0.025F)), s.seed + 32U);
   c *= 0.75F + 0.5F * blades;
-  const float soil = fbm(x / 9.0F + 100.0F, y / 9.0F, 4, s.seed + 33U);
+  const float soil = fields(GroundField::Soil);
   const float soilWeight = smoothstep(s.soilShare + 0.05F, s.soilShare - 0.05F, soil);
   if (soilWeight > 0.0F) {
     const float grain = 0.85F + 0.3F * valueNoise(x / 0.08F, y / 0.08F, s.seed + 34U);
@@ -309,8 +417,9 @@ Eigen::Vector3f GroundTexture::verge(const Eigen::Vector2d& p) const {
   return c;
 }
 
-Eigen::Vector3f GroundTexture::albedo(double xEast, double yNorth, GroundClass* cls) const {
-  const Eigen::Vector2d p(xEast, yNorth);
+template <typename Fields>
+Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields,
+                                        const Nearby& nearby, GroundClass* cls) const {
   const double d = scene_->roadDistance(p);
   const GroundStyle& s = scene_->style;
   if (d < 0.0) {
@@ -337,7 +446,8 @@ Eigen::Vector3f GroundTexture::albedo(double xEast, double yNorth, GroundClass* 
     }
     const bool inJunction = scene_->kind == SceneKind::Intersection && road != nullptr &&
                             std::fabs(along) < road->stopDistanceM - 0.5;
-    const float tone = roadTone(p, lot != nullptr ? nullptr : road, along, lateral, inJunction);
+    const float tone =
+        roadTone(p, lot != nullptr ? nullptr : road, along, lateral, inJunction, fields, nearby);
     Eigen::Vector3f c = (lot != nullptr ? s.lotAlbedo : s.roadAlbedo) * tone;
     // Dirt collects along the kerb.
     if (d > -0.35) {
@@ -390,18 +500,105 @@ Eigen::Vector3f GroundTexture::albedo(double xEast, double yNorth, GroundClass* 
     if (cls != nullptr) {
       *cls = GroundClass::Sidewalk;
     }
-    return sidewalk(p, d);
+    return sidewalk(p, d, fields);
   }
   if (cls != nullptr) {
     *cls = GroundClass::Verge;
   }
-  Eigen::Vector3f c = verge(p);
+  Eigen::Vector3f c = verge(p, fields, nearby);
   // A strip of bare soil / edging right behind the pavement.
   const double e = d - scene_->kerbWidthM - scene_->sidewalkWidthM;
   if (e < 0.15) {
     c = c * 0.6F + s.soilAlbedo * 0.4F;
   }
   return c;
+}
+
+GroundTexture::GroundTexture(const SceneSpec& scene) : scene_(&scene) {
+  for (const Building& b : scene.buildings) {
+    buildingAxes_.emplace_back(std::cos(b.headingRad), std::sin(b.headingRad));
+  }
+  all_ = nearby(Eigen::Vector2d::Constant(-1e18), Eigen::Vector2d::Constant(1e18));
+}
+
+GroundTexture::Nearby GroundTexture::nearby(const Eigen::Vector2d& lo,
+                                            const Eigen::Vector2d& hi) const {
+  // Features whose bounding circle (with the margin of their effect) meets [lo, hi].
+  const auto meets = [&](const Eigen::Vector2d& c, double r) {
+    const Eigen::Vector2d q = c.cwiseMax(lo).cwiseMin(hi);
+    return (q - c).squaredNorm() <= r * r;
+  };
+  Nearby n;
+  for (const Patch& patch : scene_->patches) {
+    if (meets(patch.centre, std::hypot(patch.halfLengthM, patch.halfWidthM) + 0.1)) {
+      n.patches.push_back(&patch);
+    }
+  }
+  for (const Manhole& m : scene_->manholes) {
+    if (meets(m.position, m.radiusM + 0.1)) {
+      n.manholes.push_back(&m);
+    }
+  }
+  for (std::size_t i = 0; i < scene_->buildings.size(); ++i) {
+    const Building& b = scene_->buildings[i];
+    if (meets(b.centre, 0.5 * std::hypot(b.lengthM, b.widthM) + 1.6)) {
+      n.buildings.push_back(i);
+    }
+  }
+  return n;
+}
+
+float GroundTexture::field(GroundField f, float x, float y) const {
+  const std::uint32_t seed = scene_->style.seed;
+  switch (f) {
+    case GroundField::Macro:
+      return fbm(x / 7.0F, y / 7.0F, 3, seed);
+    case GroundField::Fine:
+      return valueNoise(x / 0.35F, y / 0.35F, seed + 1U);
+    case GroundField::Oil:
+      return fbm(x / 2.0F, y / 2.0F, 2, seed + 3U);
+    case GroundField::CrackMask:
+      return fbm(x / 25.0F, y / 25.0F, 2, seed + 5U);
+    case GroundField::CrackRidge: {
+      // ridge() before its fold: 0.65 n(p) + 0.35 n(2.1 p), p in 6 m units.
+      const float u = x / 6.0F;
+      const float v = y / 6.0F;
+      return 0.65F * valueNoise(u, v, seed + 6U) +
+             0.35F * valueNoise(2.1F * u, 2.1F * v, seed + 13U);
+    }
+    case GroundField::Stain:
+      return fbm(x / 3.0F + 40.0F, y / 3.0F, 3, seed + 7U);
+    case GroundField::Walk:
+      return fbm(x / 3.0F, y / 3.0F, 2, seed + 20U);
+    case GroundField::Mix:
+      return fbm(x / 4.0F, y / 4.0F, 4, seed + 31U);
+    case GroundField::Soil:
+      return fbm(x / 9.0F + 100.0F, y / 9.0F, 4, seed + 33U);
+    case GroundField::Count:
+      break;
+  }
+  return 0.5F;
+}
+
+Eigen::Vector3f GroundTexture::albedo(double xEast, double yNorth, GroundClass* cls) const {
+  const Eigen::Vector2d p(xEast, yNorth);
+  DirectFields fields(*this, p);
+  return albedoAt(p, fields, all_, cls);
+}
+
+void GroundTexture::fillTile(double x0, double y0, double texelM, int texels,
+                             Eigen::Vector3f* out) const {
+  TileFields fields(*this, x0, y0, texelM, texels);
+  // Patches, manholes and building aprons are few per scene but were tested at every texel.
+  const double extent = (texels - 1) * texelM;
+  const Nearby near = nearby({x0, y0}, {x0 + extent, y0 + extent});
+  for (int j = 0; j < texels; ++j) {
+    for (int i = 0; i < texels; ++i) {
+      fields.moveTo(i, j);
+      out[static_cast<std::ptrdiff_t>(j) * texels + i] =
+          albedoAt(Eigen::Vector2d(x0 + i * texelM, y0 + j * texelM), fields, near, nullptr);
+    }
+  }
 }
 
 }  // namespace vp::sim

@@ -8,6 +8,8 @@
 // cracks, stains, grass) come from value noise seeded by the scene's style seed.
 #pragma once
 
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "scene.hpp"
@@ -16,23 +18,49 @@ namespace vp::sim {
 
 enum class GroundClass { Road, Lot, Kerb, Sidewalk, Verge };
 
+// The smooth noise fields of the texture (features of 0.2 m and more).
+enum class GroundField { Macro, Fine, Oil, CrackMask, CrackRidge, Stain, Walk, Mix, Soil, Count };
+
 class GroundTexture {
  public:
-  explicit GroundTexture(const SceneSpec& scene) : scene_(&scene) {}
+  explicit GroundTexture(const SceneSpec& scene);
 
   Eigen::Vector3f albedo(double x, double y, GroundClass* cls = nullptr) const;
+  // Albedo at the texels * texels points (x0 + i texelM, y0 + j texelM), row-major into out.
+  // The smooth fields come from coarse lattices (6 cm and more) interpolated bilinearly, so values
+  // differ slightly from albedo() at the same point; each tile is a pure function of its
+  // arguments, like albedo().
+  void fillTile(double x0, double y0, double texelM, int texels, Eigen::Vector3f* out) const;
+  // One smooth field at (x, y) (metres).
+  float field(GroundField f, float x, float y) const;
 
  private:
+  // The scene's local features that can affect an area.
+  struct Nearby {
+    std::vector<const Patch*> patches;
+    std::vector<const Manhole*> manholes;
+    std::vector<std::size_t> buildings;  // aprons
+  };
+  Nearby nearby(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const;
+
+  template <typename Fields>
+  Eigen::Vector3f albedoAt(const Eigen::Vector2d& p, Fields& fields, const Nearby& nearby,
+                           GroundClass* cls) const;
+  template <typename Fields>
   float roadTone(const Eigen::Vector2d& p, const Road* road, double along, double lateral,
-                 bool inJunction) const;
+                 bool inJunction, Fields& fields, const Nearby& nearby) const;
   // Coverage [0, 1] of painted markings of one road at (along, lateral); *yellow set when the
   // marking is yellow.
   float roadMarkings(const Road& road, double along, double lateral, bool* yellow) const;
   float lotMarkings(const ParkingLot& lot, const Eigen::Vector2d& p) const;
-  Eigen::Vector3f sidewalk(const Eigen::Vector2d& p, double kerbDistance) const;
-  Eigen::Vector3f verge(const Eigen::Vector2d& p) const;
+  template <typename Fields>
+  Eigen::Vector3f sidewalk(const Eigen::Vector2d& p, double kerbDistance, Fields& fields) const;
+  template <typename Fields>
+  Eigen::Vector3f verge(const Eigen::Vector2d& p, Fields& fields, const Nearby& nearby) const;
 
   const SceneSpec* scene_;
+  std::vector<Eigen::Vector2d> buildingAxes_;  // unit length axis of each building
+  Nearby all_;
 };
 
 }  // namespace vp::sim

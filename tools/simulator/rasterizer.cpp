@@ -191,9 +191,21 @@ void ShadowMap::init(const Eigen::Vector3d& sunDirection, const Eigen::Vector3d&
 void ShadowMap::clear() {
   top_.assign(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_),
               -std::numeric_limits<float>::infinity());
+  blocksX_ = (width_ + kBlock - 1) / kBlock;
+  blocksY_ = (height_ + kBlock - 1) / kBlock;
+  const std::size_t blocks =
+      static_cast<std::size_t>(blocksX_) * static_cast<std::size_t>(blocksY_);
+  blockTop_.assign(blocks, -std::numeric_limits<float>::infinity());
+  blockLow_.assign(blocks, -std::numeric_limits<float>::infinity());
+  nearTop_.assign(blocks, -std::numeric_limits<float>::infinity());
+  nearLow_.assign(blocks, -std::numeric_limits<float>::infinity());
+  dynamicNear_.assign(blocks, 0);
+  dirty_.assign(blocks, 0);
+  dirtyList_.clear();
 }
 
-void ShadowMap::add(const RenderTriangle& triangle, const RenderSurface& surface) {
+template <bool kDynamic>
+void ShadowMap::draw(const RenderTriangle& triangle, const RenderSurface& surface) {
   double x[3], y[3], d[3];
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d p = triangle.p[static_cast<std::size_t>(k)].cast<double>();
@@ -233,8 +245,178 @@ void ShadowMap::add(const RenderTriangle& triangle, const RenderSurface& surface
         }
       }
       cell = static_cast<float>(depth);
+      if (kDynamic) {
+        const std::size_t block =
+            static_cast<std::size_t>(py / kBlock) * static_cast<std::size_t>(blocksX_) +
+            static_cast<std::size_t>(px / kBlock);
+        if (dirty_[block] == 0) {
+          dirty_[block] = 1;
+          dirtyList_.push_back(block);
+        }
+      }
     }
   }
+}
+
+void ShadowMap::add(const RenderTriangle& triangle, const RenderSurface& surface) {
+  draw<false>(triangle, surface);
+}
+
+void ShadowMap::addDynamic(const RenderTriangle& triangle, const RenderSurface& surface) {
+  draw<true>(triangle, surface);
+}
+
+void ShadowMap::summarize(std::size_t b) {
+  const int bx = static_cast<int>(b % static_cast<std::size_t>(blocksX_));
+  const int by = static_cast<int>(b / static_cast<std::size_t>(blocksX_));
+  float top = -std::numeric_limits<float>::infinity();
+  float low = std::numeric_limits<float>::infinity();
+  for (int y = by * kBlock; y < std::min(height_, (by + 1) * kBlock); ++y) {
+    for (int x = bx * kBlock; x < std::min(width_, (bx + 1) * kBlock); ++x) {
+      const float t = top_[static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) +
+                           static_cast<std::size_t>(x)];
+      top = std::max(top, t);
+      low = std::min(low, t);
+    }
+  }
+  blockTop_[b] = top;
+  blockLow_[b] = low;
+}
+
+void ShadowMap::updateNear(int bx, int by) {
+  float top = -std::numeric_limits<float>::infinity();
+  float low = std::numeric_limits<float>::infinity();
+  bool dynamic = false;
+  for (int j = std::max(0, by - 1); j <= std::min(blocksY_ - 1, by + 1); ++j) {
+    for (int i = std::max(0, bx - 1); i <= std::min(blocksX_ - 1, bx + 1); ++i) {
+      const std::size_t b = static_cast<std::size_t>(j) * static_cast<std::size_t>(blocksX_) +
+                            static_cast<std::size_t>(i);
+      top = std::max(top, blockTop_[b]);
+      low = std::min(low, blockLow_[b]);
+      dynamic = dynamic || dirty_[b] != 0;
+    }
+  }
+  // Blocks at the border see taps outside the map (lit): never all dark.
+  const bool inner =
+      bx >= 1 && by >= 1 && (bx + 2) * kBlock <= width_ && (by + 2) * kBlock <= height_;
+  const std::size_t b = static_cast<std::size_t>(by) * static_cast<std::size_t>(blocksX_) +
+                        static_cast<std::size_t>(bx);
+  nearTop_[b] = top;
+  nearLow_[b] = inner ? low : -std::numeric_limits<float>::infinity();
+  dynamicNear_[b] = dynamic ? 1 : 0;
+}
+
+void ShadowMap::finishStatic() {
+  for (std::size_t b = 0; b < blockTop_.size(); ++b) {
+    summarize(b);
+  }
+  for (int by = 0; by < blocksY_; ++by) {
+    for (int bx = 0; bx < blocksX_; ++bx) {
+      updateNear(bx, by);
+    }
+  }
+}
+
+void ShadowMap::restoreFrom(const ShadowMap& base) {
+  for (const std::size_t b : dirtyList_) {
+    const int bx = static_cast<int>(b % static_cast<std::size_t>(blocksX_));
+    const int by = static_cast<int>(b / static_cast<std::size_t>(blocksX_));
+    for (int y = by * kBlock; y < std::min(height_, (by + 1) * kBlock); ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(width_);
+      const std::size_t x0 = static_cast<std::size_t>(bx * kBlock);
+      const std::size_t x1 = static_cast<std::size_t>(std::min(width_, (bx + 1) * kBlock));
+      std::copy(base.top_.begin() + static_cast<std::ptrdiff_t>(row + x0),
+                base.top_.begin() + static_cast<std::ptrdiff_t>(row + x1),
+                top_.begin() + static_cast<std::ptrdiff_t>(row + x0));
+    }
+    blockTop_[b] = base.blockTop_[b];
+    blockLow_[b] = base.blockLow_[b];
+    dirty_[b] = 0;
+  }
+  for (const std::size_t b : dirtyList_) {
+    const int bx = static_cast<int>(b % static_cast<std::size_t>(blocksX_));
+    const int by = static_cast<int>(b / static_cast<std::size_t>(blocksX_));
+    for (int j = std::max(0, by - 1); j <= std::min(blocksY_ - 1, by + 1); ++j) {
+      for (int i = std::max(0, bx - 1); i <= std::min(blocksX_ - 1, bx + 1); ++i) {
+        const std::size_t n = static_cast<std::size_t>(j) * static_cast<std::size_t>(blocksX_) +
+                              static_cast<std::size_t>(i);
+        nearTop_[n] = base.nearTop_[n];
+        nearLow_[n] = base.nearLow_[n];
+        dynamicNear_[n] = 0;
+      }
+    }
+  }
+  dirtyList_.clear();
+}
+
+void ShadowMap::finishDynamic() {
+  for (const std::size_t b : dirtyList_) {
+    summarize(b);
+  }
+  for (const std::size_t b : dirtyList_) {
+    const int bx = static_cast<int>(b % static_cast<std::size_t>(blocksX_));
+    const int by = static_cast<int>(b / static_cast<std::size_t>(blocksX_));
+    for (int j = std::max(0, by - 1); j <= std::min(blocksY_ - 1, by + 1); ++j) {
+      for (int i = std::max(0, bx - 1); i <= std::min(blocksX_ - 1, bx + 1); ++i) {
+        updateNear(i, j);
+      }
+    }
+  }
+}
+
+std::size_t ShadowMap::blockOf(double fx, double fy) const {
+  // Block of the texel nearest to (fx, fy); blocks_ (out of range) when outside the map.
+  const double vx = fx + 0.5;
+  const double vy = fy + 0.5;
+  if (vx < 0.0 || vy < 0.0 || vx >= width_ || vy >= height_) {
+    return std::numeric_limits<std::size_t>::max();
+  }
+  return static_cast<std::size_t>(static_cast<int>(vy) / kBlock) *
+             static_cast<std::size_t>(blocksX_) +
+         static_cast<std::size_t>(static_cast<int>(vx) / kBlock);
+}
+
+bool ShadowMap::boxLit(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const {
+  double aMin = 1e18, aMax = -1e18, bMin = 1e18, bMax = -1e18, dMin = 1e18;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d c((i & 1) != 0 ? hi.x() : lo.x(), (i & 2) != 0 ? hi.y() : lo.y(),
+                            (i & 4) != 0 ? hi.z() : lo.z());
+    aMin = std::min(aMin, c.dot(e1_));
+    aMax = std::max(aMax, c.dot(e1_));
+    bMin = std::min(bMin, c.dot(e2_));
+    bMax = std::max(bMax, c.dot(e2_));
+    dMin = std::min(dMin, c.dot(s_));
+  }
+  // Texel range of every tap (radius <= kBlock - 2) around any point of the box.
+  const auto texel = [&](double v, double origin) { return (v - origin) / texel_ - 0.5; };
+  const int x0 = std::max(0, static_cast<int>(std::floor(texel(aMin, a0_))) - kBlock) / kBlock;
+  const int x1 =
+      std::min(width_ - 1, static_cast<int>(std::ceil(texel(aMax, a0_))) + kBlock) / kBlock;
+  const int y0 = std::max(0, static_cast<int>(std::floor(texel(bMin, b0_))) - kBlock) / kBlock;
+  const int y1 =
+      std::min(height_ - 1, static_cast<int>(std::ceil(texel(bMax, b0_))) + kBlock) / kBlock;
+  const double bias = 0.04 + 1.5 * texel_;
+  for (int by = y0; by <= y1; ++by) {
+    for (int bx = x0; bx <= x1; ++bx) {
+      const float top =
+          blockTop_[static_cast<std::size_t>(by) * static_cast<std::size_t>(blocksX_) +
+                    static_cast<std::size_t>(bx)];
+      if (dMin + bias < static_cast<double>(top)) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+bool ShadowMap::dynamicNear(const Eigen::Vector3f& pf) const {
+  if (dirtyList_.empty()) {
+    return false;
+  }
+  const Eigen::Vector3d p = pf.cast<double>();
+  const std::size_t b =
+      blockOf((p.dot(e1_) - a0_) / texel_ - 0.5, (p.dot(e2_) - b0_) / texel_ - 0.5);
+  return b != std::numeric_limits<std::size_t>::max() && dynamicNear_[b] != 0;
 }
 
 float ShadowMap::visibility(const Eigen::Vector3f& pf, float radiusTexels) const {
@@ -243,6 +425,18 @@ float ShadowMap::visibility(const Eigen::Vector3f& pf, float radiusTexels) const
   const double fy = (p.dot(e2_) - b0_) / texel_ - 0.5;
   const double d = p.dot(s_);
   const double bias = 0.04 + 1.5 * texel_;
+  // Every tap lies within one block of the centre texel's block (radius <= kBlock - 2): when
+  // no caster there is above p, all taps are lit.
+  const std::size_t block = blockOf(fx, fy);
+  if (block != std::numeric_limits<std::size_t>::max()) {
+    if (d + bias >= static_cast<double>(nearTop_[block])) {
+      return 1.0F;
+    }
+    // Likewise in the core of a shadow: every caster nearby is above p.
+    if (d + bias < static_cast<double>(nearLow_[block])) {
+      return 0.0F;
+    }
+  }
   constexpr int kTaps = 3;
   int lit = 0;
   for (int j = 0; j < kTaps; ++j) {

@@ -78,6 +78,11 @@ void rasterizeSilhouette(const std::vector<RenderTriangle>& triangles, std::size
                          std::size_t count, const PinholeView& view,
                          std::vector<std::uint8_t>& scratch, Visit&& visit);
 
+// The static casters (buildings, trees) are added once per sequence and finished; each frame
+// then goes back to them (restoreFrom: only the blocks vehicles touched) and adds the
+// vehicles as dynamic casters. Per block of kBlock x kBlock texels the map keeps the highest
+// and lowest texel of the block and its 8 neighbours, so points above every caster nearby
+// (most of the ground) or below all of them (the core of a shadow) need no filtering.
 class ShadowMap {
  public:
   // Covers the receivers' bounding box (world) as seen along sunDirection (unit, towards the
@@ -85,13 +90,31 @@ class ShadowMap {
   void init(const Eigen::Vector3d& sunDirection, const Eigen::Vector3d& boxMin,
             const Eigen::Vector3d& boxMax, double texelM, int maxSize);
   void clear();
-  void copyDepthFrom(const ShadowMap& other) { top_ = other.top_; }
+  // A static caster; finishStatic() after the last one.
   void add(const RenderTriangle& triangle, const RenderSurface& surface);
-  // Share of the sun visible from p (percentage-closer filtering over radius texels).
+  void finishStatic();
+  // Back to the static casters of `base` (a finished copy of this map's static state).
+  void restoreFrom(const ShadowMap& base);
+  // A caster of this frame (vehicle); finishDynamic() after the last one.
+  void addDynamic(const RenderTriangle& triangle, const RenderSurface& surface);
+  void finishDynamic();
+  // Share of the sun visible from p (percentage-closer filtering over radius texels,
+  // radius <= kBlock - 2).
   float visibility(const Eigen::Vector3f& p, float radiusTexels) const;
+  // True when every point of the world box [lo, hi] is certainly in full sun.
+  bool boxLit(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
+  // True where a dynamic caster may shadow p (its filter footprint meets a touched block).
+  bool dynamicNear(const Eigen::Vector3f& p) const;
   double texelM() const { return texel_; }
 
  private:
+  static constexpr int kBlock = 8;
+  template <bool kDynamic>
+  void draw(const RenderTriangle& triangle, const RenderSurface& surface);
+  void summarize(std::size_t block);
+  void updateNear(int bx, int by);
+  std::size_t blockOf(double fx, double fy) const;
+
   Eigen::Vector3d e1_ = Eigen::Vector3d::UnitX();
   Eigen::Vector3d e2_ = Eigen::Vector3d::UnitY();
   Eigen::Vector3d s_ = Eigen::Vector3d::UnitZ();
@@ -101,6 +124,15 @@ class ShadowMap {
   int width_ = 0;
   int height_ = 0;
   std::vector<float> top_;  // highest caster along the sun direction (p . s), -inf if none
+  int blocksX_ = 0;
+  int blocksY_ = 0;
+  std::vector<float> blockTop_;            // highest caster in the block
+  std::vector<float> blockLow_;            // lowest texel (-inf: no caster) in the block
+  std::vector<float> nearTop_;             // highest caster in the block and its neighbours
+  std::vector<float> nearLow_;             // lowest texel there (-inf at the map's border)
+  std::vector<std::uint8_t> dynamicNear_;  // a dynamic caster in the block or a neighbour
+  std::vector<std::uint8_t> dirty_;        // block touched by a dynamic caster
+  std::vector<std::size_t> dirtyList_;
 };
 
 // --- implementation of the template ---------------------------------------------------------

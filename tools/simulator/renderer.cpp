@@ -1,7 +1,9 @@
 #include "renderer.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <thread>
 
 #include "noise.hpp"
@@ -91,6 +93,26 @@ float smoothstep(float e0, float e1, float x) {
   return t * t * (3.0F - 2.0F * t);
 }
 
+// Corner normals interpolated at p (barycentric weights of p's projection on the triangle).
+Eigen::Vector3f smoothNormal(const RenderTriangle& tri, const Eigen::Vector3f& p) {
+  const Eigen::Vector3f v0 = tri.p[1] - tri.p[0];
+  const Eigen::Vector3f v1 = tri.p[2] - tri.p[0];
+  const Eigen::Vector3f v2 = p - tri.p[0];
+  const float d00 = v0.dot(v0);
+  const float d01 = v0.dot(v1);
+  const float d11 = v1.dot(v1);
+  const float d20 = v2.dot(v0);
+  const float d21 = v2.dot(v1);
+  const float den = d00 * d11 - d01 * d01;
+  float b1 = den != 0.0F ? (d11 * d20 - d01 * d21) / den : 0.0F;
+  float b2 = den != 0.0F ? (d00 * d21 - d01 * d20) / den : 0.0F;
+  b1 = std::clamp(b1, 0.0F, 1.0F);
+  b2 = std::clamp(b2, 0.0F, 1.0F - b1);
+  Eigen::Vector3f normal = (1.0F - b1 - b2) * tri.n[0] + b1 * tri.n[1] + b2 * tri.n[2];
+  normal.normalize();
+  return normal;
+}
+
 }  // namespace
 
 Eigen::Vector3d VehiclePose::toWorld(const Eigen::Vector3d& local) const {
@@ -148,7 +170,7 @@ void Renderer::appendVehicle(const VehicleModel& model, const VehiclePose& pose,
 }
 
 void Renderer::init(const SceneSpec& scene, const World& world, const Eigen::Vector2d& regionMin,
-                    const Eigen::Vector2d& regionMax, double gsdM, int threads) {
+                    const Eigen::Vector2d& regionMax, double gsdM, int supersampling, int threads) {
   scene_ = &scene;
   world_ = &world;
   texture_.emplace(scene);
@@ -156,6 +178,11 @@ void Renderer::init(const SceneSpec& scene, const World& world, const Eigen::Vec
   staticTriangles_.clear();
   staticSurfaces_.clear();
   buildGround(regionMin, regionMax);
+  groundTriangles_ = staticTriangles_.size();
+  groundNormals_.clear();
+  for (const RenderTriangle& t : staticTriangles_) {
+    groundNormals_.push_back((t.n[0] + t.n[1] + t.n[2]).normalized());
+  }
   buildBuildings();
   buildTrees();
   double zMin = 1e9;
@@ -174,7 +201,12 @@ void Renderer::init(const SceneSpec& scene, const World& world, const Eigen::Vec
       staticShadow_.add(t, s);
     }
   }
+  staticShadow_.finishStatic();
   shadow_ = staticShadow_;
+  // Finest ground texel: a sample's footprint at the view centre (nadir views see about that
+  // footprint everywhere), so the texture keeps the samples' detail.
+  groundCache_.init(*texture_, staticShadow_, scene.light.shadowSoftnessTexels, heights_, regionMin,
+                    regionMax, gsdM / std::max(1, supersampling));
   occlusionOrigin_ = regionMin;
   occlusionCellM_ = std::max(kOcclusionCellM, gsdM);
   occlusionW_ = static_cast<int>(std::ceil((regionMax.x() - regionMin.x()) / occlusionCellM_)) + 1;
@@ -192,10 +224,18 @@ void Renderer::buildGround(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi)
   const int nx = static_cast<int>(std::ceil((hi.x() - lo.x()) / cell)) + 1;
   const int ny = static_cast<int>(std::ceil((hi.y() - lo.y()) / cell)) + 1;
   std::vector<Eigen::Vector3d> v(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
+  heights_.origin = lo;
+  heights_.cellM = cell;
+  heights_.nx = nx;
+  heights_.ny = ny;
+  heights_.z.resize(v.size());
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
-      v[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)] =
-          world_->ground(lo.x() + i * cell, lo.y() + j * cell);
+      const std::size_t k =
+          static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i);
+      v[k] = world_->ground(lo.x() + i * cell, lo.y() + j * cell);
+      // As the triangles store it (float), so the cache sits on the rasterized surface.
+      heights_.z[k] = static_cast<double>(static_cast<float>(v[k].z()));
     }
   }
   const auto at = [&](int i, int j) -> const Eigen::Vector3d& {
@@ -358,7 +398,17 @@ void Renderer::buildTrees() {
           centre + Eigen::Vector3d(s.x() * tree.canopyRadiusM * r, s.y() * tree.canopyRadiusM * r,
                                    s.z() * tree.canopyVerticalRadiusM * r);
     }
-    for (const auto& f : faces) {
+    // Upper faces first: seen from above, they fill the z-buffer before the lower ones, whose
+    // samples then fail the depth test before the (costly) foliage alpha test.
+    std::vector<std::array<int, 3>> ordered = faces;
+    std::stable_sort(ordered.begin(), ordered.end(), [&](const auto& a, const auto& b) {
+      const auto z = [&](const std::array<int, 3>& f) {
+        return pts[static_cast<std::size_t>(f[0])].z() + pts[static_cast<std::size_t>(f[1])].z() +
+               pts[static_cast<std::size_t>(f[2])].z();
+      };
+      return z(a) > z(b);
+    });
+    for (const auto& f : ordered) {
       RenderTriangle t;
       for (std::size_t k = 0; k < 3; ++k) {
         t.p[k] = pts[static_cast<std::size_t>(f[k])].cast<float>();
@@ -427,8 +477,9 @@ void Renderer::buildOcclusion(const std::vector<SimVehicle>& vehicles) {
 }
 
 float Renderer::occlusionAt(double x, double y) const {
-  const int i = static_cast<int>(std::lround((x - occlusionOrigin_.x()) / occlusionCellM_));
-  const int j = static_cast<int>(std::lround((y - occlusionOrigin_.y()) / occlusionCellM_));
+  // Nearest cell (floor of + 0.5: lround is a library call, and this runs per pixel).
+  const int i = static_cast<int>(std::floor((x - occlusionOrigin_.x()) / occlusionCellM_ + 0.5));
+  const int j = static_cast<int>(std::floor((y - occlusionOrigin_.y()) / occlusionCellM_ + 0.5));
   if (i < 0 || j < 0 || i >= occlusionW_ || j >= occlusionH_) {
     return 1.0F;
   }
@@ -436,35 +487,20 @@ float Renderer::occlusionAt(double x, double y) const {
                     static_cast<std::size_t>(i)];
 }
 
-Eigen::Vector3f Renderer::shade(const PinholeView& view, double x, double y,
-                                std::size_t index) const {
+Eigen::Vector3f Renderer::shade(const PinholeView& view, double x, double y, std::int32_t ti,
+                                float invDepth) const {
   const Lighting& light = scene_->light;
-  const std::int32_t ti = samples_.triangle[index];
   if (ti < 0) {
     return scene_->style.grassA;
   }
   const RenderTriangle& tri = triangles_[static_cast<std::size_t>(ti)];
   const RenderSurface& s = surfaces_[tri.surface];
-  const Eigen::Vector3d pd =
-      view.unproject(x, y, 1.0 / static_cast<double>(samples_.invDepth[index]));
+  const Eigen::Vector3d pd = view.unproject(x, y, 1.0 / static_cast<double>(invDepth));
   const Eigen::Vector3f p = pd.cast<float>();
-  // Barycentric weights of p for the smooth normal.
-  const Eigen::Vector3f v0 = tri.p[1] - tri.p[0];
-  const Eigen::Vector3f v1 = tri.p[2] - tri.p[0];
-  const Eigen::Vector3f v2 = p - tri.p[0];
-  const float d00 = v0.dot(v0);
-  const float d01 = v0.dot(v1);
-  const float d11 = v1.dot(v1);
-  const float d20 = v2.dot(v0);
-  const float d21 = v2.dot(v1);
-  const float den = d00 * d11 - d01 * d01;
-  float b1 = den != 0.0F ? (d11 * d20 - d01 * d21) / den : 0.0F;
-  float b2 = den != 0.0F ? (d00 * d21 - d01 * d20) / den : 0.0F;
-  b1 = std::clamp(b1, 0.0F, 1.0F);
-  b2 = std::clamp(b2, 0.0F, 1.0F - b1);
-  Eigen::Vector3f normal = (1.0F - b1 - b2) * tri.n[0] + b1 * tri.n[1] + b2 * tri.n[2];
-  normal.normalize();
-  const Eigen::Vector3f toCamera = (view.centre - pd).normalized().cast<float>();
+  Eigen::Vector3f normal = smoothNormal(tri, p);
+  const Eigen::Vector3d toCameraD = view.centre - pd;
+  const double distance = toCameraD.norm();
+  const Eigen::Vector3f toCamera = (toCameraD / distance).cast<float>();
   if (normal.dot(toCamera) < 0.0F) {
     normal = -normal;
   }
@@ -474,11 +510,20 @@ Eigen::Vector3f Renderer::shade(const PinholeView& view, double x, double y,
   float shininess = s.shininess;
   float skyOcclusion = 1.0F;
   float reflect = 0.0F;
+  float staticSun = -1.0F;  // ground: the cached visibility past static casters
   switch (s.material) {
-    case Material::Ground:
-      albedo = texture_->albedo(pd.x(), pd.y());
+    case Material::Ground: {
+      // Ground area the sample covers: (z / f)^2 on the image plane, stretched by the ray's
+      // obliquity to the image plane (z / distance) and to the ground (cos incidence).
+      const double z = 1.0 / static_cast<double>(invDepth);
+      const double footprint = z * z / (view.fx * view.fy) * (z / distance) /
+                               static_cast<double>(std::max(0.05F, normal.dot(toCamera)));
+      const GroundSample g = groundCache_.sample(pd.x(), pd.y(), groundCache_.level(footprint));
+      albedo = g.albedo;
+      staticSun = g.sunVisibility;
       skyOcclusion = occlusionAt(pd.x(), pd.y());
       break;
+    }
     case Material::Wall: {
       const double along = p.dot(s.axis);
       const double h = p.z() - s.param;
@@ -528,7 +573,10 @@ Eigen::Vector3f Renderer::shade(const PinholeView& view, double x, double y,
   const float nDotL = normal.dot(sun);
   float sunVisible = 0.0F;
   if (nDotL > 0.0F) {
-    sunVisible = shadow_.visibility(p + normal * 0.03F, light.shadowSoftnessTexels);
+    const Eigen::Vector3f lifted = p + normal * 0.03F;
+    sunVisible = staticSun >= 0.0F && !shadow_.dynamicNear(lifted)
+                     ? staticSun
+                     : shadow_.visibility(lifted, light.shadowSoftnessTexels);
   }
   const float skyTerm = (0.6F + 0.4F * normal.z()) * skyOcclusion;
   Eigen::Vector3f colour = albedo.cwiseProduct(
@@ -551,12 +599,106 @@ Eigen::Vector3f Renderer::shade(const PinholeView& view, double x, double y,
   return colour;
 }
 
+Eigen::Vector3f Renderer::shadeGroundPixel(const PinholeView& view, int x, int y, int ss,
+                                           Eigen::Vector2d* previous) const {
+  // The ground's light (sun, sky, sky occlusion, vehicle shadows) varies little within a
+  // pixel, so it is computed once at the pixel's centre; the albedo and the static shadow
+  // (the detail) are taken at every sample and averaged, as before.
+  const Lighting& light = scene_->light;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double depth = 0.0;
+  std::array<Eigen::Vector2d, 16> ground;
+  int n = 0;
+  // Sample rays are affine in the sample coordinates (view.unproject without its divisions).
+  const Eigen::Vector3d rayRow = ray0_ + (x * ss) * rayDx_ + (y * ss) * rayDy_;
+  for (int j = 0; j < ss; ++j) {
+    const std::size_t row =
+        static_cast<std::size_t>(y * ss + j) * static_cast<std::size_t>(samples_.width) +
+        static_cast<std::size_t>(x * ss);
+    for (int i = 0; i < ss; ++i) {
+      const double z =
+          1.0 / static_cast<double>(samples_.invDepth[row + static_cast<std::size_t>(i)]);
+      const Eigen::Vector3d pd = view.centre + z * (rayRow + i * rayDx_ + j * rayDy_);
+      ground[static_cast<std::size_t>(n++)] = pd.head<2>();
+      centre += pd;
+      depth += z;
+    }
+  }
+  centre /= n;
+  depth /= n;
+  const std::int32_t first =
+      samples_
+          .triangle[static_cast<std::size_t>(y * ss) * static_cast<std::size_t>(samples_.width) +
+                    static_cast<std::size_t>(x * ss)];
+  const Eigen::Vector3f p = centre.cast<float>();
+  // The ground is nearly flat: one normal per triangle (its corners' mean) is enough.
+  Eigen::Vector3f normal = groundNormals_[static_cast<std::size_t>(first)];
+  const Eigen::Vector3d toCameraD = view.centre - centre;
+  const double distance = toCameraD.norm();
+  const Eigen::Vector3f toCamera = (toCameraD / distance).cast<float>();
+  if (normal.dot(toCamera) < 0.0F) {
+    normal = -normal;
+  }
+  // Ground area one sample covers (see shade()).
+  const double footprint = depth * depth / (view.fx * view.fy) * (depth / distance) /
+                           static_cast<double>(std::max(0.05F, normal.dot(toCamera)));
+  const int level = groundCache_.level(footprint);
+  // The texels of a frame are read once each, in an order the hardware prefetcher cannot
+  // guess: ask for those of the pixel a few steps ahead along the row (extrapolated).
+  if (previous != nullptr) {
+    const Eigen::Vector2d c = centre.head<2>();
+    if (previous->allFinite()) {
+      const Eigen::Vector2d ahead = c + 8.0 * (c - *previous);
+      groundCache_.prefetch(ahead.x(), ahead.y(), level);
+    }
+    *previous = c;
+  }
+  Eigen::Vector3f albedo = Eigen::Vector3f::Zero();
+  float staticSun = 0.0F;
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector2d& g = ground[static_cast<std::size_t>(k)];
+    const GroundSample s = groundCache_.sample(g.x(), g.y(), level);
+    albedo += s.albedo;
+    staticSun += s.sunVisibility;
+  }
+  albedo /= static_cast<float>(n);
+  staticSun /= static_cast<float>(n);
+  const Eigen::Vector3f sun = light.sunDirectionEnu.cast<float>();
+  const float nDotL = normal.dot(sun);
+  float sunVisible = 0.0F;
+  if (nDotL > 0.0F) {
+    const Eigen::Vector3f lifted = p + normal * 0.03F;
+    sunVisible = shadow_.dynamicNear(lifted)
+                     ? shadow_.visibility(lifted, light.shadowSoftnessTexels)
+                     : staticSun;
+  }
+  const float skyTerm = (0.6F + 0.4F * normal.z()) * occlusionAt(centre.x(), centre.y());
+  return albedo.cwiseProduct(light.sunIrradiance * (std::max(nDotL, 0.0F) * sunVisible) +
+                             light.skyIrradiance * skyTerm);
+}
+
+bool Renderer::smoothSurface(std::uint32_t surface) const {
+  switch (surfaces_[surface].material) {
+    case Material::Canopy:
+    case Material::Paint:
+    case Material::Glass:
+    case Material::Tyre:
+    case Material::Rim:
+    case Material::HeadLight:
+    case Material::TailLight:
+    case Material::Underbody:
+      return true;
+    default:
+      return false;
+  }
+}
+
 void Renderer::render(const std::vector<SimVehicle>& vehicles, const PinholeView& view,
                       const Canvas& canvas, cv::Mat& linear) {
   triangles_ = staticTriangles_;
   surfaces_ = staticSurfaces_;
   ranges_.clear();
-  shadow_.copyDepthFrom(staticShadow_);
+  shadow_.restoreFrom(staticShadow_);
   for (const SimVehicle& v : vehicles) {
     VehicleRange range;
     range.trackId = v.trackId;
@@ -565,18 +707,71 @@ void Renderer::render(const std::vector<SimVehicle>& vehicles, const PinholeView
     range.count = triangles_.size() - range.first;
     ranges_.push_back(range);
     for (std::size_t t = range.first; t < triangles_.size(); ++t) {
-      shadow_.add(triangles_[t], surfaces_[triangles_[t].surface]);
+      shadow_.addDynamic(triangles_[t], surfaces_[triangles_[t].surface]);
     }
   }
+  shadow_.finishDynamic();
   buildOcclusion(vehicles);
   rasterize(triangles_, surfaces_, view, samples_, threads_);
 
   const int ss = canvas.supersampling;
+  const Eigen::Matrix3d toWorld = view.worldToCamera.transpose();
+  ray0_ = toWorld * Eigen::Vector3d(-view.cx / view.fx, -view.cy / view.fy, 1.0);
+  rayDx_ = toWorld.col(0) / view.fx;
+  rayDy_ = toWorld.col(1) / view.fy;
   linear.create(canvas.height, canvas.width, CV_32FC3);
   const auto shadeRows = [&](int r0, int r1) {
     for (int y = r0; y < r1; ++y) {
       auto* row = linear.ptr<cv::Vec3f>(y);
+      const std::uint8_t* needed =
+          canvasMask_.empty() ? nullptr
+                              : canvasMask_.data() + static_cast<std::ptrdiff_t>(y) * canvas.width;
+      Eigen::Vector2d previous = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
       for (int x = 0; x < canvas.width; ++x) {
+        if (needed != nullptr && needed[x] == 0) {
+          row[x] = cv::Vec3f(0.0F, 0.0F, 0.0F);  // never read by the sensor
+          continue;
+        }
+        bool allGround = ss <= 4;
+        for (int j = 0; j < ss && allGround; ++j) {
+          const std::int32_t* t = samples_.triangle.data() +
+                                  static_cast<std::ptrdiff_t>(y * ss + j) * samples_.width + x * ss;
+          for (int i = 0; i < ss; ++i) {
+            // Ground triangles come first in the list (buildGround runs first).
+            allGround = allGround && t[i] >= 0 && static_cast<std::size_t>(t[i]) < groundTriangles_;
+          }
+        }
+        if (allGround) {
+          const Eigen::Vector3f c = shadeGroundPixel(view, x, y, ss, &previous);
+          row[x] = cv::Vec3f(c.x(), c.y(), c.z());
+          continue;
+        }
+        // Pixels wholly on one smooth surface (tree crown, vehicle paint, glass, ...) are
+        // shaded once at their centre: these shadings (foliage noise, filtered shadows,
+        // highlights) vary little within a pixel. Edges and textured surfaces keep S x S.
+        std::int32_t t0 = samples_.triangle[static_cast<std::size_t>(y * ss) *
+                                                static_cast<std::size_t>(samples_.width) +
+                                            static_cast<std::size_t>(x * ss)];
+        bool uniform = t0 >= 0 && smoothSurface(triangles_[static_cast<std::size_t>(t0)].surface);
+        float invDepth = 0.0F;
+        for (int j = 0; j < ss && uniform; ++j) {
+          const std::size_t base =
+              static_cast<std::size_t>(y * ss + j) * static_cast<std::size_t>(samples_.width) +
+              static_cast<std::size_t>(x * ss);
+          for (int i = 0; i < ss && uniform; ++i) {
+            const std::int32_t t = samples_.triangle[base + static_cast<std::size_t>(i)];
+            uniform = t >= 0 && triangles_[static_cast<std::size_t>(t)].surface ==
+                                    triangles_[static_cast<std::size_t>(t0)].surface;
+            invDepth += samples_.invDepth[base + static_cast<std::size_t>(i)];
+          }
+        }
+        if (uniform) {
+          const double c = 0.5 * (ss - 1);
+          const Eigen::Vector3f v =
+              shade(view, x * ss + c, y * ss + c, t0, invDepth / static_cast<float>(ss * ss));
+          row[x] = cv::Vec3f(v.x(), v.y(), v.z());
+          continue;
+        }
         Eigen::Vector3f sum = Eigen::Vector3f::Zero();
         for (int j = 0; j < ss; ++j) {
           for (int i = 0; i < ss; ++i) {
@@ -585,7 +780,7 @@ void Renderer::render(const std::vector<SimVehicle>& vehicles, const PinholeView
             const std::size_t idx =
                 static_cast<std::size_t>(sy) * static_cast<std::size_t>(samples_.width) +
                 static_cast<std::size_t>(sx);
-            sum += shade(view, sx, sy, idx);
+            sum += shade(view, sx, sy, samples_.triangle[idx], samples_.invDepth[idx]);
           }
         }
         sum /= static_cast<float>(ss * ss);

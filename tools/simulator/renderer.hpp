@@ -4,7 +4,8 @@
 // filtered), with the per-sample depth and triangle (object id) buffers kept for ground truth.
 //
 // Contract: init() builds the static geometry once per sequence (the ground mesh with its
-// procedural texture, buildings, trees) and the static part of the sun's shadow map; render()
+// procedural texture, buildings, trees), the static part of the sun's shadow map and the
+// ground cache (texture and static shadow, filled as frames first see the ground); render()
 // adds the vehicles of the frame (their shadows, the darkening of the ground under them) and
 // shades every sample: Lambertian diffuse from the sun (shadow mapped, soft) and the sky
 // (hemispherical, ambient occlusion under vehicles), Blinn-Phong highlights and Fresnel sky
@@ -13,11 +14,13 @@
 #pragma once
 
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "ground_cache.hpp"
 #include "ground_texture.hpp"
 #include "rasterizer.hpp"
 #include "scene.hpp"
@@ -52,14 +55,18 @@ struct VehicleRange {
 
 class Renderer {
  public:
-  // gsdM: ground sampling distance at the view centre; sets the shadow-map and sky-occlusion
-  // resolutions (finer than a pixel, no finer than needed).
+  // gsdM: ground sampling distance (of a pixel) at the view centre; sets the shadow-map,
+  // sky-occlusion and ground-cache resolutions (finer than a pixel, no finer than needed);
+  // supersampling: samples per pixel and side.
   void init(const SceneSpec& scene, const World& world, const Eigen::Vector2d& regionMin,
-            const Eigen::Vector2d& regionMax, double gsdM, int threads);
+            const Eigen::Vector2d& regionMax, double gsdM, int supersampling, int threads);
 
   // view: the ideal pinhole on the sample grid of `canvas`. linear: CV_32FC3 (RGB) canvas.
   void render(const std::vector<SimVehicle>& vehicles, const PinholeView& view,
               const Canvas& canvas, cv::Mat& linear);
+
+  // Canvas pixels to shade (1; others are set to 0): see Sensor::neededCanvas. Empty: all.
+  void setCanvasMask(std::vector<std::uint8_t> mask) { canvasMask_ = std::move(mask); }
 
   const std::vector<RenderTriangle>& triangles() const { return triangles_; }
   const std::vector<RenderSurface>& surfaces() const { return surfaces_; }
@@ -82,13 +89,34 @@ class Renderer {
   void buildTrees();
   void buildOcclusion(const std::vector<SimVehicle>& vehicles);
   float occlusionAt(double x, double y) const;
-  Eigen::Vector3f shade(const PinholeView& view, double x, double y, std::size_t index) const;
+  // Colour of the surface point seen at sample coordinates (x, y) on triangle ti (-1: none)
+  // at inverse depth invDepth.
+  Eigen::Vector3f shade(const PinholeView& view, double x, double y, std::int32_t ti,
+                        float invDepth) const;
+  // Surfaces without texture detail below a pixel (shaded once per pixel when a pixel lies
+  // wholly on one).
+  bool smoothSurface(std::uint32_t surface) const;
+  // Colour of canvas pixel (x, y) whose samples all show the ground.
+  // previous: the ground point of the last ground pixel of this row (for prefetching).
+  Eigen::Vector3f shadeGroundPixel(const PinholeView& view, int x, int y, int ss,
+                                   Eigen::Vector2d* previous) const;
 
   const SceneSpec* scene_ = nullptr;
   const World* world_ = nullptr;
   std::optional<GroundTexture> texture_;
+  HeightGrid heights_;
+  // Albedo and static sun visibility of the ground, filled on first sight, kept for the
+  // sequence (the ground does not move; only vehicles do).
+  GroundCache groundCache_;
   int threads_ = 1;
   std::vector<RenderTriangle> staticTriangles_;
+  std::size_t groundTriangles_ = 0;             // the first ones of staticTriangles_
+  std::vector<Eigen::Vector3f> groundNormals_;  // per ground triangle
+  std::vector<std::uint8_t> canvasMask_;
+  // This frame's viewing ray (z = 1) of sample (x, y): ray0_ + x rayDx_ + y rayDy_.
+  Eigen::Vector3d ray0_{0, 0, 1};
+  Eigen::Vector3d rayDx_{0, 0, 0};
+  Eigen::Vector3d rayDy_{0, 0, 0};
   std::vector<RenderSurface> staticSurfaces_;
   std::vector<RenderTriangle> triangles_;  // this frame: static + vehicles
   std::vector<RenderSurface> surfaces_;

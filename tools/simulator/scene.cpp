@@ -23,7 +23,10 @@ double boxDistance(const Eigen::Vector2d& centre, const Eigen::Vector2d& dir, do
   const Eigen::Vector2d d = p - centre;
   const double qx = std::fabs(d.dot(dir)) - halfLength;
   const double qy = std::fabs(d.x() * -dir.y() + d.y() * dir.x()) - halfWidth;
-  const double outside = std::hypot(std::max(qx, 0.0), std::max(qy, 0.0));
+  // sqrt rather than hypot: metres cannot overflow, and this runs per ground texel.
+  const double ox = std::max(qx, 0.0);
+  const double oy = std::max(qy, 0.0);
+  const double outside = std::sqrt(ox * ox + oy * oy);
   return outside + std::min(std::max(qx, qy), 0.0);
 }
 
@@ -32,7 +35,7 @@ double boxDistance(const Eigen::Vector2d& centre, const Eigen::Vector2d& dir, do
 double roundUnion(double a, double b, double r) {
   const double ux = std::max(r - a, 0.0);
   const double uy = std::max(r - b, 0.0);
-  return std::max(r, std::min(a, b)) - std::hypot(ux, uy);
+  return std::max(r, std::min(a, b)) - std::sqrt(ux * ux + uy * uy);
 }
 
 Eigen::Vector3f grey(double v) {

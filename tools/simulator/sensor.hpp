@@ -73,6 +73,9 @@ class Sensor {
   }
   const Canvas& canvas() const { return canvas_; }
   const SensorSpec& spec() const { return spec_; }
+  // Canvas pixels within marginPx of one that maps into the image: the only ones develop()
+  // reads (the canvas is the bounding box of the lens's ideal field, larger than needed).
+  std::vector<std::uint8_t> neededCanvas(int marginPx) const;
   // Mean linear level of the canvas part that lands in the image (for auto exposure).
   double meanLevel(const cv::Mat& linear) const;
 
@@ -85,6 +88,7 @@ class Sensor {
   cv::Mat mapY_;
   cv::Mat vignette_;  // CV_32FC1
   std::vector<std::uint8_t> inImage_;
+  std::vector<float> tone_;  // 8-bit output (unrounded) over sqrt(linear), see toneTable()
 };
 
 }  // namespace vp::sim

@@ -196,7 +196,10 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   factory_ = std::make_unique<VehicleFactory>(asm_);
   traffic_.init(scene_, *factory_, pathHalf, options.warmUpS, kFrameIntervalS, rng);
   sensor_.init(camera_, canvas_, sensorSpec_);
-  renderer_.init(scene_, world_, lo, hi, rig_.altitudeM / rig_.intrinsics.fxPx, options.threads);
+  renderer_.init(scene_, world_, lo, hi, rig_.altitudeM / rig_.intrinsics.fxPx,
+                 canvas_.supersampling, options.threads);
+  // Bilinear remap reads a canvas pixel's neighbours; lens curvature moves them < 2 px.
+  renderer_.setCanvasMask(sensor_.neededCanvas(3));
   frameIndex_ = 0;
   return true;
 }
