@@ -19,18 +19,6 @@ bool allFinite(const Array& values) {
 
 }  // namespace
 
-const char* toString(TrackStatus status) {
-  switch (status) {
-    case TrackStatus::Tentative:
-      return "tentative";
-    case TrackStatus::Confirmed:
-      return "confirmed";
-    case TrackStatus::Lost:
-      return "lost";
-  }
-  return "unknown";
-}
-
 const char* toString(ValidationError error) {
   switch (error) {
     case ValidationError::None:

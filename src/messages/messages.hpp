@@ -19,14 +19,15 @@
 
 #include "geodesy/geodesy.hpp"
 #include "shape/vehicle_model.hpp"
+#include "tracking/track_manager.hpp"
 
 namespace vp::messages {
 
 // Life cycle of a track as the tracker reports it. Only tracks that have been confirmed are
 // published; Lost (coasting, not observed in the last frames) is published until deletion so
 // that receivers see the state degrade before the instance is disposed.
-enum class TrackStatus : std::uint8_t { Tentative, Confirmed, Lost };
-const char* toString(TrackStatus status);  // "tentative", "confirmed", "lost"
+// The tracker's status, published as is (the stage before knows it; this one reuses it).
+using tracking::TrackStatus;
 
 struct VehicleState {
   // Key: a track id is unique per drone only.

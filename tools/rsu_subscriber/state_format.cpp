@@ -43,7 +43,7 @@ void forEachField(EventKind kind, const messages::VehicleState& s, double latenc
   i("track_id", s.trackId);
   i("measurement_time_ns", s.measurementTimeNs);
   d("latency_ms", latency_ms);
-  str("status", messages::toString(s.status));
+  str("status", tracking::toString(s.status));
   d("latitude_deg", s.position.latitudeDeg);
   d("longitude_deg", s.position.longitudeDeg);
   d("height_m", s.position.heightM);
