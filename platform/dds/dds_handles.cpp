@@ -50,22 +50,27 @@ void applySecurity(const messages::SecurityConfig& security, Qos& qos) {
   if (!security.enabled) {
     return;
   }
-  const std::string dir = security.pluginDir + "/";
-  setProp(qos, "dds.sec.auth.library.path", dir + "libdds_security_auth.so");
-  setProp(qos, "dds.sec.auth.library.init", "init_authentication");
-  setProp(qos, "dds.sec.auth.library.finalize", "finalize_authentication");
+  // The three plugins Debian ships in its private folder: property prefix, library, entry name.
+  struct Plugin {
+    const char* prefix;
+    const char* library;
+    const char* entry;
+  };
+  constexpr Plugin kPlugins[] = {{"dds.sec.auth", "libdds_security_auth.so", "authentication"},
+                                 {"dds.sec.access", "libdds_security_ac.so", "access_control"},
+                                 {"dds.sec.crypto", "libdds_security_crypto.so", "crypto"}};
+  for (const Plugin& p : kPlugins) {
+    const std::string prefix = p.prefix;
+    setProp(qos, (prefix + ".library.path").c_str(), security.pluginDir + "/" + p.library);
+    setProp(qos, (prefix + ".library.init").c_str(), std::string("init_") + p.entry);
+    setProp(qos, (prefix + ".library.finalize").c_str(), std::string("finalize_") + p.entry);
+  }
   setProp(qos, "dds.sec.auth.identity_ca", fileUri(security.identityCa));
   setProp(qos, "dds.sec.auth.identity_certificate", fileUri(security.identityCertificate));
   setProp(qos, "dds.sec.auth.private_key", fileUri(security.privateKey));
-  setProp(qos, "dds.sec.access.library.path", dir + "libdds_security_ac.so");
-  setProp(qos, "dds.sec.access.library.init", "init_access_control");
-  setProp(qos, "dds.sec.access.library.finalize", "finalize_access_control");
   setProp(qos, "dds.sec.access.permissions_ca", fileUri(security.permissionsCa));
   setProp(qos, "dds.sec.access.governance", fileUri(security.governance));
   setProp(qos, "dds.sec.access.permissions", fileUri(security.permissions));
-  setProp(qos, "dds.sec.crypto.library.path", dir + "libdds_security_crypto.so");
-  setProp(qos, "dds.sec.crypto.library.init", "init_crypto");
-  setProp(qos, "dds.sec.crypto.library.finalize", "finalize_crypto");
 }
 
 Entity& Entity::operator=(Entity&& other) noexcept {

@@ -241,6 +241,26 @@ void setActivationQuant(onnx::ModelProto& model, const std::string& floatValue, 
   }
 }
 
+// The dequantized value that follows the first `opType` node's output through its Q/DQ pair
+// (empty when there is none).
+std::string dequantizedOutputOf(onnx::ModelProto& model, const std::string& opType) {
+  const onnx::NodeProto* op = findNode(model, opType);
+  if (op == nullptr) {
+    return {};
+  }
+  for (const auto& q : model.graph().node()) {
+    if (q.op_type() != "QuantizeLinear" || q.input(0) != op->output(0)) {
+      continue;
+    }
+    for (const auto& dq : model.graph().node()) {
+      if (dq.op_type() == "DequantizeLinear" && dq.input(0) == q.output(0)) {
+        return dq.output(0);
+      }
+    }
+  }
+  return {};
+}
+
 // Inserts `op` (+ Q/DQ with the given params, or the input's when scale <= 0) after the
 // dequantized activation `value`, rewiring its consumers.
 void insertActivation(onnx::ModelProto& model, const std::string& value, const std::string& op,
@@ -344,38 +364,16 @@ std::vector<Variant> variants() {
        "conv_blocks"},
       {"standalone_relu",
        [](onnx::ModelProto& m) {
-         auto* p = findNode(m, "MaxPool");
-         ASSERT_NE(p, nullptr);
-         const std::string out = p->output(0);
-         for (auto& node : *m.mutable_graph()->mutable_node()) {
-           if (node.op_type() == "QuantizeLinear" && node.input(0) == out) {
-             for (auto& dq : *m.mutable_graph()->mutable_node()) {
-               if (dq.op_type() == "DequantizeLinear" && dq.input(0) == node.output(0)) {
-                 insertActivation(m, dq.output(0), "Relu", 0.0F, 0);
-                 return;
-               }
-             }
-           }
-         }
-         FAIL() << "no MaxPool output Q/DQ";
+         const std::string value = dequantizedOutputOf(m, "MaxPool");
+         ASSERT_FALSE(value.empty()) << "no MaxPool output Q/DQ";
+         insertActivation(m, value, "Relu", 0.0F, 0);
        },
        "fpn_heads"},
       {"requantizing_relu",
        [](onnx::ModelProto& m) {
-         auto* p = findNode(m, "GlobalAveragePool");
-         ASSERT_NE(p, nullptr);
-         const std::string out = p->output(0);
-         for (auto& node : *m.mutable_graph()->mutable_node()) {
-           if (node.op_type() == "QuantizeLinear" && node.input(0) == out) {
-             for (auto& dq : *m.mutable_graph()->mutable_node()) {
-               if (dq.op_type() == "DequantizeLinear" && dq.input(0) == node.output(0)) {
-                 insertActivation(m, dq.output(0), "Relu", 0.05F, -100);
-                 return;
-               }
-             }
-           }
-         }
-         FAIL() << "no GlobalAveragePool output Q/DQ";
+         const std::string value = dequantizedOutputOf(m, "GlobalAveragePool");
+         ASSERT_FALSE(value.empty()) << "no GlobalAveragePool output Q/DQ";
+         insertActivation(m, value, "Relu", 0.05F, -100);
        },
        "classifier"},
   };
