@@ -244,7 +244,27 @@ class Predictor:
         boxes[:, 4] = wrap_angle(boxes[:, 4] + np.where(flip, math.pi, 0.0))
         return {"crop_type_probs": e / e.sum(1, keepdims=True),
                 "crop_shape": out["shape"].flatten(1).cpu().numpy(),
-                "crop_flip": flip, "crop_refine": refine, "boxes_flip_corrected": boxes}
+                "crop_flip": flip, "crop_refine": refine, "boxes_flip_corrected": boxes,
+                "boxes_refined": apply_refine(det, flip, refine, g)}
+
+
+def apply_refine(det: np.ndarray, flip: np.ndarray, refine: np.ndarray, gsd_m) -> np.ndarray:
+    """Boxes [M, 6] after the second stage: the inverse of ``crops.refine_target``.
+
+    The crop was cut at (cx, cy, angle) of ``det``; refine = (du_m, dv_m) the true centre in the
+    crop frame (x along the crop axis, y to its right), d_angle the true axis minus the crop
+    axis, length_m, width_m. The driving direction is the refined axis, turned by 180 deg where
+    the crop net says the crop's +x was the rear. Scores are kept."""
+    out = det.copy()
+    g = np.broadcast_to(np.asarray(gsd_m, float), (len(det),))
+    c, s = np.cos(det[:, 4]), np.sin(det[:, 4])
+    du, dv = refine[:, 0] / g, refine[:, 1] / g
+    out[:, 0] = det[:, 0] + c * du - s * dv
+    out[:, 1] = det[:, 1] + s * du + c * dv
+    out[:, 2] = refine[:, 3] / g
+    out[:, 3] = refine[:, 4] / g
+    out[:, 4] = wrap_angle(det[:, 4] + refine[:, 2] + np.where(flip, math.pi, 0.0))
+    return out
 
 
 def evaluate_samples(predictor: Predictor, samples: Sequence, use_crops: bool = True,
@@ -257,8 +277,8 @@ def evaluate_samples(predictor: Predictor, samples: Sequence, use_crops: bool = 
         res = predictor(s.image, gsd_m=gsd if use_crops else None)
         det = res["boxes"]
         probs = res.get("crop_type_probs", res.get("type_probs"))
-        if "boxes_flip_corrected" in res:
-            det = res["boxes_flip_corrected"]
+        if "boxes_refined" in res:
+            det = res["boxes_refined"]
         acc.add(det, s.boxes, s.ignore, s.direction_known, s.gsd_m, s.types, probs,
                 axis_aligned=axis_aligned)
     return acc.result()

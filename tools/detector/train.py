@@ -80,11 +80,16 @@ def parse_args(argv=None):
     p.add_argument("--tile", type=int, default=256)
     p.add_argument("--lr", type=float, default=2e-3)
     p.add_argument("--warmup-steps", type=int, default=100)
+    p.add_argument("--schedule", choices=["steps", "time"], default="steps",
+                   help="cosine learning-rate decay over the planned steps, or over the time budget "
+                        "(for CPU runs whose step count the budget decides; resumable)")
     p.add_argument("--working-width", type=int, default=648)
     p.add_argument("--working-gsd-range", type=float, nargs=2, default=(0.08, 0.18))
     p.add_argument("--shape-loss", choices=["l1", "l2"], default="l1", help="V_L1 or V_L2")
     p.add_argument("--single-stage", action="store_true", help="add type/shape heads to the detector")
     p.add_argument("--no-crop", action="store_true", help="do not train the crop classifier")
+    p.add_argument("--crop-only", action="store_true",
+                   help="train only the crop classifier (second stage; e.g. the V_L1/V_L2 comparison)")
     p.add_argument("--asm", default=DEFAULT_ASM_PATH)
     p.add_argument("--cache-frames", type=int, default=256)
     p.add_argument("--log-every", type=int, default=10)
@@ -236,10 +241,13 @@ def _empty(n_s):
     return empty_like_arrays(0, n_s)
 
 
-def lr_at(step: int, total: int, base: float, warmup: int = 100) -> float:
+def lr_at(step: int, total: int, base: float, warmup: int = 100,
+          progress: Optional[float] = None) -> float:
+    """Linear warm-up, then cosine decay to 2 % of ``base`` over the steps after the warm-up,
+    or over ``progress`` in [0, 1] (share of the time budget used) when given."""
     if step < warmup:
         return base * (step + 1) / warmup
-    t = min(1.0, (step - warmup) / max(1, total - warmup))
+    t = min(1.0, (step - warmup) / max(1, total - warmup)) if progress is None else min(1.0, progress)
     return base * (0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * t)))
 
 
@@ -280,6 +288,8 @@ def train(args) -> dict:
             f"{r['val_dropped_hash']} (dHash <= {r['hash_threshold_bits']} bits); min val-train "
             f"hash distance {r['min_val_train_hash_distance']}")
     det = Detector(n_s=asm.n_s, single_stage=args.single_stage).to(device)
+    if args.crop_only and args.no_crop:
+        raise SystemExit("--crop-only and --no-crop exclude each other")
     crop_net = None if args.no_crop else CropNet(n_s=asm.n_s).to(device)
     opt_d = torch.optim.AdamW(det.parameters(), lr=args.lr, weight_decay=1e-4)
     opt_c = torch.optim.AdamW(crop_net.parameters(), lr=args.lr, weight_decay=1e-4) if crop_net else None
@@ -328,19 +338,25 @@ def train(args) -> dict:
     with open(log_path, "a") as logf:
         while step < total_steps and elapsed < budget_s:
             t0 = time.monotonic()
-            lr = lr_at(step, total_steps, args.lr, args.warmup_steps)
-            for g in opt_d.param_groups:
-                g["lr"] = lr
-            batch = data.detector_batch(rng, device)
-            t_data = time.monotonic() - t0
-            out = det(batch["input"])
-            loss_d, terms_d = detector_loss(out, batch, shape_loss)
-            opt_d.zero_grad(set_to_none=True)
-            loss_d.backward()
-            torch.nn.utils.clip_grad_norm_(det.parameters(), 10.0)
-            opt_d.step()
-            rec = {"step": step, "lr": lr, "det_loss": float(loss_d.detach()),
-                   **{f"det_{k}": v for k, v in terms_d.items()}}
+            if args.schedule == "time":
+                lr = lr_at(step, total_steps, args.lr, args.warmup_steps, progress=elapsed / budget_s)
+            else:
+                lr = lr_at(step, total_steps, args.lr, args.warmup_steps)
+            rec = {"step": step, "lr": lr}
+            t_data = 0.0
+            if not args.crop_only:
+                for g in opt_d.param_groups:
+                    g["lr"] = lr
+                batch = data.detector_batch(rng, device)
+                t_data = time.monotonic() - t0
+                out = det(batch["input"])
+                loss_d, terms_d = detector_loss(out, batch, shape_loss)
+                opt_d.zero_grad(set_to_none=True)
+                loss_d.backward()
+                torch.nn.utils.clip_grad_norm_(det.parameters(), 10.0)
+                opt_d.step()
+                rec.update({"det_loss": float(loss_d.detach()),
+                            **{f"det_{k}": v for k, v in terms_d.items()}})
             if crop_net is not None:
                 cb = data.crop_batch(rng, device)
                 if cb is not None:
@@ -361,7 +377,7 @@ def train(args) -> dict:
             if step % args.log_every == 0 or step == 1:
                 logf.flush()
                 log(f"step {step}/{total_steps} ep {step / steps_per_epoch:.2f} "
-                    f"{elapsed / 60:.1f} min det {rec['det_loss']:.3f} "
+                    f"{elapsed / 60:.1f} min det {rec.get('det_loss', float('nan')):.3f} "
                     + " ".join(f"{k[4:]} {v:.3f}" for k, v in rec.items() if k.startswith("det_") and k != "det_loss")
                     + (f" | crop {rec['crop_loss']:.3f}" if "crop_loss" in rec else "")
                     + f" | {rec['step_s']:.2f} s/step (data {t_data:.2f})")

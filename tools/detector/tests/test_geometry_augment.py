@@ -145,3 +145,23 @@ class RotatedIoU(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class RefineInverse(unittest.TestCase):
+    """evaluate.apply_refine undoes crops.refine_target: a crop at a jittered (and possibly
+    reversed) pose plus its exact targets gives back the true box."""
+
+    def test_round_trip(self):
+        from detector import crops, evaluate
+
+        rng = np.random.default_rng(5)
+        for _ in range(200):
+            gsd = rng.uniform(0.03, 0.2)
+            box = np.array([rng.uniform(0, 500), rng.uniform(0, 400), 4.5 / gsd, 1.8 / gsd,
+                            rng.uniform(0, 2 * math.pi)])
+            cen, ang, _, flip, refine = crops.jittered_crop_target(box, gsd, rng)
+            det = np.array([[cen[0], cen[1], 30.0, 12.0, ang, 0.9]])
+            out = evaluate.apply_refine(det, np.array([bool(flip)]), refine[None].astype(np.float64), gsd)[0]
+            np.testing.assert_allclose(out[:4], box[:4], atol=1e-4)
+            self.assertLess(geometry.abs_angle_difference(out[4], box[4]), 1e-5)
+            self.assertEqual(out[5], 0.9)
