@@ -31,13 +31,13 @@ std::string describe(const DdsResult& result) {
   return std::string(result.call) + ": " + dds_strretcode(result.rc);
 }
 
-void applyProfile(const messages::QosProfile& profile, Qos& qos) {
+void applyProfile(const config::QosProfile& profile, Qos& qos) {
   dds_qset_reliability(qos.get(),
-                       profile.reliability == messages::Reliability::Reliable
+                       profile.reliability == config::Reliability::Reliable
                            ? DDS_RELIABILITY_RELIABLE
                            : DDS_RELIABILITY_BEST_EFFORT,
                        static_cast<dds_duration_t>(std::llround(profile.maxBlocking_s * 1e9)));
-  dds_qset_durability(qos.get(), profile.durability == messages::Durability::TransientLocal
+  dds_qset_durability(qos.get(), profile.durability == config::Durability::TransientLocal
                                      ? DDS_DURABILITY_TRANSIENT_LOCAL
                                      : DDS_DURABILITY_VOLATILE);
   dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, profile.historyDepth);
@@ -46,7 +46,7 @@ void applyProfile(const messages::QosProfile& profile, Qos& qos) {
   dds_qset_liveliness(qos.get(), DDS_LIVELINESS_AUTOMATIC, toDuration(profile.livelinessLease_s));
 }
 
-void applySecurity(const messages::SecurityConfig& security, Qos& qos) {
+void applySecurity(const config::SecurityConfig& security, Qos& qos) {
   if (!security.enabled) {
     return;
   }
@@ -99,7 +99,7 @@ DdsResult Entity::adopt(dds_entity_t handle, const char* call) {
   return DdsResult{};
 }
 
-DdsResult Participant::open(const messages::DdsConfig& config) {
+DdsResult Participant::open(const config::DdsConfig& config) {
   Qos qos;
   applySecurity(config.security, qos);
   return adopt(
@@ -107,8 +107,13 @@ DdsResult Participant::open(const messages::DdsConfig& config) {
       "dds_create_participant");
 }
 
+DdsResult Participant::open(std::uint32_t domainId) {
+  return adopt(dds_create_participant(static_cast<dds_domainid_t>(domainId), nullptr, nullptr),
+               "dds_create_participant");
+}
+
 DdsResult Topic::open(const Participant& participant, const dds_topic_descriptor_t& descriptor,
-                      const std::string& name, const messages::QosProfile& profile) {
+                      const std::string& name, const config::QosProfile& profile) {
   Qos qos;
   applyProfile(profile, qos);
   return adopt(dds_create_topic(participant.get(), &descriptor, name.c_str(), qos.get(), nullptr),
@@ -116,10 +121,12 @@ DdsResult Topic::open(const Participant& participant, const dds_topic_descriptor
 }
 
 DdsResult Writer::open(const Participant& participant, const Topic& topic,
-                       const messages::QosProfile& profile, const std::string& partition) {
+                       const config::QosProfile& profile, const std::string& partition) {
   Qos publisherQos;
   const char* partitions[] = {partition.c_str()};
-  dds_qset_partition(publisherQos.get(), 1, partitions);
+  if (!partition.empty()) {
+    dds_qset_partition(publisherQos.get(), 1, partitions);
+  }
   DdsResult result = publisher_.adopt(
       dds_create_publisher(participant.get(), publisherQos.get(), nullptr), "dds_create_publisher");
   if (!result.ok()) {
@@ -132,10 +139,12 @@ DdsResult Writer::open(const Participant& participant, const Topic& topic,
 }
 
 DdsResult Reader::open(const Participant& participant, const Topic& topic,
-                       const messages::QosProfile& profile, const std::string& partition) {
+                       const config::QosProfile& profile, const std::string& partition) {
   Qos subscriberQos;
   const char* partitions[] = {partition.c_str()};
-  dds_qset_partition(subscriberQos.get(), 1, partitions);
+  if (!partition.empty()) {
+    dds_qset_partition(subscriberQos.get(), 1, partitions);
+  }
   DdsResult result =
       subscriber_.adopt(dds_create_subscriber(participant.get(), subscriberQos.get(), nullptr),
                         "dds_create_subscriber");
@@ -148,13 +157,13 @@ DdsResult Reader::open(const Participant& participant, const Topic& topic,
                        "dds_create_reader");
 }
 
-std::string vehicleStateTopicName(const messages::DdsConfig& config) {
+std::string vehicleStateTopicName(const config::DdsConfig& config) {
   return config.topicPrefix + "/vehicle_state";
 }
-std::string droneStatusTopicName(const messages::DdsConfig& config) {
+std::string droneStatusTopicName(const config::DdsConfig& config) {
   return config.topicPrefix + "/drone_status";
 }
-std::string occupancyTopicName(const messages::DdsConfig& config) {
+std::string occupancyTopicName(const config::DdsConfig& config) {
   return config.topicPrefix + "/occupancy";
 }
 

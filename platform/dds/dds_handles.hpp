@@ -1,5 +1,5 @@
 // platform/dds/dds_handles: RAII owners of Cyclone DDS entities and QoS objects, and the QoS
-// built from the typed configuration (messages/dds_config.hpp).
+// built from the typed configuration (config/dds_config.hpp, the `dds:` section).
 //
 // Contract: every class here owns exactly one handle and releases it in its destructor
 // (dds_delete for entities, which also deletes their children; dds_delete_qos for QoS);
@@ -13,9 +13,10 @@
 
 #include <dds/dds.h>
 
+#include <cstdint>
 #include <string>
 
-#include "messages/dds_config.hpp"
+#include "config/dds_config.hpp"
 
 namespace vp::platform::dds {
 
@@ -41,9 +42,9 @@ class Qos {
 };
 
 // Reliability, durability, history, deadline, lifespan, liveliness of one topic.
-void applyProfile(const messages::QosProfile& profile, Qos& qos);
+void applyProfile(const config::QosProfile& profile, Qos& qos);
 // Participant QoS: the DDS Security properties when security is enabled.
-void applySecurity(const messages::SecurityConfig& security, Qos& qos);
+void applySecurity(const config::SecurityConfig& security, Qos& qos);
 
 class Entity {
  public:
@@ -66,20 +67,24 @@ class Entity {
 
 class Participant : public Entity {
  public:
-  DdsResult open(const messages::DdsConfig& config);
+  // The perception participant: config.domainId, with DDS Security when config.security says so.
+  DdsResult open(const config::DdsConfig& config);
+  // A plain participant in another domain (the flight stack's ROS 2 bridge: no security).
+  DdsResult open(std::uint32_t domainId);
 };
 
 class Topic : public Entity {
  public:
   DdsResult open(const Participant& participant, const dds_topic_descriptor_t& descriptor,
-                 const std::string& name, const messages::QosProfile& profile);
+                 const std::string& name, const config::QosProfile& profile);
 };
 
-// A writer under its own publisher, so that the partition applies to it alone.
+// A writer under its own publisher, so that the partition applies to it alone. An empty
+// partition means the default partition (what ROS 2 uses).
 class Writer {
  public:
   DdsResult open(const Participant& participant, const Topic& topic,
-                 const messages::QosProfile& profile, const std::string& partition);
+                 const config::QosProfile& profile, const std::string& partition);
   dds_entity_t get() const { return writer_.get(); }
   bool isOpen() const { return writer_.isOpen(); }
 
@@ -91,7 +96,7 @@ class Writer {
 class Reader {
  public:
   DdsResult open(const Participant& participant, const Topic& topic,
-                 const messages::QosProfile& profile, const std::string& partition);
+                 const config::QosProfile& profile, const std::string& partition);
   dds_entity_t get() const { return reader_.get(); }
   bool isOpen() const { return reader_.isOpen(); }
 
@@ -101,8 +106,8 @@ class Reader {
 };
 
 // Topic names: <prefix>/vehicle_state, <prefix>/drone_status, <prefix>/occupancy.
-std::string vehicleStateTopicName(const messages::DdsConfig& config);
-std::string droneStatusTopicName(const messages::DdsConfig& config);
-std::string occupancyTopicName(const messages::DdsConfig& config);
+std::string vehicleStateTopicName(const config::DdsConfig& config);
+std::string droneStatusTopicName(const config::DdsConfig& config);
+std::string occupancyTopicName(const config::DdsConfig& config);
 
 }  // namespace vp::platform::dds

@@ -24,7 +24,7 @@ const char* toString(PublishOutcome outcome) {
 }
 
 DdsResult VehicleStatePublisher::open(const Participant& participant,
-                                      const messages::DdsConfig& config) {
+                                      const config::DdsConfig& config) {
   publishedCount_ = 0;
   DdsResult result = topic_.open(participant, vp_msg_VehicleState_desc,
                                  vehicleStateTopicName(config), config.vehicleState);
@@ -122,8 +122,7 @@ FrameSummary VehicleStatePublisher::endFrame(std::int64_t time_ns) {
   return summary;
 }
 
-DdsResult DroneStatusWriter::open(const Participant& participant,
-                                  const messages::DdsConfig& config) {
+DdsResult DroneStatusWriter::open(const Participant& participant, const config::DdsConfig& config) {
   DdsResult result = topic_.open(participant, vp_msg_DroneStatus_desc, droneStatusTopicName(config),
                                  config.droneStatus);
   if (!result.ok()) {
@@ -142,7 +141,7 @@ DdsResult DroneStatusWriter::write(const messages::DroneStatus& status) {
   return rc < 0 ? DdsResult::failure("dds_write_ts", rc) : DdsResult{};
 }
 
-DdsResult OccupancyWriter::open(const Participant& participant, const messages::DdsConfig& config) {
+DdsResult OccupancyWriter::open(const Participant& participant, const config::DdsConfig& config) {
   DdsResult result = topic_.open(participant, vp_msg_OccupancyGrid_desc, occupancyTopicName(config),
                                  config.occupancy);
   if (!result.ok()) {

@@ -17,7 +17,7 @@
 #include <array>
 #include <cstdint>
 
-#include "messages/dds_config.hpp"
+#include "config/dds_config.hpp"
 #include "messages/messages.hpp"
 #include "platform/dds/dds_handles.hpp"
 #include "vp_perception.h"
@@ -52,7 +52,7 @@ class VehicleStatePublisher {
  public:
   static constexpr std::size_t kMaxTracks = 1024;
 
-  DdsResult open(const Participant& participant, const messages::DdsConfig& config);
+  DdsResult open(const Participant& participant, const config::DdsConfig& config);
 
   PublishResult publish(const messages::VehicleState& state);
   // Disposes and unregisters one published track (no-op returning Skipped if not published).
@@ -81,7 +81,7 @@ class VehicleStatePublisher {
 
 class DroneStatusWriter {
  public:
-  DdsResult open(const Participant& participant, const messages::DdsConfig& config);
+  DdsResult open(const Participant& participant, const config::DdsConfig& config);
   DdsResult write(const messages::DroneStatus& status);
   dds_entity_t writer() const { return writer_.get(); }
 
@@ -93,7 +93,7 @@ class DroneStatusWriter {
 
 class OccupancyWriter {
  public:
-  DdsResult open(const Participant& participant, const messages::DdsConfig& config);
+  DdsResult open(const Participant& participant, const config::DdsConfig& config);
   DdsResult write(const messages::OccupancyGrid& grid);
   dds_entity_t writer() const { return writer_.get(); }
 

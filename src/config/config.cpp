@@ -12,6 +12,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -33,7 +34,12 @@ constexpr std::nullopt_t kRequired = std::nullopt;
 // Shortest text that reads back as the same double ("0.1", "-90", "16384").
 std::string formatNumber(double value) {
   char buffer[32];
-  const auto result = std::to_chars(std::begin(buffer), std::end(buffer), value);
+  // Whole numbers in plain digits ("100000", not the shorter "1e+05").
+  constexpr double kPlainLimit = 1e15;
+  const bool whole = std::abs(value) < kPlainLimit && value == std::floor(value);
+  const auto result =
+      whole ? std::to_chars(std::begin(buffer), std::end(buffer), value, std::chars_format::fixed)
+            : std::to_chars(std::begin(buffer), std::end(buffer), value);
   return std::string(buffer, result.ptr);
 }
 
@@ -139,8 +145,9 @@ double readNumber(const YAML::Node& node, const std::string& path, const Range& 
   return value;
 }
 
-int readInteger(const YAML::Node& node, const std::string& path, const Range& range,
-                const Diagnostics& diag) {
+// Any integer a double holds exactly (|value| < 2^53); the caller's range bounds it further.
+std::int64_t readInteger(const YAML::Node& node, const std::string& path, const Range& range,
+                         const Diagnostics& diag) {
   const double value = readFinite(node, path, "an integer", diag);
   if (value != std::floor(value)) {
     diag.fail(path, "expected an integer, got " + describe(node));
@@ -148,7 +155,24 @@ int readInteger(const YAML::Node& node, const std::string& path, const Range& ra
   if (!range.contains(value)) {
     diag.fail(path, range.describe() + ", got " + node.Scalar());
   }
-  return static_cast<int>(value);  // in range, so it fits
+  return static_cast<std::int64_t>(value);  // in range, so it fits
+}
+
+// YAML 1.2 core booleans only: true/false in any case. yaml-cpp would also take yes/no/on/off,
+// which are strings in YAML 1.2 and a classic source of surprises.
+bool readBoolean(const YAML::Node& node, const std::string& path, const Diagnostics& diag) {
+  if (node.IsScalar() && node.Tag() != "!") {
+    std::string lower = node.Scalar();
+    std::transform(lower.begin(), lower.end(), lower.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (lower == "true") {
+      return true;
+    }
+    if (lower == "false") {
+      return false;
+    }
+  }
+  diag.fail(path, "expected true or false, got " + describe(node));
 }
 
 // A non-empty string; no key of the schema has a meaningful empty value.
@@ -192,7 +216,19 @@ class MapReader {
   }
   int integer(std::string_view key, const Range& range, std::optional<int> fallback) {
     const YAML::Node* node = take(key, !fallback);
-    return node ? readInteger(*node, childPath(key), range, diag_) : *fallback;
+    // The ranges of int keys lie within int.
+    return node ? static_cast<int>(readInteger(*node, childPath(key), range, diag_)) : *fallback;
+  }
+  // An unsigned 32-bit integer (DDS ids); the range must lie within [0, 2^32 - 1].
+  std::uint32_t uint32(std::string_view key, const Range& range,
+                       std::optional<std::uint32_t> fallback) {
+    const YAML::Node* node = take(key, !fallback);
+    return node ? static_cast<std::uint32_t>(readInteger(*node, childPath(key), range, diag_))
+                : *fallback;
+  }
+  bool boolean(std::string_view key, std::optional<bool> fallback) {
+    const YAML::Node* node = take(key, !fallback);
+    return node ? readBoolean(*node, childPath(key), diag_) : *fallback;
   }
   std::string text(std::string_view key, std::optional<std::string> fallback) {
     const YAML::Node* node = take(key, !fallback);
@@ -237,6 +273,9 @@ class MapReader {
   MapReader requiredSection(std::string_view key) { return sectionOf(key, take(key, true)); }
 
   bool has(std::string_view key) const { return find(key) != nullptr; }
+  [[noreturn]] void fail(std::string_view key, const std::string& problem) const {
+    diag_.fail(childPath(key), problem);
+  }
   void warn(std::string_view key, const std::string& remark) const {
     diag_.warn(childPath(key) + ": " + remark);
   }
@@ -422,6 +461,171 @@ TerrainConfig readTerrain(MapReader section, const std::string& baseDir) {
   return config;
 }
 
+// --- dds: (docs/configuration.md, docs/dds.md) ----------------------------------------------
+
+// DDS domain ids: Cyclone accepts 0..232 (the RTPS port formula with the default port mapping).
+const Range kDomainIdRange = Range::closed(0.0, 232.0);
+const Range kDroneIdRange = Range::closed(0.0, 4294967295.0);
+// How long a reliable write may block when the writer's history is full: beyond 10 s the loop
+// would miss many frames, which is never wanted.
+const Range kMaxBlockingRangeS = Range::closed(0.0, 10.0);
+const Range kHistoryDepthRange = Range::closed(1.0, 1000.0);
+// Deadline, lifespan, liveliness lease: 0 = off; an hour is far beyond any useful setting.
+const Range kQosDurationRangeS = Range::closed(0.0, 3600.0);
+const Range kStatusRateRangeHz = Range::closed(0.01, 100.0);
+const Range kOccupancyRateRangeHz = Range::closed(0.0, 100.0);
+const Range kGridOriginRangeM = Range::closed(-1e5, 1e5);
+const Range kGridResolutionRangeM = Range::closed(0.05, 10.0);
+// 2048 x 2048 cells is the IDL's bound on the grid (kMaxOccupancyCells).
+const Range kGridCellsRange = Range::closed(1.0, 2048.0);
+// Geoid undulation is within about +-110 m on Earth; more means a unit mistake.
+const Range kAltitudeOffsetRangeM = Range::closed(-200.0, 200.0);
+
+constexpr std::string_view kReliabilityNames = "reliable, best_effort";
+constexpr std::string_view kDurabilityNames = "volatile, transient_local";
+constexpr std::string_view kTelemetrySourceNames = "none, ardupilot, px4";
+
+std::optional<Reliability> reliabilityFromString(const std::string& text) {
+  if (text == "reliable") {
+    return Reliability::Reliable;
+  }
+  if (text == "best_effort") {
+    return Reliability::BestEffort;
+  }
+  return std::nullopt;
+}
+
+std::optional<Durability> durabilityFromString(const std::string& text) {
+  if (text == "volatile") {
+    return Durability::Volatile;
+  }
+  if (text == "transient_local") {
+    return Durability::TransientLocal;
+  }
+  return std::nullopt;
+}
+
+std::optional<TelemetrySource> telemetrySourceFromString(const std::string& text) {
+  for (const TelemetrySource source :
+       {TelemetrySource::None, TelemetrySource::ArduPilot, TelemetrySource::Px4}) {
+    if (text == toString(source)) {
+      return source;
+    }
+  }
+  return std::nullopt;
+}
+
+QosProfile readQos(MapReader section, const QosProfile& defaults) {
+  QosProfile qos;
+  qos.reliability = section.choice<Reliability>("reliability", reliabilityFromString,
+                                                kReliabilityNames, defaults.reliability);
+  qos.maxBlocking_s = section.number("max_blocking_s", kMaxBlockingRangeS, defaults.maxBlocking_s);
+  qos.durability = section.choice<Durability>("durability", durabilityFromString, kDurabilityNames,
+                                              defaults.durability);
+  qos.historyDepth = section.integer("history_depth", kHistoryDepthRange, defaults.historyDepth);
+  qos.deadline_s = section.number("deadline_s", kQosDurationRangeS, defaults.deadline_s);
+  qos.lifespan_s = section.number("lifespan_s", kQosDurationRangeS, defaults.lifespan_s);
+  qos.livelinessLease_s =
+      section.number("liveliness_lease_s", kQosDurationRangeS, defaults.livelinessLease_s);
+  section.warnUnknownKeys();
+  return qos;
+}
+
+// A security document: required and checked to exist when security is enabled (Cyclone would
+// only say "dds_create_participant: Error"), read for its type and resolved otherwise.
+std::string readSecurityFile(MapReader& section, std::string_view key, bool enabled,
+                             const std::string& baseDir) {
+  if (!section.has(key)) {
+    if (enabled) {
+      section.fail(key, "missing (required when dds.security.enabled is true)");
+    }
+    return "";
+  }
+  const std::string path = resolvePath(section.text(key, kRequired), baseDir);
+  std::error_code error;
+  if (enabled && !fs::is_regular_file(path, error)) {
+    section.fail(key, "file not found: " + path);
+  }
+  return path;
+}
+
+SecurityConfig readSecurity(MapReader section, const std::string& baseDir) {
+  const SecurityConfig defaults;
+  SecurityConfig security;
+  security.enabled = section.boolean("enabled", defaults.enabled);
+  security.pluginDir = section.text("plugin_dir", defaults.pluginDir);
+  std::error_code error;
+  if (security.enabled &&
+      !fs::is_regular_file(fs::path(security.pluginDir) / "libdds_security_auth.so", error)) {
+    section.fail("plugin_dir",
+                 "no DDS Security plugins (libdds_security_auth.so) in " + security.pluginDir);
+  }
+  security.identityCa = readSecurityFile(section, "identity_ca", security.enabled, baseDir);
+  security.identityCertificate =
+      readSecurityFile(section, "identity_certificate", security.enabled, baseDir);
+  security.privateKey = readSecurityFile(section, "private_key", security.enabled, baseDir);
+  security.permissionsCa = readSecurityFile(section, "permissions_ca", security.enabled, baseDir);
+  security.governance = readSecurityFile(section, "governance", security.enabled, baseDir);
+  security.permissions = readSecurityFile(section, "permissions", security.enabled, baseDir);
+  section.warnUnknownKeys();
+  return security;
+}
+
+TelemetryConfig readTelemetry(MapReader section) {
+  const TelemetryConfig defaults;
+  TelemetryConfig telemetry;
+  telemetry.source = section.choice<TelemetrySource>("source", telemetrySourceFromString,
+                                                     kTelemetrySourceNames, defaults.source);
+  telemetry.domainId = section.uint32("domain_id", kDomainIdRange, defaults.domainId);
+  telemetry.ardupilotGeoPoseTopic =
+      section.text("ardupilot_geopose_topic", defaults.ardupilotGeoPoseTopic);
+  telemetry.px4AttitudeTopic = section.text("px4_attitude_topic", defaults.px4AttitudeTopic);
+  telemetry.px4GlobalPositionTopic =
+      section.text("px4_global_position_topic", defaults.px4GlobalPositionTopic);
+  telemetry.ardupilotAltitudeOffset_m = section.number(
+      "ardupilot_altitude_offset_m", kAltitudeOffsetRangeM, defaults.ardupilotAltitudeOffset_m);
+  telemetry.historyDepth =
+      section.integer("history_depth", kHistoryDepthRange, defaults.historyDepth);
+  section.warnUnknownKeys();
+  return telemetry;
+}
+
+DdsConfig readDds(MapReader section, const std::string& baseDir) {
+  const DdsConfig defaults;
+  DdsConfig dds;
+  dds.enabled = section.boolean("enabled", defaults.enabled);
+  dds.domainId = section.uint32("domain_id", kDomainIdRange, defaults.domainId);
+  dds.partition = section.text("partition", defaults.partition);
+  dds.droneId = section.uint32("drone_id", kDroneIdRange, defaults.droneId);
+  dds.topicPrefix = section.text("topic_prefix", defaults.topicPrefix);
+  dds.statusRate_hz = section.number("status_rate_hz", kStatusRateRangeHz, defaults.statusRate_hz);
+  dds.occupancyRate_hz =
+      section.number("occupancy_rate_hz", kOccupancyRateRangeHz, defaults.occupancyRate_hz);
+  {
+    MapReader qos = section.section("qos");
+    dds.vehicleState = readQos(qos.section("vehicle_state"), defaults.vehicleState);
+    dds.droneStatus = readQos(qos.section("drone_status"), defaults.droneStatus);
+    dds.occupancy = readQos(qos.section("occupancy"), defaults.occupancy);
+    qos.warnUnknownKeys();
+  }
+  {
+    MapReader grid = section.section("occupancy_grid");
+    dds.grid.originEast_m =
+        grid.number("origin_east_m", kGridOriginRangeM, defaults.grid.originEast_m);
+    dds.grid.originNorth_m =
+        grid.number("origin_north_m", kGridOriginRangeM, defaults.grid.originNorth_m);
+    dds.grid.resolution_m =
+        grid.number("resolution_m", kGridResolutionRangeM, defaults.grid.resolution_m);
+    dds.grid.rows = grid.uint32("rows", kGridCellsRange, defaults.grid.rows);
+    dds.grid.cols = grid.uint32("cols", kGridCellsRange, defaults.grid.cols);
+    grid.warnUnknownKeys();
+  }
+  dds.security = readSecurity(section.section("security"), baseDir);
+  dds.telemetry = readTelemetry(section.section("telemetry"));
+  section.warnUnknownKeys();
+  return dds;
+}
+
 YAML::Node loadDocument(const std::string& text, const Diagnostics& diag) {
   try {
     return YAML::Load(text);
@@ -454,11 +658,29 @@ AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName
   config.camera = readCamera(root.requiredSection("camera"));
   config.mount = readMount(root.section("mount"));
   config.terrain = readTerrain(root.requiredSection("terrain"), baseDir);
+  config.dds = readDds(root.section("dds"), baseDir);
   root.warnUnknownKeys();
   return config;
 }
 
-AppConfig loadConfig(const std::string& path) {
+DdsSection parseDdsSection(const std::string& yamlText, const std::string& sourceName,
+                           const std::string& baseDir) {
+  DdsSection result;
+  const Diagnostics diag(sourceName, &result.warnings);
+  const YAML::Node document = loadDocument(yamlText, diag);
+  if (document.IsDefined() && !document.IsNull() && !document.IsMap()) {
+    diag.fail("", "expected a map of sections at the top level, got " + describe(document));
+  }
+  // The other sections belong to other readers: they are not reported as unknown here.
+  MapReader root(document, "", diag);
+  result.dds = readDds(root.section("dds"), baseDir);
+  return result;
+}
+
+namespace {
+
+// The file's text and its directory (against which relative paths are resolved).
+std::pair<std::string, std::string> readConfigFile(const std::string& path) {
   std::error_code error;
   if (fs::is_directory(path, error)) {
     throw ConfigError(path + ": cannot open configuration file (it is a directory)");
@@ -474,7 +696,19 @@ AppConfig loadConfig(const std::string& path) {
   }
   const fs::path absolute = fs::absolute(path, error);
   const fs::path baseDir = (error ? fs::path(path) : absolute).parent_path();
-  return parseConfig(text.str(), path, baseDir.string());
+  return {text.str(), baseDir.string()};
+}
+
+}  // namespace
+
+AppConfig loadConfig(const std::string& path) {
+  const auto [text, baseDir] = readConfigFile(path);
+  return parseConfig(text, path, baseDir);
+}
+
+DdsSection loadDdsSection(const std::string& path) {
+  const auto [text, baseDir] = readConfigFile(path);
+  return parseDdsSection(text, path, baseDir);
 }
 
 }  // namespace vp::config

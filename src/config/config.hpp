@@ -6,7 +6,9 @@
 // Keys the schema does not know are not fatal: they are listed in AppConfig::warnings
 // ("site.yaml: unknown key 'camera.fxx'"). Relative paths in the file are resolved
 // against the file's directory. The schema, with units, ranges and defaults, is
-// documented in docs/configuration.md and config/default.yaml. Start-up only.
+// documented in docs/configuration.md and config/default.yaml. The optional `dds:` section
+// (config/dds_config.hpp) can also be read alone, for tools that need only the DDS settings
+// (parseDdsSection: other sections are then ignored). Start-up only.
 #pragma once
 
 #include <optional>
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "camera/camera_model.hpp"
+#include "config/dds_config.hpp"
 #include "geodesy/attitude.hpp"
 #include "geodesy/geodesy.hpp"
 #include "terrain/terrain_model.hpp"
@@ -47,6 +50,7 @@ struct AppConfig {
   CameraConfig camera{};
   MountConfig mount{};
   TerrainConfig terrain{};
+  DdsConfig dds{};                    // optional section: absent = the documented defaults
   std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
 };
 
@@ -55,5 +59,15 @@ AppConfig loadConfig(const std::string& path);
 // Same from text; sourceName is used in messages, baseDir to resolve relative paths.
 AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName,
                       const std::string& baseDir);
+
+// Only the `dds:` section of a file (the other sections are neither read nor checked), with
+// the same checks and messages as in parseConfig(). Throws ConfigError.
+struct DdsSection {
+  DdsConfig dds{};
+  std::vector<std::string> warnings;  // unknown keys inside `dds:`
+};
+DdsSection parseDdsSection(const std::string& yamlText, const std::string& sourceName,
+                           const std::string& baseDir);
+DdsSection loadDdsSection(const std::string& path);
 
 }  // namespace vp::config

@@ -3,10 +3,12 @@
 #include "config/config.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vp::config {
@@ -46,6 +48,62 @@ mount:
 terrain:
   dtm_path: dtm/site.tif
   crs: utm:16N
+dds:
+  enabled: true
+  domain_id: 7
+  partition: site_a
+  drone_id: 12
+  topic_prefix: vpx
+  status_rate_hz: 2.0
+  occupancy_rate_hz: 1.5
+  qos:
+    vehicle_state:
+      reliability: reliable
+      max_blocking_s: 0.02
+      durability: volatile
+      history_depth: 2
+      deadline_s: 0.4
+      lifespan_s: 0.6
+      liveliness_lease_s: 3.0
+    drone_status:
+      reliability: best_effort
+      max_blocking_s: 0.03
+      durability: transient_local
+      history_depth: 3
+      deadline_s: 4.0
+      lifespan_s: 0.7
+      liveliness_lease_s: 6.0
+    occupancy:
+      reliability: best_effort
+      max_blocking_s: 0.04
+      durability: volatile
+      history_depth: 4
+      deadline_s: 0.0
+      lifespan_s: 2.0
+      liveliness_lease_s: 0.0
+  occupancy_grid:
+    origin_east_m: -40.0
+    origin_north_m: -30.0
+    resolution_m: 0.25
+    rows: 300
+    cols: 400
+  security:
+    enabled: false
+    plugin_dir: /opt/dds/plugins
+    identity_ca: certs/ca.pem
+    identity_certificate: certs/drone.pem
+    private_key: certs/drone_key.pem
+    permissions_ca: certs/permissions_ca.pem
+    governance: certs/governance.p7s
+    permissions: certs/permissions.p7s
+  telemetry:
+    source: px4
+    domain_id: 3
+    ardupilot_geopose_topic: rt/ap/geopose/filtered
+    px4_attitude_topic: rt/px4_1/fmu/out/vehicle_attitude
+    px4_global_position_topic: rt/px4_1/fmu/out/vehicle_global_position
+    ardupilot_altitude_offset_m: -33.5
+    history_depth: 5
 )";
 
 // Only the required keys.
@@ -128,6 +186,44 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
       (fs::path(VP_SOURCE_DIR) / "tests/fixtures/dtm/sloped_utm16n.tif").lexically_normal();
   EXPECT_EQ(config.terrain.dtmPath, dtm.string());
   EXPECT_FALSE(config.terrain.crs.has_value());
+
+  // The dds: section of the shipped file holds the documented defaults.
+  const DdsConfig defaults;
+  const DdsConfig& dds = config.dds;
+  EXPECT_EQ(dds.enabled, defaults.enabled);
+  EXPECT_EQ(dds.domainId, defaults.domainId);
+  EXPECT_EQ(dds.partition, defaults.partition);
+  EXPECT_EQ(dds.droneId, defaults.droneId);
+  EXPECT_EQ(dds.topicPrefix, defaults.topicPrefix);
+  EXPECT_EQ(dds.statusRate_hz, defaults.statusRate_hz);
+  EXPECT_EQ(dds.occupancyRate_hz, defaults.occupancyRate_hz);
+  const std::pair<const QosProfile*, const QosProfile*> profiles[] = {
+      {&dds.vehicleState, &defaults.vehicleState},
+      {&dds.droneStatus, &defaults.droneStatus},
+      {&dds.occupancy, &defaults.occupancy}};
+  for (const auto& [got, want] : profiles) {
+    EXPECT_EQ(got->reliability, want->reliability);
+    EXPECT_EQ(got->maxBlocking_s, want->maxBlocking_s);
+    EXPECT_EQ(got->durability, want->durability);
+    EXPECT_EQ(got->historyDepth, want->historyDepth);
+    EXPECT_EQ(got->deadline_s, want->deadline_s);
+    EXPECT_EQ(got->lifespan_s, want->lifespan_s);
+    EXPECT_EQ(got->livelinessLease_s, want->livelinessLease_s);
+  }
+  EXPECT_EQ(dds.grid.originEast_m, defaults.grid.originEast_m);
+  EXPECT_EQ(dds.grid.originNorth_m, defaults.grid.originNorth_m);
+  EXPECT_EQ(dds.grid.resolution_m, defaults.grid.resolution_m);
+  EXPECT_EQ(dds.grid.rows, defaults.grid.rows);
+  EXPECT_EQ(dds.grid.cols, defaults.grid.cols);
+  EXPECT_EQ(dds.security.enabled, defaults.security.enabled);
+  EXPECT_EQ(dds.security.pluginDir, defaults.security.pluginDir);
+  EXPECT_EQ(dds.telemetry.source, defaults.telemetry.source);
+  EXPECT_EQ(dds.telemetry.domainId, defaults.telemetry.domainId);
+  EXPECT_EQ(dds.telemetry.ardupilotGeoPoseTopic, defaults.telemetry.ardupilotGeoPoseTopic);
+  EXPECT_EQ(dds.telemetry.px4AttitudeTopic, defaults.telemetry.px4AttitudeTopic);
+  EXPECT_EQ(dds.telemetry.px4GlobalPositionTopic, defaults.telemetry.px4GlobalPositionTopic);
+  EXPECT_EQ(dds.telemetry.ardupilotAltitudeOffset_m, defaults.telemetry.ardupilotAltitudeOffset_m);
+  EXPECT_EQ(dds.telemetry.historyDepth, defaults.telemetry.historyDepth);
 }
 
 TEST(ConfigDefaults, RequiredKeysOnlyGetTheDocumentedDefaults) {
@@ -311,6 +407,115 @@ const MalformedCase kMalformedCases[] = {
     {"crs: utm:16N", "crs: utm:16X", "terrain.crs", "unknown value 'utm:16X'"},
     {"crs: utm:16N", "crs: epsg:4326", "terrain.crs", "unknown value 'epsg:4326'"},
     {"crs: utm:16N", "crs: {zone: 16}", "terrain.crs", "expected a string, got a map"},
+    // dds
+    {"dds:\n  enabled: true\n", "dds: [1]\nx:\n  enabled: true\n", "dds",
+     "expected a map, got a sequence of 1 element(s)"},
+    {"enabled: true\n  domain_id", "enabled: yes\n  domain_id", "dds.enabled",
+     "expected true or false, got 'yes'"},
+    {"domain_id: 7", "domain_id: 233", "dds.domain_id", "must be in [0, 232], got 233"},
+    {"domain_id: 7", "domain_id: 1.5", "dds.domain_id", "expected an integer, got '1.5'"},
+    {"partition: site_a", "partition: ''", "dds.partition", "must not be empty"},
+    {"drone_id: 12", "drone_id: -1", "dds.drone_id", "must be in [0, 4294967295], got -1"},
+    {"topic_prefix: vpx", "topic_prefix: [a]", "dds.topic_prefix",
+     "expected a string, got a sequence of 1 element(s)"},
+    {"status_rate_hz: 2.0", "status_rate_hz: 0", "dds.status_rate_hz",
+     "must be in [0.01, 100], got 0"},
+    {"occupancy_rate_hz: 1.5", "occupancy_rate_hz: fast", "dds.occupancy_rate_hz",
+     "expected a number, got 'fast'"},
+    {"  qos:\n    vehicle_state:", "  qos: 1\n  x:\n    vehicle_state:", "dds.qos",
+     "expected a map, got '1'"},
+    {"    vehicle_state:\n", "    vehicle_state: fast\n    x:\n", "dds.qos.vehicle_state",
+     "expected a map, got 'fast'"},
+    {"reliability: reliable", "reliability: maybe", "dds.qos.vehicle_state.reliability",
+     "unknown value 'maybe' (expected reliable, best_effort)"},
+    {"max_blocking_s: 0.02", "max_blocking_s: 11", "dds.qos.vehicle_state.max_blocking_s",
+     "must be in [0, 10], got 11"},
+    {"0.02\n      durability: volatile", "0.02\n      durability: persistent",
+     "dds.qos.vehicle_state.durability",
+     "unknown value 'persistent' (expected volatile, transient_local)"},
+    {"history_depth: 2", "history_depth: 0", "dds.qos.vehicle_state.history_depth",
+     "must be in [1, 1000], got 0"},
+    {"deadline_s: 0.4", "deadline_s: -1", "dds.qos.vehicle_state.deadline_s",
+     "must be in [0, 3600], got -1"},
+    {"lifespan_s: 0.6", "lifespan_s: .inf", "dds.qos.vehicle_state.lifespan_s",
+     "must be finite, got .inf"},
+    {"liveliness_lease_s: 3.0", "liveliness_lease_s: 3601",
+     "dds.qos.vehicle_state.liveliness_lease_s", "must be in [0, 3600], got 3601"},
+    {"    drone_status:\n", "    drone_status: [1]\n    x:\n", "dds.qos.drone_status",
+     "expected a map, got a sequence of 1 element(s)"},
+    {"drone_status:\n      reliability: best_effort", "drone_status:\n      reliability: lossy",
+     "dds.qos.drone_status.reliability", "unknown value 'lossy'"},
+    {"max_blocking_s: 0.03", "max_blocking_s: x", "dds.qos.drone_status.max_blocking_s",
+     "expected a number, got 'x'"},
+    {"durability: transient_local", "durability: durable", "dds.qos.drone_status.durability",
+     "unknown value 'durable' (expected volatile, transient_local)"},
+    {"history_depth: 3", "history_depth: 1001", "dds.qos.drone_status.history_depth",
+     "must be in [1, 1000], got 1001"},
+    {"deadline_s: 4.0", "deadline_s: [4]", "dds.qos.drone_status.deadline_s",
+     "expected a number, got a sequence of 1 element(s)"},
+    {"lifespan_s: 0.7", "lifespan_s: -0.1", "dds.qos.drone_status.lifespan_s",
+     "must be in [0, 3600], got -0.1"},
+    {"liveliness_lease_s: 6.0", "liveliness_lease_s: .nan",
+     "dds.qos.drone_status.liveliness_lease_s", "must be finite, got .nan"},
+    {"    occupancy:\n", "    occupancy: 2\n    x:\n", "dds.qos.occupancy",
+     "expected a map, got '2'"},
+    {"occupancy:\n      reliability: best_effort", "occupancy:\n      reliability: BEST_EFFORT",
+     "dds.qos.occupancy.reliability", "unknown value 'BEST_EFFORT'"},
+    {"max_blocking_s: 0.04", "max_blocking_s: -0.04", "dds.qos.occupancy.max_blocking_s",
+     "must be in [0, 10], got -0.04"},
+    {"0.04\n      durability: volatile", "0.04\n      durability: {a: 1}",
+     "dds.qos.occupancy.durability", "expected a string, got a map"},
+    {"history_depth: 4", "history_depth: 4.5", "dds.qos.occupancy.history_depth",
+     "expected an integer, got '4.5'"},
+    {"deadline_s: 0.0", "deadline_s: 1e9", "dds.qos.occupancy.deadline_s",
+     "must be in [0, 3600], got 1e9"},
+    {"lifespan_s: 2.0", "lifespan_s: two", "dds.qos.occupancy.lifespan_s",
+     "expected a number, got 'two'"},
+    {"liveliness_lease_s: 0.0", "liveliness_lease_s: -1", "dds.qos.occupancy.liveliness_lease_s",
+     "must be in [0, 3600], got -1"},
+    {"  occupancy_grid:\n", "  occupancy_grid: none\n  x:\n", "dds.occupancy_grid",
+     "expected a map, got 'none'"},
+    {"origin_east_m: -40.0", "origin_east_m: 1e6", "dds.occupancy_grid.origin_east_m",
+     "must be in [-100000, 100000], got 1e6"},
+    {"origin_north_m: -30.0", "origin_north_m: north", "dds.occupancy_grid.origin_north_m",
+     "expected a number, got 'north'"},
+    {"resolution_m: 0.25", "resolution_m: 0.01", "dds.occupancy_grid.resolution_m",
+     "must be in [0.05, 10], got 0.01"},
+    {"rows: 300", "rows: 2049", "dds.occupancy_grid.rows", "must be in [1, 2048], got 2049"},
+    {"cols: 400", "cols: 1.5", "dds.occupancy_grid.cols", "expected an integer, got '1.5'"},
+    {"  security:\n", "  security: on\n  x:\n", "dds.security", "expected a map, got 'on'"},
+    {"enabled: false", "enabled: on", "dds.security.enabled", "expected true or false, got 'on'"},
+    {"enabled: false", "enabled: true", "dds.security.plugin_dir",
+     "no DDS Security plugins (libdds_security_auth.so) in /opt/dds/plugins"},
+    {"plugin_dir: /opt/dds/plugins", "plugin_dir: [a]", "dds.security.plugin_dir",
+     "expected a string, got a sequence of 1 element(s)"},
+    {"identity_ca: certs/ca.pem", "identity_ca: ''", "dds.security.identity_ca",
+     "must not be empty"},
+    {"identity_certificate: certs/drone.pem", "identity_certificate: [a, b]",
+     "dds.security.identity_certificate", "expected a string, got a sequence of 2 element(s)"},
+    {"private_key: certs/drone_key.pem", "private_key: {file: k}", "dds.security.private_key",
+     "expected a string, got a map"},
+    {"permissions_ca: certs/permissions_ca.pem", "permissions_ca:", "dds.security.permissions_ca",
+     "expected a string, got nothing (null)"},
+    {"governance: certs/governance.p7s", "governance: ''", "dds.security.governance",
+     "must not be empty"},
+    {"permissions: certs/permissions.p7s", "permissions: [p]", "dds.security.permissions",
+     "expected a string, got a sequence of 1 element(s)"},
+    {"  telemetry:\n", "  telemetry: px4\n  x:\n", "dds.telemetry", "expected a map, got 'px4'"},
+    {"source: px4", "source: mavlink", "dds.telemetry.source",
+     "unknown value 'mavlink' (expected none, ardupilot, px4)"},
+    {"domain_id: 3", "domain_id: 300", "dds.telemetry.domain_id", "must be in [0, 232], got 300"},
+    {"ardupilot_geopose_topic: rt/ap/geopose/filtered", "ardupilot_geopose_topic: ''",
+     "dds.telemetry.ardupilot_geopose_topic", "must not be empty"},
+    {"px4_attitude_topic: rt/px4_1/fmu/out/vehicle_attitude", "px4_attitude_topic: {a: 1}",
+     "dds.telemetry.px4_attitude_topic", "expected a string, got a map"},
+    {"px4_global_position_topic: rt/px4_1/fmu/out/vehicle_global_position",
+     "px4_global_position_topic: [a]", "dds.telemetry.px4_global_position_topic",
+     "expected a string, got a sequence of 1 element(s)"},
+    {"ardupilot_altitude_offset_m: -33.5", "ardupilot_altitude_offset_m: 500",
+     "dds.telemetry.ardupilot_altitude_offset_m", "must be in [-200, 200], got 500"},
+    {"history_depth: 5", "history_depth: 0", "dds.telemetry.history_depth",
+     "must be in [1, 1000], got 0"},
 };
 
 TEST(ConfigMalformed, EachBrokenKeyIsReportedWithSourceAndFullPath) {
@@ -354,8 +559,50 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "mount.gimbal.yaw_deg",
                                                "terrain",
                                                "terrain.dtm_path",
-                                               "terrain.crs"};
-  for (const std::string& key : schemaKeys) {
+                                               "terrain.crs",
+                                               "dds",
+                                               "dds.enabled",
+                                               "dds.domain_id",
+                                               "dds.partition",
+                                               "dds.drone_id",
+                                               "dds.topic_prefix",
+                                               "dds.status_rate_hz",
+                                               "dds.occupancy_rate_hz",
+                                               "dds.qos",
+                                               "dds.occupancy_grid",
+                                               "dds.occupancy_grid.origin_east_m",
+                                               "dds.occupancy_grid.origin_north_m",
+                                               "dds.occupancy_grid.resolution_m",
+                                               "dds.occupancy_grid.rows",
+                                               "dds.occupancy_grid.cols",
+                                               "dds.security",
+                                               "dds.security.enabled",
+                                               "dds.security.plugin_dir",
+                                               "dds.security.identity_ca",
+                                               "dds.security.identity_certificate",
+                                               "dds.security.private_key",
+                                               "dds.security.permissions_ca",
+                                               "dds.security.governance",
+                                               "dds.security.permissions",
+                                               "dds.telemetry",
+                                               "dds.telemetry.source",
+                                               "dds.telemetry.domain_id",
+                                               "dds.telemetry.ardupilot_geopose_topic",
+                                               "dds.telemetry.px4_attitude_topic",
+                                               "dds.telemetry.px4_global_position_topic",
+                                               "dds.telemetry.ardupilot_altitude_offset_m",
+                                               "dds.telemetry.history_depth"};
+  // Every key of the three QoS profiles.
+  std::vector<std::string> keys = schemaKeys;
+  for (const char* topic : {"vehicle_state", "drone_status", "occupancy"}) {
+    const std::string profile = std::string("dds.qos.") + topic;
+    keys.push_back(profile);
+    for (const char* key : {"reliability", "max_blocking_s", "durability", "history_depth",
+                            "deadline_s", "lifespan_s", "liveliness_lease_s"}) {
+      keys.push_back(profile + "." + key);
+    }
+  }
+  for (const std::string& key : keys) {
     bool covered = false;
     for (const MalformedCase& row : kMalformedCases) {
       covered = covered || key == row.path;
@@ -374,6 +621,8 @@ TEST(ConfigMalformed, MessagesReadAsDocumented) {
             "brown_conrady, equivalent_spherical)");
   EXPECT_EQ(errorOf(edited("latitude_deg: 43.0731", "latitude_deg: abc")),
             "site.yaml: origin.latitude_deg: expected a number, got 'abc'");
+  EXPECT_EQ(errorOf(edited("history_depth: 2", "history_depth: 0")),
+            "site.yaml: dds.qos.vehicle_state.history_depth: must be in [1, 1000], got 0");
 }
 
 TEST(ConfigWarnings, UnknownKeysAtEveryLevelAreNamedButNotFatal) {
@@ -458,6 +707,158 @@ TEST(ConfigFile, LoadResolvesAgainstTheFilesDirectoryAndReportsMissingFiles) {
     EXPECT_EQ(std::string(error.what()), file.string() + ": origin: expected a map, got '1'");
   }
   fs::remove_all(dir.parent_path());
+}
+
+TEST(ConfigDds, AbsentSectionGivesTheDocumentedDefaults) {
+  const DdsConfig dds = parse(kMinimalConfig).dds;
+  EXPECT_TRUE(dds.enabled);
+  EXPECT_EQ(dds.domainId, 0U);
+  EXPECT_EQ(dds.partition, "vp");
+  EXPECT_EQ(dds.droneId, 1U);
+  EXPECT_EQ(dds.topicPrefix, "vp");
+  EXPECT_DOUBLE_EQ(dds.statusRate_hz, 1.0);
+  EXPECT_DOUBLE_EQ(dds.occupancyRate_hz, 2.0);
+  EXPECT_EQ(dds.vehicleState.reliability, Reliability::Reliable);
+  EXPECT_EQ(dds.vehicleState.durability, Durability::Volatile);
+  EXPECT_EQ(dds.vehicleState.historyDepth, 1);
+  EXPECT_DOUBLE_EQ(dds.vehicleState.maxBlocking_s, 0.01);
+  EXPECT_DOUBLE_EQ(dds.vehicleState.deadline_s, 0.3);
+  EXPECT_DOUBLE_EQ(dds.vehicleState.lifespan_s, 0.5);
+  EXPECT_DOUBLE_EQ(dds.vehicleState.livelinessLease_s, 2.0);
+  EXPECT_EQ(dds.droneStatus.reliability, Reliability::Reliable);
+  EXPECT_EQ(dds.droneStatus.durability, Durability::TransientLocal);
+  EXPECT_DOUBLE_EQ(dds.droneStatus.deadline_s, 3.0);
+  EXPECT_DOUBLE_EQ(dds.droneStatus.lifespan_s, 0.0);
+  EXPECT_DOUBLE_EQ(dds.droneStatus.livelinessLease_s, 5.0);
+  EXPECT_EQ(dds.occupancy.reliability, Reliability::BestEffort);
+  EXPECT_DOUBLE_EQ(dds.occupancy.deadline_s, 0.0);
+  EXPECT_DOUBLE_EQ(dds.occupancy.lifespan_s, 1.0);
+  EXPECT_DOUBLE_EQ(dds.grid.originEast_m, -50.0);
+  EXPECT_DOUBLE_EQ(dds.grid.originNorth_m, -50.0);
+  EXPECT_DOUBLE_EQ(dds.grid.resolution_m, 0.5);
+  EXPECT_EQ(dds.grid.rows, 200U);
+  EXPECT_EQ(dds.grid.cols, 200U);
+  EXPECT_FALSE(dds.security.enabled);
+  EXPECT_EQ(dds.security.pluginDir, "/usr/lib/x86_64-linux-gnu/libddsc0debian");
+  EXPECT_TRUE(dds.security.identityCa.empty());
+  EXPECT_EQ(dds.telemetry.source, TelemetrySource::None);
+  EXPECT_EQ(dds.telemetry.domainId, 0U);
+  EXPECT_EQ(dds.telemetry.ardupilotGeoPoseTopic, "rt/ap/geopose/filtered");
+  EXPECT_EQ(dds.telemetry.px4AttitudeTopic, "rt/fmu/out/vehicle_attitude");
+  EXPECT_EQ(dds.telemetry.px4GlobalPositionTopic, "rt/fmu/out/vehicle_global_position");
+  EXPECT_DOUBLE_EQ(dds.telemetry.ardupilotAltitudeOffset_m, 0.0);
+  EXPECT_EQ(dds.telemetry.historyDepth, 8);
+}
+
+TEST(ConfigDds, FullSectionReadsEveryKey) {
+  const AppConfig config = parse(kFullConfig);
+  EXPECT_TRUE(config.warnings.empty());
+  const DdsConfig& dds = config.dds;
+  EXPECT_TRUE(dds.enabled);
+  EXPECT_EQ(dds.domainId, 7U);
+  EXPECT_EQ(dds.partition, "site_a");
+  EXPECT_EQ(dds.droneId, 12U);
+  EXPECT_EQ(dds.topicPrefix, "vpx");
+  EXPECT_DOUBLE_EQ(dds.statusRate_hz, 2.0);
+  EXPECT_DOUBLE_EQ(dds.occupancyRate_hz, 1.5);
+  const QosProfile& vs = dds.vehicleState;
+  EXPECT_EQ(vs.reliability, Reliability::Reliable);
+  EXPECT_DOUBLE_EQ(vs.maxBlocking_s, 0.02);
+  EXPECT_EQ(vs.durability, Durability::Volatile);
+  EXPECT_EQ(vs.historyDepth, 2);
+  EXPECT_DOUBLE_EQ(vs.deadline_s, 0.4);
+  EXPECT_DOUBLE_EQ(vs.lifespan_s, 0.6);
+  EXPECT_DOUBLE_EQ(vs.livelinessLease_s, 3.0);
+  const QosProfile& st = dds.droneStatus;
+  EXPECT_EQ(st.reliability, Reliability::BestEffort);
+  EXPECT_DOUBLE_EQ(st.maxBlocking_s, 0.03);
+  EXPECT_EQ(st.durability, Durability::TransientLocal);
+  EXPECT_EQ(st.historyDepth, 3);
+  EXPECT_DOUBLE_EQ(st.deadline_s, 4.0);
+  EXPECT_DOUBLE_EQ(st.lifespan_s, 0.7);
+  EXPECT_DOUBLE_EQ(st.livelinessLease_s, 6.0);
+  const QosProfile& oc = dds.occupancy;
+  EXPECT_EQ(oc.reliability, Reliability::BestEffort);
+  EXPECT_DOUBLE_EQ(oc.maxBlocking_s, 0.04);
+  EXPECT_EQ(oc.historyDepth, 4);
+  EXPECT_DOUBLE_EQ(oc.lifespan_s, 2.0);
+  EXPECT_DOUBLE_EQ(dds.grid.originEast_m, -40.0);
+  EXPECT_DOUBLE_EQ(dds.grid.originNorth_m, -30.0);
+  EXPECT_DOUBLE_EQ(dds.grid.resolution_m, 0.25);
+  EXPECT_EQ(dds.grid.rows, 300U);
+  EXPECT_EQ(dds.grid.cols, 400U);
+  // Disabled security: the paths are resolved but not required to exist.
+  EXPECT_FALSE(dds.security.enabled);
+  EXPECT_EQ(dds.security.pluginDir, "/opt/dds/plugins");
+  EXPECT_EQ(dds.security.identityCa, "/data/site/certs/ca.pem");
+  EXPECT_EQ(dds.security.identityCertificate, "/data/site/certs/drone.pem");
+  EXPECT_EQ(dds.security.privateKey, "/data/site/certs/drone_key.pem");
+  EXPECT_EQ(dds.security.permissionsCa, "/data/site/certs/permissions_ca.pem");
+  EXPECT_EQ(dds.security.governance, "/data/site/certs/governance.p7s");
+  EXPECT_EQ(dds.security.permissions, "/data/site/certs/permissions.p7s");
+  EXPECT_EQ(dds.telemetry.source, TelemetrySource::Px4);
+  EXPECT_EQ(dds.telemetry.domainId, 3U);
+  EXPECT_EQ(dds.telemetry.px4AttitudeTopic, "rt/px4_1/fmu/out/vehicle_attitude");
+  EXPECT_EQ(dds.telemetry.px4GlobalPositionTopic, "rt/px4_1/fmu/out/vehicle_global_position");
+  EXPECT_DOUBLE_EQ(dds.telemetry.ardupilotAltitudeOffset_m, -33.5);
+  EXPECT_EQ(dds.telemetry.historyDepth, 5);
+}
+
+TEST(ConfigDds, EnabledSecurityNeedsEveryFileAndSaysWhichIsMissing) {
+  const fs::path dir = fs::temp_directory_path() / ("vp_config_dds_" + std::to_string(getpid()));
+  fs::create_directories(dir / "certs");
+  for (const char* name : {"ca.pem", "drone.pem", "drone_key.pem", "permissions_ca.pem",
+                           "governance.p7s", "permissions.p7s"}) {
+    std::ofstream(dir / "certs" / name) << "test\n";
+  }
+  // A plugin folder with the file the check looks for.
+  fs::create_directories(dir / "plugins");
+  std::ofstream(dir / "plugins" / "libdds_security_auth.so") << "";
+  std::string text = edited("enabled: false", "enabled: true");
+  text.replace(text.find("/opt/dds/plugins"), 16, (dir / "plugins").string());
+  const AppConfig config = parseConfig(text, kSource, dir.string());
+  EXPECT_TRUE(config.dds.security.enabled);
+  EXPECT_EQ(config.dds.security.governance, (dir / "certs/governance.p7s").string());
+
+  fs::remove(dir / "certs" / "permissions.p7s");
+  try {
+    parseConfig(text, kSource, dir.string());
+    ADD_FAILURE() << "no error for a missing permissions file";
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(std::string(error.what()), "site.yaml: dds.security.permissions: file not found: " +
+                                             (dir / "certs/permissions.p7s").string());
+  }
+  text.replace(text.find("    private_key: certs/drone_key.pem\n"), 37, "");
+  try {
+    parseConfig(text, kSource, dir.string());
+    ADD_FAILURE() << "no error for an absent private_key";
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "site.yaml: dds.security.private_key: missing (required when "
+              "dds.security.enabled is true)");
+  }
+  fs::remove_all(dir);
+}
+
+TEST(ConfigDds, SectionAloneIgnoresTheOtherSections) {
+  // A roadside unit's file: no origin, camera or terrain, and sections it does not know.
+  const DdsSection alone = parseDdsSection(
+      "dds:\n  domain_id: 12\n  partition: site_b\n  colour: blue\nlogging: {level: 1}\n",
+      "rsu.yaml", "/cfg");
+  EXPECT_EQ(alone.dds.domainId, 12U);
+  EXPECT_EQ(alone.dds.partition, "site_b");
+  EXPECT_EQ(alone.warnings, std::vector<std::string>{"rsu.yaml: unknown key 'dds.colour'"});
+  EXPECT_EQ(parseDdsSection("", "rsu.yaml", "/cfg").dds.partition, "vp");
+  // The whole application file reads the same as the section alone.
+  EXPECT_EQ(parseDdsSection(kFullConfig, kSource, kBaseDir).dds.security.identityCa,
+            parse(kFullConfig).dds.security.identityCa);
+  try {
+    parseDdsSection("dds:\n  qos:\n    occupancy:\n      history_depth: 0\n", "rsu.yaml", "/");
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "rsu.yaml: dds.qos.occupancy.history_depth: must be in [1, 1000], got 0");
+  }
 }
 
 }  // namespace

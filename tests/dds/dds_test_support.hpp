@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "messages/dds_config.hpp"
+#include "config/dds_config.hpp"
 #include "messages/messages.hpp"
 
 namespace vp::test {
@@ -26,10 +26,10 @@ inline void useLoopbackDds() {
 }
 
 // A domain id and partition unique to this process and call.
-inline messages::DdsConfig uniqueDdsConfig() {
+inline config::DdsConfig uniqueDdsConfig() {
   static std::atomic<int> counter{0};
   const int k = counter++;
-  messages::DdsConfig config;
+  config::DdsConfig config;
   config.domainId = static_cast<std::uint32_t>(1 + (getpid() * 7 + k) % 200);
   config.partition = "test_" + std::to_string(getpid()) + "_" + std::to_string(k);
   return config;

@@ -1,11 +1,10 @@
-// Pure parts of the DDS interface: validation, occupancy rasterisation, the dds: config.
+// Pure parts of the DDS interface: validation and occupancy rasterisation.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
 #include "dds_test_support.hpp"
-#include "messages/dds_config.hpp"
 #include "messages/occupancy.hpp"
 
 namespace vp::messages {
@@ -61,46 +60,6 @@ TEST(Occupancy, MarksObservedAreaAndFootprints) {
     occupied += c == static_cast<std::uint8_t>(Occupancy::Occupied);
   }
   EXPECT_NEAR(occupied * 0.25, 4.6 * 1.8, 2.0);  // area within the cell quantisation
-}
-
-TEST(DdsConfig, DefaultsAndOverrides) {
-  const DdsConfigResult empty = parseDdsConfig("origin: {}\n", "site.yaml", "/cfg");
-  EXPECT_EQ(empty.config.vehicleState.reliability, Reliability::Reliable);
-  EXPECT_EQ(empty.config.vehicleState.historyDepth, 1);
-  EXPECT_TRUE(empty.warnings.empty());
-  const DdsConfigResult r = parseDdsConfig(
-      "dds:\n  domain_id: 12\n  partition: site_a\n  qos:\n    vehicle_state:\n"
-      "      reliability: best_effort\n      deadline_s: 0.2\n  security:\n    enabled: true\n"
-      "    identity_ca: certs/ca.pem\n    identity_certificate: certs/drone.pem\n"
-      "    private_key: certs/drone_key.pem\n    permissions_ca: certs/ca.pem\n"
-      "    governance: certs/governance.p7s\n    permissions: certs/permissions.p7s\n"
-      "  colour: blue\n",
-      "site.yaml", "/cfg");
-  EXPECT_EQ(r.config.domainId, 12U);
-  EXPECT_EQ(r.config.partition, "site_a");
-  EXPECT_EQ(r.config.vehicleState.reliability, Reliability::BestEffort);
-  EXPECT_DOUBLE_EQ(r.config.vehicleState.deadline_s, 0.2);
-  EXPECT_EQ(r.config.security.identityCa, "/cfg/certs/ca.pem");
-  ASSERT_EQ(r.warnings.size(), 1U);
-  EXPECT_EQ(r.warnings[0], "site.yaml: unknown key 'dds.colour'");
-}
-
-TEST(DdsConfig, ErrorsNameTheKey) {
-  const auto message = [](const std::string& yaml) {
-    try {
-      parseDdsConfig(yaml, "site.yaml", "/cfg");
-    } catch (const DdsConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
-  EXPECT_EQ(message("dds:\n  qos:\n    occupancy:\n      history_depth: 0\n"),
-            "site.yaml: dds.qos.occupancy.history_depth: must be in [1, 1000], got 0");
-  EXPECT_EQ(message("dds:\n  qos:\n    vehicle_state:\n      reliability: maybe\n"),
-            "site.yaml: dds.qos.vehicle_state.reliability: unknown value 'maybe' (expected "
-            "reliable, best_effort)");
-  EXPECT_EQ(message("dds:\n  security:\n    enabled: true\n"),
-            "site.yaml: dds.security.identity_ca: missing (required when enabled)");
 }
 
 }  // namespace

@@ -5,14 +5,20 @@
 #include <cstdlib>
 #include <new>
 
+#include <pthread.h>
+
 namespace {
 
 std::atomic<bool> gCounting{false};
 std::atomic<std::size_t> gCount{0};
+std::atomic<unsigned long> gThread{0};  // pthread_t of the only thread counted; 0 = all
 
 inline void noteAllocation() {
-  if (gCounting.load(std::memory_order_relaxed))
-    gCount.fetch_add(1, std::memory_order_relaxed);
+  if (gCounting.load(std::memory_order_relaxed)) {
+    const unsigned long only = gThread.load(std::memory_order_relaxed);
+    if (only == 0 || only == static_cast<unsigned long>(pthread_self()))
+      gCount.fetch_add(1, std::memory_order_relaxed);
+  }
 }
 
 }  // namespace
@@ -27,6 +33,12 @@ AllocationCounter::~AllocationCounter() {
 }
 
 void AllocationCounter::start() {
+  gThread.store(0);
+  gCount.store(0);
+  gCounting.store(true);
+}
+void AllocationCounter::startOnThread(unsigned long pthreadId) {
+  gThread.store(pthreadId);
   gCount.store(0);
   gCounting.store(true);
 }

@@ -21,7 +21,10 @@ class AllocationCounter {
   AllocationCounter(const AllocationCounter&) = delete;
   AllocationCounter& operator=(const AllocationCounter&) = delete;
 
-  void start();  // resets the count and starts counting
+  void start();  // resets the count and starts counting (every thread)
+  // Resets and counts only the allocations made by one thread (its pthread_t as an integer):
+  // e.g. the processing thread of a loop whose capture thread is allowed to allocate.
+  void startOnThread(unsigned long pthreadId);
   void stop();
   std::size_t count() const;  // allocations seen while counting
 

@@ -13,10 +13,10 @@
 #include <filesystem>
 #include <string>
 
+#include "alloc_counter.hpp"
 #include "platform/system/realtime.hpp"
 #include "platform/system/stop_signals.hpp"
 #include "platform/system/systemd_notify.hpp"
-#include "alloc_counter.hpp"
 
 namespace {
 

@@ -188,7 +188,7 @@ class Predictor:
             if nw > pw or nh > ph:  # crop what does not fit (fixed-size engine input)
                 small = small[:ph, :pw]
                 nh, nw = small.shape[:2]
-        canvas = np.zeros((ph, pw, 3), np.uint8)
+        canvas = np.full((ph, pw, 3), 128, np.uint8)  # mean grey = network input 0, as the C++ side pads
         canvas[:nh, :nw] = small
         return canvas, fx, fy
 

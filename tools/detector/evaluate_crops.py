@@ -42,7 +42,7 @@ import torch
 from detector import crops
 from detector.asm import CAR_TYPES, DEFAULT_ASM_PATH, EVAL_KEYPOINTS, TYPES, load_asm
 from detector.datasets import read_sequence
-from detector.model import REFINE_OFFSET, REFINE_SCALE, CropNet, normalize
+from detector.model import REFINE_OFFSET, REFINE_SCALE, STRIDE, CropNet, Detector, normalize
 
 
 def shape_errors(asm, pred_gamma: np.ndarray, true_gamma: np.ndarray) -> Dict[str, float]:
@@ -121,6 +121,46 @@ def evaluate(crop_net, asm, sequences: List[str], jitter: bool, seed: int, batch
     return res
 
 
+def evaluate_single_stage(det, asm, sequences: List[str], working_width: int = 648) -> dict:
+    """Type and shape of the single-stage variant: the detector's dense type/shape heads read
+    at the cell of each ground-truth centre (the best case for it: no localisation error)."""
+    from detector.evaluate import Predictor
+
+    pred = Predictor(det, None)
+    probs, shapes, types, gammas = [], [], [], []
+    det.eval()
+    for d in sequences:
+        for s in read_sequence(d, n_s=asm.n_s):
+            s = s.loaded()
+            keep = [j for j in range(len(s)) if not s.ignore[j] and s.types[j] >= 0 and not s.aa_only[j]]
+            if not keep:
+                continue
+            scale = working_width / s.image.shape[1]
+            canvas, fx, fy = pred.working_image(s.image, scale)
+            x = normalize(torch.from_numpy(canvas).permute(2, 0, 1)[None])
+            with torch.no_grad():
+                out = det(x)
+            t, g = out["type"][0].numpy(), out["shape"][0].numpy()
+            for j in keep:
+                u = (s.boxes[j, 0] + 0.5) * fx - 0.5
+                v = (s.boxes[j, 1] + 0.5) * fy - 0.5
+                ix = int(np.clip(round((u - (STRIDE - 1) / 2) / STRIDE), 0, t.shape[2] - 1))
+                iy = int(np.clip(round((v - (STRIDE - 1) / 2) / STRIDE), 0, t.shape[1] - 1))
+                logit = t[:, iy, ix]
+                e = np.exp(logit - logit.max())
+                probs.append(e / e.sum())
+                shapes.append(g[:, iy, ix])
+                types.append(int(s.types[j]))
+                gammas.append(s.gammas[j])
+    types_a, gam = np.array(types), np.stack(gammas)
+    res = {"vehicles": len(types), "jitter": False}
+    res.update(type_scores(np.stack(probs), types_a))
+    cars = np.isfinite(gam).all(1) & (types_a < len(CAR_TYPES))
+    res.update(shape_errors(asm, np.stack(shapes)[cars].astype(np.float64), gam[cars].astype(np.float64)))
+    res["flip_error_share"] = math.nan
+    return res
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--checkpoint", required=True, help="train.py run checkpoint (with a crop net)")
@@ -128,16 +168,25 @@ def main(argv=None) -> int:
     p.add_argument("--asm", default=DEFAULT_ASM_PATH)
     p.add_argument("--jitter", action="store_true", help="crop at detector-like poses")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--single-stage", action="store_true",
+                   help="evaluate the detector's own type/shape heads (single-stage variant) instead")
     p.add_argument("--label", default="", help="row label in the printed table")
     p.add_argument("--json", default=None, help="write the figures here")
     args = p.parse_args(argv)
     asm = load_asm(args.asm)
     ck = torch.load(args.checkpoint, map_location="cpu")
-    if ck.get("crop") is None:
-        raise SystemExit(f"{args.checkpoint}: the run has no crop net (--no-crop)")
-    net = CropNet(n_s=ck.get("n_s", asm.n_s))
-    net.load_state_dict(ck["crop"])
-    res = evaluate(net, asm, args.data, args.jitter, args.seed)
+    if args.single_stage:
+        if not ck.get("single_stage"):
+            raise SystemExit(f"{args.checkpoint}: not a single-stage run (--single-stage)")
+        det = Detector(n_s=ck.get("n_s", asm.n_s), single_stage=True)
+        det.load_state_dict(ck["detector"])
+        res = evaluate_single_stage(det, asm, args.data)
+    else:
+        if ck.get("crop") is None:
+            raise SystemExit(f"{args.checkpoint}: the run has no crop net (--no-crop)")
+        net = CropNet(n_s=ck.get("n_s", asm.n_s))
+        net.load_state_dict(ck["crop"])
+        res = evaluate(net, asm, args.data, args.jitter, args.seed)
     res.update({"checkpoint": args.checkpoint, "steps": ck.get("step"),
                 "shape_loss": ck.get("shape_loss"), "label": args.label})
     if args.json:

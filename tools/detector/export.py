@@ -111,7 +111,7 @@ def working_canvas(image: np.ndarray, hw, scale: float) -> np.ndarray:
     h, w = image.shape[:2]
     nw, nh = min(hw[1], int(round(w * scale))), min(hw[0], int(round(h * scale)))
     small = cv2.resize(image, (nw, nh), interpolation=cv2.INTER_AREA)
-    canvas = np.zeros((hw[0], hw[1], 3), np.uint8)
+    canvas = np.full((hw[0], hw[1], 3), 128, np.uint8)  # padded as at run time (mean grey)
     canvas[:nh, :nw] = small
     return canvas
 

@@ -88,6 +88,11 @@ def parse_args(argv=None):
     p.add_argument("--shape-loss", choices=["l1", "l2"], default="l1", help="V_L1 or V_L2")
     p.add_argument("--single-stage", action="store_true", help="add type/shape heads to the detector")
     p.add_argument("--no-crop", action="store_true", help="do not train the crop classifier")
+    p.add_argument("--init-from", default=None,
+                   help="start from this run's detector (and crop net) weights (missing heads stay new)")
+    p.add_argument("--train-heads-only", action="store_true",
+                   help="with --single-stage: train only the type/shape heads on a frozen detector "
+                        "(the single- vs two-stage comparison of the model card)")
     p.add_argument("--crop-only", action="store_true",
                    help="train only the crop classifier (second stage; e.g. the V_L1/V_L2 comparison)")
     p.add_argument("--asm", default=DEFAULT_ASM_PATH)
@@ -291,7 +296,22 @@ def train(args) -> dict:
     if args.crop_only and args.no_crop:
         raise SystemExit("--crop-only and --no-crop exclude each other")
     crop_net = None if args.no_crop else CropNet(n_s=asm.n_s).to(device)
-    opt_d = torch.optim.AdamW(det.parameters(), lr=args.lr, weight_decay=1e-4)
+    if args.init_from:
+        ck0 = torch.load(args.init_from, map_location=device)
+        missing, unexpected = det.load_state_dict(ck0["detector"], strict=False)
+        if unexpected:
+            raise SystemExit(f"--init-from {args.init_from}: unexpected detector weights {unexpected[:4]}")
+        if crop_net is not None and ck0.get("crop") is not None:
+            crop_net.load_state_dict(ck0["crop"])
+        log(f"initialised from {args.init_from}; new: {sorted({k.split('.')[0] for k in missing})}")
+    head_names = ("type_head", "shape_head")
+    if args.train_heads_only:
+        if not args.single_stage:
+            raise SystemExit("--train-heads-only needs --single-stage")
+        for name, prm in det.named_parameters():
+            prm.requires_grad = name.split(".")[0] in head_names
+    opt_d = torch.optim.AdamW([q for q in det.parameters() if q.requires_grad], lr=args.lr,
+                              weight_decay=1e-4)
     opt_c = torch.optim.AdamW(crop_net.parameters(), lr=args.lr, weight_decay=1e-4) if crop_net else None
     shape_loss = make_shape_loss(args.shape_loss, asm)
     steps_per_epoch = max(1, math.ceil(data.frames_per_epoch() / args.batch))
@@ -329,6 +349,10 @@ def train(args) -> dict:
     log(f"device {device}, {steps_per_epoch} steps/epoch, planned {total_steps} steps, "
         f"budget {args.budget_minutes} min")
     det.train()
+    if args.train_heads_only:  # frozen parts keep their batch-norm statistics
+        for name, mod in det.named_children():
+            if name not in head_names:
+                mod.eval()
     if crop_net:
         crop_net.train()
     last_ckpt = time.monotonic()

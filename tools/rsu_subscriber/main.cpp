@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "bev_view.hpp"
-#include "messages/dds_config.hpp"
+#include "config/config.hpp"
 #include "platform/dds/conversion.hpp"
 #include "platform/dds/dds_handles.hpp"
 #include "state_format.hpp"
@@ -56,8 +56,9 @@ void printHelp() {
 
 Usage: vp_rsu_subscriber [options]
 
-  --config FILE         YAML file with a `dds:` section (domain, partition, QoS, security);
-                        see docs/dds.md. Without it the defaults are used.
+  --config FILE         YAML file with a `dds:` section (domain, partition, QoS, security;
+                        other sections are ignored); see docs/configuration.md and docs/dds.md.
+                        Without it the defaults are used.
   --domain N            DDS domain id (overrides the file), 0..232
   --partition NAME      DDS partition (overrides the file)
   --topic-prefix P      topic prefix (default vp: vp/vehicle_state, vp/drone_status, vp/occupancy)
@@ -170,15 +171,16 @@ double latencyMs(const dds_sample_info_t& info) {
 
 int main(int argc, char** argv) {
   const Options options = parseOptions(argc, argv);
-  msg::DdsConfig config;
+  vp::config::DdsConfig config;
   if (!options.configPath.empty()) {
     try {
-      msg::DdsConfigResult loaded = msg::loadDdsConfig(options.configPath);
+      // Only the dds: section is read: an RSU has no camera or terrain of its own.
+      vp::config::DdsSection loaded = vp::config::loadDdsSection(options.configPath);
       for (const std::string& warning : loaded.warnings) {
         std::cerr << "vp_rsu_subscriber: warning: " << warning << "\n";
       }
-      config = loaded.config;
-    } catch (const msg::DdsConfigError& e) {
+      config = loaded.dds;
+    } catch (const vp::config::ConfigError& e) {
       std::cerr << "vp_rsu_subscriber: " << e.what() << "\n";
       return 2;
     }

@@ -1,26 +1,21 @@
-// messages/dds_config: the typed `dds:` configuration section (domain, partition, QoS
-// profiles per topic, publication rates, occupancy grid, DDS Security files).
+// config/dds_config: the typed `dds:` section of the application configuration (domain,
+// partition, topic prefix, QoS profile per topic, publication rates, occupancy grid, DDS
+// Security files, and the flight stack's DDS telemetry topics).
 //
-// Contract: plain values, no DDS types; platform/dds turns them into QoS objects. The defaults
-// are the documented ones (docs/dds.md, "QoS defaults") chosen for a lossy radio link at
-// 10 Hz. parseDdsConfig() reads the `dds:` map of a YAML document and throws DdsConfigError
-// naming the source and the full key path ("site.yaml: dds.qos.vehicle_state.history_depth:
-// must be in [1, 1000], got 0"); unknown keys are returned as warnings. Relative security file
-// paths are resolved against baseDir. This section lives here until src/config's AppConfig
-// takes it over (it will become AppConfig::dds with the same keys). Start-up only.
+// Contract: plain values, no DDS types; platform/dds turns them into QoS objects and entities.
+// The defaults are the documented ones (docs/configuration.md, docs/dds.md "QoS defaults"),
+// chosen for a lossy radio link at 10 Hz. config.cpp reads the section (as AppConfig::dds, or
+// alone with parseDdsSection() for tools such as the roadside-unit subscriber) and reports a
+// malformed key as ConfigError naming the file and the full key path
+// ("site.yaml: dds.qos.vehicle_state.history_depth: must be in [1, 1000], got 0"). Relative
+// security file paths are resolved against the configuration file's directory and, when
+// security is enabled, must exist. Start-up only.
 #pragma once
 
 #include <cstdint>
-#include <stdexcept>
 #include <string>
-#include <vector>
 
-namespace vp::messages {
-
-class DdsConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+namespace vp::config {
 
 enum class Reliability : std::uint8_t { BestEffort, Reliable };
 enum class Durability : std::uint8_t { Volatile, TransientLocal };
@@ -56,6 +51,26 @@ struct OccupancyGridSpec {
   std::uint32_t cols = 200;
 };
 
+// Which flight stack's ROS 2 bridge the drone pose comes from over DDS (docs/telemetry.md).
+enum class TelemetrySource : std::uint8_t {
+  None,       // pose from elsewhere (MAVLink, a recording)
+  ArduPilot,  // ArduPilot DDS: geographic_msgs/GeoPoseStamped
+  Px4,        // PX4 uXRCE-DDS: px4_msgs/VehicleAttitude + VehicleGlobalPosition
+};
+
+struct TelemetryConfig {
+  TelemetrySource source = TelemetrySource::None;
+  // The bridge's ROS_DOMAIN_ID; ROS 2 uses no partition and no DDS Security by default.
+  std::uint32_t domainId = 0;
+  std::string ardupilotGeoPoseTopic = "rt/ap/geopose/filtered";
+  std::string px4AttitudeTopic = "rt/fmu/out/vehicle_attitude";
+  std::string px4GlobalPositionTopic = "rt/fmu/out/vehicle_global_position";
+  // Added to ArduPilot's GeoPose altitude to give the ellipsoidal height: ArduPilot fills it
+  // with its absolute (AMSL) altitude, so set the geoid undulation N of the site here.
+  double ardupilotAltitudeOffset_m = 0.0;
+  std::int32_t historyDepth = 8;  // KEEP_LAST depth of each telemetry reader
+};
+
 struct DdsConfig {
   bool enabled = true;
   std::uint32_t domainId = 0;
@@ -69,24 +84,15 @@ struct DdsConfig {
   double occupancyRate_hz = 2.0;  // 0 = do not publish the grid
   OccupancyGridSpec grid{};
   SecurityConfig security{};
+  TelemetryConfig telemetry{};
 
   static QosProfile defaultVehicleStateQos();
   static QosProfile defaultDroneStatusQos();
   static QosProfile defaultOccupancyQos();
 };
 
-struct DdsConfigResult {
-  DdsConfig config;
-  std::vector<std::string> warnings;
-};
-
-// Parses the `dds` map of the document (the whole document may hold other sections; an
-// absent `dds` section gives the defaults). Throws DdsConfigError.
-DdsConfigResult parseDdsConfig(const std::string& yamlText, const std::string& sourceName,
-                               const std::string& baseDir);
-DdsConfigResult loadDdsConfig(const std::string& path);
-
 const char* toString(Reliability reliability);
 const char* toString(Durability durability);
+const char* toString(TelemetrySource source);
 
-}  // namespace vp::messages
+}  // namespace vp::config

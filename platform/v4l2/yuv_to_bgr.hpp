@@ -1,0 +1,27 @@
+// platform/v4l2/yuv_to_bgr: the camera's YUV layouts into the pipeline's BGR8 frames, in place.
+//
+// Contract: pure, allocation-free, single-threaded; writes into a caller-owned CV_8UC3 image
+// of exactly the given size (never reallocates it) and returns false, writing nothing, when
+// the image or the dimensions do not fit (odd width, odd height for NV12). Colour: ITU-R
+// BT.601 limited range ("studio swing", Y 16..235), the convention of UVC/V4L2 cameras that
+// report no colorimetry and of OpenCV's COLOR_YUV2BGR_*, in 20-bit fixed point so that the
+// result matches cv::cvtColor (the tests compare them). Source strides are in bytes
+// (V4L2 bytesperline), so padded rows are handled.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include <opencv2/core.hpp>
+
+namespace vp::platform::v4l2 {
+
+// YUYV 4:2:2 (V4L2_PIX_FMT_YUYV, "YUY2"): Y0 U Y1 V per pixel pair.
+bool yuyvToBgr(const std::uint8_t* yuyv, std::size_t strideBytes, int widthPx, int heightPx,
+               cv::Mat& bgr);
+
+// NV12 4:2:0 (V4L2_PIX_FMT_NV12): a Y plane, then an interleaved U V plane at half resolution.
+bool nv12ToBgr(const std::uint8_t* yPlane, std::size_t yStrideBytes, const std::uint8_t* uvPlane,
+               std::size_t uvStrideBytes, int widthPx, int heightPx, cv::Mat& bgr);
+
+}  // namespace vp::platform::v4l2

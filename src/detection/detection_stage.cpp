@@ -1,0 +1,217 @@
+#include "detection/detection_stage.hpp"
+
+#include <chrono>
+#include <cmath>
+
+namespace vp::detection {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+bool fail(std::string* why, const std::string& message) {
+  if (why != nullptr) {
+    *why = "detection stage: " + message;
+  }
+  return false;
+}
+
+// The detector's four heads, in headIndex_ order, with their channel counts.
+struct Head {
+  const char* name;
+  int channels;
+};
+constexpr std::array<Head, 4> kHeads{
+    {{"heatmap", 1}, {"offset", 2}, {"size", 2}, {"direction", 2}}};
+
+}  // namespace
+
+const char* toString(DetectionStatus status) {
+  switch (status) {
+    case DetectionStatus::Ok:
+      return "ok";
+    case DetectionStatus::NotInitialised:
+      return "detection stage not initialised";
+    case DetectionStatus::NoTiles:
+      return "the preprocessed frame has no tiles";
+    case DetectionStatus::TooManyTiles:
+      return "more tiles than the detection stage was sized for";
+    case DetectionStatus::WrongTileSize:
+      return "tile size differs from the detector input";
+    case DetectionStatus::EmptyFrame:
+      return "no corrected frame to cut crops from";
+    case DetectionStatus::DetectorFailed:
+      return "detector run failed";
+    case DetectionStatus::DecodeFailed:
+      return "detector outputs could not be decoded";
+  }
+  return "unknown";
+}
+
+bool DetectionStage::init(const DetectionStageOptions& options, int maxTiles, std::string* why) {
+  initialised_ = false;
+  std::string detail;
+  if (!validate(options.decoder, &detail) || !validate(options.gsd, &detail)) {
+    return fail(why, detail);
+  }
+  if (options.maxCrops < 0 || options.maxCrops > kMaxDetectionsPerFrame) {
+    return fail(why, "max_crops: must be in [0, " + std::to_string(kMaxDetectionsPerFrame) +
+                         "], got " + std::to_string(options.maxCrops));
+  }
+  if (options.cropEngineThreads < 1 || options.cropEngineThreads > 16) {
+    return fail(why, "crop_engine_threads: must be in [1, 16], got " +
+                         std::to_string(options.cropEngineThreads));
+  }
+  if (maxTiles < 1 || maxTiles > preprocess::kMaxTiles) {
+    return fail(why, "max tiles must be in [1, " + std::to_string(preprocess::kMaxTiles) + "]");
+  }
+  const std::string& path = options.detectorModelPath;
+  if (!detector_.load(path, options.engine, &detail)) {
+    return fail(why, "detector model: " + detail);
+  }
+  const inference::TensorShape input = detector_.inputShape();
+  inputWidth_ = input.w;
+  inputHeight_ = input.h;
+  for (std::size_t k = 0; k < kHeads.size(); ++k) {
+    bool found = false;
+    for (std::size_t i = 0; i < detector_.outputCount(); ++i) {
+      const inference::OutputTensor& out = detector_.output(i);
+      if (out.name != kHeads[k].name) {
+        continue;
+      }
+      if (out.shape.c != kHeads[k].channels) {
+        return fail(why, path + ": output '" + out.name + "' has " + std::to_string(out.shape.c) +
+                             " channels, expected " + std::to_string(kHeads[k].channels));
+      }
+      if (k == 0) {
+        gridWidth_ = out.shape.w;
+        gridHeight_ = out.shape.h;
+      } else if (out.shape.w != gridWidth_ || out.shape.h != gridHeight_) {
+        return fail(why, path + ": output '" + out.name + "' is on a " +
+                             std::to_string(out.shape.w) + "x" + std::to_string(out.shape.h) +
+                             " grid, the heatmap on " + std::to_string(gridWidth_) + "x" +
+                             std::to_string(gridHeight_));
+      }
+      headIndex_[k] = i;
+      found = true;
+    }
+    if (!found) {
+      return fail(why, path + ": no output named '" + kHeads[k].name +
+                           "' (the detector needs heatmap, offset, size, direction)");
+    }
+  }
+  if (gridWidth_ <= 0 || gridHeight_ <= 0 || inputWidth_ % gridWidth_ != 0 ||
+      inputHeight_ % gridHeight_ != 0 || inputWidth_ / gridWidth_ != inputHeight_ / gridHeight_) {
+    return fail(why, path + ": output grid " + std::to_string(gridWidth_) + "x" +
+                         std::to_string(gridHeight_) + " is not the input " +
+                         std::to_string(inputWidth_) + "x" + std::to_string(inputHeight_) +
+                         " divided by one integer stride");
+  }
+  stridePx_ = inputWidth_ / gridWidth_;
+  if (!decoder_.init(options.decoder, gridWidth_, gridHeight_, stridePx_, maxTiles, &detail)) {
+    return fail(why, detail);
+  }
+  inference::EngineOptions cropEngine = options.engine;
+  cropEngine.threads = options.cropEngineThreads;
+  if (!options.cropModelPath.empty() &&
+      !cropper_.init(options.cropModelPath, cropEngine, options.secondStage, &detail)) {
+    return fail(why, detail);
+  }
+  options_ = options;
+  maxTiles_ = maxTiles;
+  stats_ = DetectionStats{};
+  initialised_ = true;
+  return true;
+}
+
+DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
+                                    std::span<Detection> out, std::size_t* count,
+                                    const GsdProvider* gsdProvider) {
+  *count = 0;
+  stats_ = DetectionStats{};
+  if (!initialised_) {
+    return DetectionStatus::NotInitialised;
+  }
+  if (frame.tiles.empty()) {
+    return DetectionStatus::NoTiles;
+  }
+  if (frame.tiles.size() > static_cast<std::size_t>(maxTiles_)) {
+    return DetectionStatus::TooManyTiles;
+  }
+  const bool secondStage = cropper_.initialised() && options_.maxCrops > 0;
+  if (secondStage && (frame.frame.empty() || frame.frame.type() != CV_8UC3)) {
+    return DetectionStatus::EmptyFrame;
+  }
+
+  // First stage: detector per tile, decoded into frame pixels.
+  double detectorMs = 0.0;
+  double decodeMs = 0.0;
+  decoder_.beginFrame();
+  for (const preprocess::TileView& tile : frame.tiles) {
+    if (tile.rect.widthPx != inputWidth_ || tile.rect.heightPx != inputHeight_ ||
+        tile.data == nullptr) {
+      return DetectionStatus::WrongTileSize;
+    }
+    const Clock::time_point start = Clock::now();
+    const inference::ImageView view{tile.data, inputWidth_, inputHeight_, tile.strideBytes};
+    if (detector_.run(view) != inference::RunStatus::Ok) {
+      return DetectionStatus::DetectorFailed;
+    }
+    const Clock::time_point ran = Clock::now();
+    HeadTensors heads;
+    heads.heatmap = detector_.output(headIndex_[0]).data;
+    heads.offset = detector_.output(headIndex_[1]).data;
+    heads.size = detector_.output(headIndex_[2]).data;
+    heads.direction = detector_.output(headIndex_[3]).data;
+    heads.gridWidth = gridWidth_;
+    heads.gridHeight = gridHeight_;
+    heads.stridePx = stridePx_;
+    if (decoder_.decodeTile(heads, tile, frame.geometry) != DecodeStatus::Ok) {
+      return DetectionStatus::DecodeFailed;
+    }
+    detectorMs += millisecondsBetween(start, ran);
+    decodeMs += millisecondsBetween(ran, Clock::now());
+  }
+  const Clock::time_point nmsStart = Clock::now();
+  const std::size_t kept = decoder_.finishFrame(out);
+  const Clock::time_point nmsEnd = Clock::now();
+  decodeMs += millisecondsBetween(nmsStart, nmsEnd);
+
+  // Second stage, best detections first.
+  if (secondStage && kept > 0) {
+    double frameGsd = options_.gsd.fixedGsd_m;
+    if (!(frameGsd > 0.0)) {
+      frameGsd = medianLengthGsd(out.first(kept), options_.gsd, gsdScratch_);
+    }
+    stats_.frameGsd_m = frameGsd;
+    const std::size_t crops = std::min(kept, static_cast<std::size_t>(options_.maxCrops));
+    for (std::size_t i = 0; i < crops; ++i) {
+      double gsd = gsdProvider != nullptr ? gsdProvider->groundSampleDistance_m(out[i]) : 0.0;
+      if (!(gsd > 0.0) || !std::isfinite(gsd)) {
+        gsd = frameGsd;
+      }
+      if (cropper_.classify(frame.frame, gsd, &out[i]) == SecondStageStatus::Ok) {
+        ++stats_.crops;
+      } else {
+        ++stats_.cropFailures;
+      }
+    }
+    stats_.cropFailures += static_cast<int>(kept - crops);
+  }
+  stats_.crops_ms = millisecondsBetween(nmsEnd, Clock::now());
+  stats_.detector_ms = detectorMs;
+  stats_.decode_ms = decodeMs;
+  stats_.tiles = static_cast<int>(frame.tiles.size());
+  stats_.candidates = static_cast<int>(decoder_.candidateCount());
+  stats_.cutCandidates = static_cast<int>(decoder_.cutCandidateCount());
+  stats_.detections = static_cast<int>(kept);
+  stats_.droppedForCapacity = static_cast<int>(decoder_.droppedForCapacity());
+  *count = kept;
+  return DetectionStatus::Ok;
+}
+
+}  // namespace vp::detection

@@ -1,0 +1,108 @@
+// detection/detection_stage: one frame's image-side detection - detector network on every
+// tile, decoding, rotated NMS across tiles, and the second stage on every kept vehicle.
+//
+// Contract: init() loads the detector (input = the preprocessor's tile size; outputs named
+// heatmap 1, offset 2, size 2, direction 2 channels on one grid at a stride that divides the
+// input) and, when a crop model path is given, the crop network (vehicle_cropper.hpp), and
+// sizes every buffer for maxTiles tiles. run() takes a preprocessed frame, runs the detector
+// per tile, decodes and suppresses (decoder.hpp), then for each kept detection - best first,
+// at most maxCrops - cuts the crop from the corrected full-resolution frame at a GSD from the
+// caller's GsdProvider, else the options' fixed GSD, else the frame's median box length
+// (ground_sample_distance.hpp), and applies the crop network's outputs. It writes at most
+// out.size() detections (kMaxDetectionsPerFrame is the intended capacity) and returns a
+// status, never throws and performs no heap allocation after init(). A detection whose
+// second stage could not run (no GSD, beyond maxCrops) keeps its first-stage values (uniform
+// types, no gamma) and is counted in stats(). Not thread-safe; the detector engine uses
+// engine.threads workers, the crop engine cropEngineThreads.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <span>
+#include <string>
+
+#include "detection/decoder.hpp"
+#include "detection/detection.hpp"
+#include "detection/ground_sample_distance.hpp"
+#include "detection/vehicle_cropper.hpp"
+#include "inference/engine.hpp"
+#include "preprocess/preprocessor.hpp"
+
+namespace vp::detection {
+
+struct DetectionStageOptions {
+  std::string detectorModelPath;      // models/detector/detector_int8.onnx
+  std::string cropModelPath;          // models/detector/crop_int8.onnx; empty: no second stage
+  inference::EngineOptions engine{};  // backend and threads of the detector network
+  // The crop network is tiny (~6 MMAC): a thread pool costs more than it saves per crop
+  // (measured: 2 threads made 30 crops 300x slower on a loaded 2-core machine).
+  int cropEngineThreads = 1;  // [1, 16]
+  DecoderOptions decoder{};
+  SecondStageOptions secondStage{};
+  GsdOptions gsd{};
+  int maxCrops = kMaxDetectionsPerFrame;  // second-stage runs per frame, [0, 512]
+};
+
+enum class DetectionStatus {
+  Ok,
+  NotInitialised,
+  NoTiles,         // the preprocessed frame has no tiles (preprocessing failed?)
+  TooManyTiles,    // more than init()'s maxTiles
+  WrongTileSize,   // tile size differs from the detector input
+  EmptyFrame,      // no corrected frame to crop from
+  DetectorFailed,  // Engine::run failed
+  DecodeFailed,    // decoder refused the outputs
+};
+const char* toString(DetectionStatus status);
+
+struct DetectionStats {
+  int tiles = 0;
+  int candidates = 0;          // decoded peaks over all tiles, before NMS
+  int cutCandidates = 0;       // of which touched an inner tile edge
+  int detections = 0;          // written to the output
+  int droppedForCapacity = 0;  // kept by NMS but beyond the output's size
+  int crops = 0;               // second-stage runs that succeeded
+  int cropFailures = 0;        // second stage skipped or failed (no GSD, engine error, ...)
+  double frameGsd_m = 0.0;     // the frame-level GSD estimate used (0: provider or none)
+  double detector_ms = 0.0;    // detector engine, all tiles
+  double decode_ms = 0.0;      // decoding + NMS
+  double crops_ms = 0.0;       // crops + crop engine + output application
+};
+
+class DetectionStage {
+ public:
+  DetectionStage() = default;
+  DetectionStage(const DetectionStage&) = delete;
+  DetectionStage& operator=(const DetectionStage&) = delete;
+
+  // Start-up: loads and checks the models; *why names the file and the problem.
+  bool init(const DetectionStageOptions& options, int maxTiles, std::string* why = nullptr);
+  bool initialised() const { return initialised_; }
+
+  // Real-time path. *count receives the number of detections written to out.
+  DetectionStatus run(const preprocess::PreprocessedFrame& frame, std::span<Detection> out,
+                      std::size_t* count, const GsdProvider* gsdProvider = nullptr);
+
+  const DetectionStats& stats() const { return stats_; }
+  int detectorInputWidth() const { return inputWidth_; }
+  int detectorInputHeight() const { return inputHeight_; }
+  int stridePx() const { return stridePx_; }
+
+ private:
+  bool initialised_ = false;
+  DetectionStageOptions options_{};
+  inference::Engine detector_;
+  VehicleCropper cropper_;
+  DetectionDecoder decoder_;
+  std::array<std::size_t, 4> headIndex_{};  // heatmap, offset, size, direction
+  int inputWidth_ = 0;
+  int inputHeight_ = 0;
+  int gridWidth_ = 0;
+  int gridHeight_ = 0;
+  int stridePx_ = 0;
+  int maxTiles_ = 0;
+  std::array<double, kMaxDetectionsPerFrame> gsdScratch_{};
+  DetectionStats stats_{};
+};
+
+}  // namespace vp::detection

@@ -1,0 +1,282 @@
+#include "detection/vehicle_cropper.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "geometry/rotated_box.hpp"
+
+namespace vp::detection {
+
+namespace {
+
+// cv::warpAffine's fixed point: coordinates in 1/1024 px (AB_BITS), reduced to 1/32 px
+// (INTER_BITS) with a rounding offset of half a 1/32 step; bilinear weights are products of
+// the 5-bit fractions (sum 1024), i.e. OpenCV's 15-bit table divided by 32.
+constexpr int kAffineBits = 10;
+constexpr double kAffineScale = 1 << kAffineBits;
+constexpr int kFractionBits = 5;
+constexpr int kFractionSteps = 1 << kFractionBits;
+constexpr std::int64_t kAffineRound = (1 << kAffineBits) / kFractionSteps / 2;
+constexpr int kWeightBits = 2 * kFractionBits;
+constexpr int kWeightRound = 1 << (kWeightBits - 1);
+// Keeps absurd maps (a GSD of 1e-9) inside integer range; any such point is far outside.
+constexpr double kCoordinateLimit = 1e9;
+
+std::int64_t fixedPoint(double value) {
+  return static_cast<std::int64_t>(
+      std::llrint(std::clamp(value * kAffineScale, -kCoordinateLimit, kCoordinateLimit)));
+}
+
+bool fail(std::string* why, const std::string& message) {
+  if (why != nullptr) {
+    *why = message;
+  }
+  return false;
+}
+
+bool allFinite(std::span<const float> values) {
+  return std::all_of(values.begin(), values.end(), [](float v) { return std::isfinite(v); });
+}
+
+}  // namespace
+
+const char* toString(SecondStageStatus status) {
+  switch (status) {
+    case SecondStageStatus::Ok:
+      return "ok";
+    case SecondStageStatus::NotInitialised:
+      return "crop network not loaded";
+    case SecondStageStatus::BadGsd:
+      return "ground sample distance unknown or invalid";
+    case SecondStageStatus::BadOutputs:
+      return "crop network outputs have the wrong size or are not finite";
+    case SecondStageStatus::CropFailed:
+      return "crop could not be cut (frame empty or not CV_8UC3)";
+    case SecondStageStatus::EngineFailed:
+      return "crop network run failed";
+  }
+  return "unknown";
+}
+
+CropMap cropAffine(double centreU, double centreV, double angle, double gsd_m, double cropGsd_m) {
+  const double k = cropGsd_m / gsd_m;
+  const double c = std::cos(angle);
+  const double s = std::sin(angle);
+  const double x0 = (kCropWidthPx - 1) / 2.0;
+  const double y0 = (kCropHeightPx - 1) / 2.0;
+  CropMap map;
+  map(0, 0) = k * c;
+  map(0, 1) = -k * s;
+  map(1, 0) = k * s;
+  map(1, 1) = k * c;
+  // t = centre - A (x0, y0), summed in numpy's order.
+  map(0, 2) = centreU - (map(0, 0) * x0 + map(0, 1) * y0);
+  map(1, 2) = centreV - (map(1, 0) * x0 + map(1, 1) * y0);
+  return map;
+}
+
+bool cutCrop(const cv::Mat& frame, const CropMap& map, cv::Mat& crop) {
+  if (frame.empty() || frame.type() != CV_8UC3 || crop.empty() || crop.type() != CV_8UC3) {
+    return false;
+  }
+  const int width = frame.cols;
+  const int height = frame.rows;
+  const std::size_t step = frame.step[0];
+  const std::uint8_t* data = frame.data;
+  for (int y = 0; y < crop.rows; ++y) {
+    const std::int64_t rowX = fixedPoint(map(0, 1) * y + map(0, 2)) + kAffineRound;
+    const std::int64_t rowY = fixedPoint(map(1, 1) * y + map(1, 2)) + kAffineRound;
+    std::uint8_t* out = crop.ptr<std::uint8_t>(y);
+    for (int x = 0; x < crop.cols; ++x, out += 3) {
+      const std::int64_t fx = (rowX + fixedPoint(map(0, 0) * x)) >> (kAffineBits - kFractionBits);
+      const std::int64_t fy = (rowY + fixedPoint(map(1, 0) * x)) >> (kAffineBits - kFractionBits);
+      const auto sx =
+          static_cast<int>(std::clamp<std::int64_t>(fx >> kFractionBits, INT16_MIN, INT16_MAX));
+      const auto sy =
+          static_cast<int>(std::clamp<std::int64_t>(fy >> kFractionBits, INT16_MIN, INT16_MAX));
+      const auto ax = static_cast<int>(fx & (kFractionSteps - 1));
+      const auto ay = static_cast<int>(fy & (kFractionSteps - 1));
+      const int w00 = (kFractionSteps - ax) * (kFractionSteps - ay);
+      const int w01 = ax * (kFractionSteps - ay);
+      const int w10 = (kFractionSteps - ax) * ay;
+      const int w11 = ax * ay;
+      int x0 = sx;
+      int x1 = sx + 1;
+      int y0 = sy;
+      int y1 = sy + 1;
+      if (!(static_cast<unsigned>(sx) < static_cast<unsigned>(width - 1) &&
+            static_cast<unsigned>(sy) < static_cast<unsigned>(height - 1))) {
+        // BORDER_REPLICATE: neighbours outside the frame take the nearest edge pixel.
+        x0 = std::clamp(x0, 0, width - 1);
+        x1 = std::clamp(x1, 0, width - 1);
+        y0 = std::clamp(y0, 0, height - 1);
+        y1 = std::clamp(y1, 0, height - 1);
+      }
+      const std::uint8_t* p00 =
+          data + static_cast<std::size_t>(y0) * step + static_cast<std::size_t>(x0) * 3;
+      const std::uint8_t* p01 =
+          data + static_cast<std::size_t>(y0) * step + static_cast<std::size_t>(x1) * 3;
+      const std::uint8_t* p10 =
+          data + static_cast<std::size_t>(y1) * step + static_cast<std::size_t>(x0) * 3;
+      const std::uint8_t* p11 =
+          data + static_cast<std::size_t>(y1) * step + static_cast<std::size_t>(x1) * 3;
+      for (int c = 0; c < 3; ++c) {
+        const int sum = p00[c] * w00 + p01[c] * w01 + p10[c] * w10 + p11[c] * w11;
+        out[c] = static_cast<std::uint8_t>((sum + kWeightRound) >> kWeightBits);
+      }
+    }
+  }
+  return true;
+}
+
+SecondStageStatus applyCropOutputs(const CropNetOutputs& outputs, double gsd_m,
+                                   const SecondStageOptions& options, Detection* detection) {
+  if (!(gsd_m > 0.0) || !std::isfinite(gsd_m)) {
+    return SecondStageStatus::BadGsd;
+  }
+  if (outputs.typeLogits.size() != static_cast<std::size_t>(shape::kVehicleTypeCount) ||
+      outputs.shape.size() > static_cast<std::size_t>(shape::kMaxShapeComponents) ||
+      outputs.refine.size() != static_cast<std::size_t>(kRefineCount) ||
+      !allFinite(outputs.typeLogits) || !allFinite(outputs.shape) || !allFinite(outputs.refine) ||
+      !std::isfinite(outputs.flipLogit)) {
+    return SecondStageStatus::BadOutputs;
+  }
+  Detection& d = *detection;
+
+  // Type: softmax of the logits (shifted by the largest for range).
+  const float largest = *std::max_element(outputs.typeLogits.begin(), outputs.typeLogits.end());
+  double total = 0.0;
+  std::array<double, shape::kVehicleTypeCount> e{};
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    e[t] = std::exp(static_cast<double>(outputs.typeLogits[t]) - static_cast<double>(largest));
+    total += e[t];
+  }
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    d.typeProbabilities[t] = static_cast<float>(e[t] / total);
+  }
+
+  // Shape: the ASM describes cars; a vehicle most likely Large gets none.
+  d.gamma = shape::ShapeParams{};
+  const bool large = topTwoTypes(d).first == shape::VehicleType::Large;
+  if (!large || options.shapeForLargeVehicles) {
+    d.gamma.count = static_cast<int>(outputs.shape.size());
+    std::copy(outputs.shape.begin(), outputs.shape.end(), d.gamma.gamma.begin());
+  }
+
+  // Refinement in the crop frame of the first-stage pose (inverse of crops.refine_target).
+  const double angle0 = d.box.angle;
+  double angle = angle0;
+  if (options.applyRefine) {
+    std::array<double, kRefineCount> r{};
+    for (int i = 0; i < kRefineCount; ++i) {
+      r[i] = static_cast<double>(outputs.refine[i]) * kRefineScale[i] + kRefineOffset[i];
+    }
+    const double c = std::cos(angle0);
+    const double s = std::sin(angle0);
+    d.box.cx += (c * r[0] - s * r[1]) / gsd_m;
+    d.box.cy += (s * r[0] + c * r[1]) / gsd_m;
+    angle += r[2];
+    if (r[3] > 0.0 && r[4] > 0.0) {
+      d.box.length = r[3] / gsd_m;
+      d.box.width = r[4] / gsd_m;
+    }
+  }
+
+  // Front/back: logit > 0 <=> probability > 0.5 (Predictor's rule).
+  d.flipProbability =
+      static_cast<float>(1.0 / (1.0 + std::exp(-static_cast<double>(outputs.flipLogit))));
+  if (options.applyFlip && outputs.flipLogit > 0.0F) {
+    angle += geometry::kPi;
+  }
+  d.box.angle = geometry::wrapTwoPi(angle);
+  return SecondStageStatus::Ok;
+}
+
+bool VehicleCropper::init(const std::string& cropModelPath,
+                          const inference::EngineOptions& engineOptions,
+                          const SecondStageOptions& options, std::string* why) {
+  std::string detail;
+  if (!engine_.load(cropModelPath, engineOptions, &detail)) {
+    return fail(why, "crop model: " + detail);
+  }
+  const inference::TensorShape input = engine_.inputShape();
+  if (input.h != kCropHeightPx || input.w != kCropWidthPx || input.c != 3) {
+    return fail(why, cropModelPath + ": input is " + std::to_string(input.c) + "x" +
+                         std::to_string(input.h) + "x" + std::to_string(input.w) +
+                         ", the crop network needs 3x" + std::to_string(kCropHeightPx) + "x" +
+                         std::to_string(kCropWidthPx));
+  }
+  struct Wanted {
+    const char* name;
+    std::size_t* index;
+    int minChannels;
+    int maxChannels;
+  };
+  const Wanted wanted[] = {
+      {"type_logits", &typeIndex_, shape::kVehicleTypeCount, shape::kVehicleTypeCount},
+      {"shape", &shapeIndex_, 0, shape::kMaxShapeComponents},
+      {"flip_logit", &flipIndex_, 1, 1},
+      {"refine", &refineIndex_, kRefineCount, kRefineCount},
+  };
+  for (const Wanted& w : wanted) {
+    bool found = false;
+    for (std::size_t i = 0; i < engine_.outputCount(); ++i) {
+      const inference::OutputTensor& out = engine_.output(i);
+      if (out.name != w.name) {
+        continue;
+      }
+      if (out.shape.h != 1 || out.shape.w != 1 || out.shape.c < w.minChannels ||
+          out.shape.c > w.maxChannels) {
+        return fail(why, cropModelPath + ": output '" + w.name + "' is " +
+                             std::to_string(out.shape.c) + "x" + std::to_string(out.shape.h) + "x" +
+                             std::to_string(out.shape.w) + ", expected " +
+                             std::to_string(w.minChannels) +
+                             (w.maxChannels != w.minChannels ? ".." + std::to_string(w.maxChannels)
+                                                             : std::string()) +
+                             " channels x 1 x 1");
+      }
+      *w.index = i;
+      found = true;
+    }
+    if (!found) {
+      return fail(why, cropModelPath + ": no output named '" + w.name +
+                           "' (the crop network needs type_logits, shape, flip_logit, refine)");
+    }
+  }
+  shapeCount_ = engine_.output(shapeIndex_).shape.c;
+  options_ = options;
+  crop_.create(kCropHeightPx, kCropWidthPx, CV_8UC3);
+  crop_.setTo(cv::Scalar::all(0));
+  return true;
+}
+
+SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
+                                           Detection* detection) {
+  if (!initialised()) {
+    return SecondStageStatus::NotInitialised;
+  }
+  if (!(gsd_m > 0.0) || !std::isfinite(gsd_m)) {
+    return SecondStageStatus::BadGsd;
+  }
+  const geometry::RotatedBox& box = detection->box;
+  if (!cutCrop(frame, cropAffine(box.cx, box.cy, box.angle, gsd_m), crop_)) {
+    return SecondStageStatus::CropFailed;
+  }
+  const inference::ImageView view{crop_.data, crop_.cols, crop_.rows, crop_.step[0]};
+  if (engine_.run(view) != inference::RunStatus::Ok) {
+    return SecondStageStatus::EngineFailed;
+  }
+  auto values = [this](std::size_t index) {
+    const inference::OutputTensor& out = engine_.output(index);
+    return std::span<const float>(out.data, out.shape.elements());
+  };
+  CropNetOutputs outputs;
+  outputs.typeLogits = values(typeIndex_);
+  outputs.shape = values(shapeIndex_);
+  outputs.flipLogit = values(flipIndex_)[0];
+  outputs.refine = values(refineIndex_);
+  return applyCropOutputs(outputs, gsd_m, options_, detection);
+}
+
+}  // namespace vp::detection

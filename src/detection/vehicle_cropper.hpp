@@ -1,0 +1,114 @@
+// detection/vehicle_cropper: the second stage - a rotated, direction-aligned crop of the
+// full-resolution frame around each detection, the crop network on it, and its outputs
+// (type, ASM shape, front/back flip, box refinement) applied to the detection.
+//
+// Contract (Python reference: tools/detector/crops.py and evaluate.Predictor.run_crops;
+// tools/detector/model.py for the output meanings):
+//  - cropAffine() is crops.crop_affine: crop pixel (x, y) -> frame pixel
+//      (u, v) = (cu, cv) + k R(angle) (x - (W - 1) / 2, y - (H - 1) / 2),  k = 0.06 / gsd_m,
+//    W x H = 96 x 48, so the crop's +x is the box's forward axis and +y the vehicle's right.
+//  - cutCrop() samples the frame through that map exactly as cv2.warpAffine(...,
+//    INTER_LINEAR | WARP_INVERSE_MAP, BORDER_REPLICATE) does (same fixed-point coordinates
+//    and weights: bit-identical crops), without allocating.
+//  - applyCropOutputs(): typeProbabilities = softmax(type_logits); gamma = shape (n_s values;
+//    count 0 for a vehicle whose most likely type is Large unless shapeForLargeVehicles: the
+//    ASM describes cars only); flipProbability = sigmoid(flip_logit) and, when > 0.5
+//    (logit > 0, Predictor's rule), angle += pi; refine = raw * kRefineScale + kRefineOffset =
+//    (du_m, dv_m, d_angle, length_m, width_m) in the crop frame of the first-stage pose
+//    (x forward, y right): centre += R(angle0) (du, dv) / gsd, angle += d_angle, length and
+//    width = metres / gsd - the inverse of crops.refine_target (the Python Predictor returns
+//    refine without applying it). Non-finite or non-positive refined sizes keep the
+//    first-stage values.
+//  - VehicleCropper owns the crop engine and one crop buffer; classify() runs one detection
+//    (the engine is batch 1) with no heap allocation.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <span>
+#include <string>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "detection/detection.hpp"
+#include "inference/engine.hpp"
+
+namespace vp::detection {
+
+constexpr int kCropWidthPx = 96;     // model.CROP_W
+constexpr int kCropHeightPx = 48;    // model.CROP_H
+constexpr double kCropGsd_m = 0.06;  // model.CROP_GSD_M, metres per crop pixel
+constexpr int kRefineCount = 5;      // du_m, dv_m, d_angle_rad, length_m, width_m
+// model.REFINE_SCALE / REFINE_OFFSET: refine = raw * scale + offset.
+constexpr std::array<double, kRefineCount> kRefineScale{0.5, 0.5, 0.2, 1.0, 1.0};
+constexpr std::array<double, kRefineCount> kRefineOffset{0.0, 0.0, 0.0, 4.5, 1.8};
+
+// 2 x 3 affine map crop pixel -> frame pixel.
+using CropMap = Eigen::Matrix<double, 2, 3>;
+CropMap cropAffine(double centreU, double centreV, double angle, double gsd_m,
+                   double cropGsd_m = kCropGsd_m);
+
+// frame: CV_8UC3; crop: preallocated CV_8UC3 (any size; 48 x 96 for the CropNet). False (and
+// nothing written) on a wrong type or an empty image.
+bool cutCrop(const cv::Mat& frame, const CropMap& map, cv::Mat& crop);
+
+// Raw CropNet outputs of one crop.
+struct CropNetOutputs {
+  std::span<const float> typeLogits;  // shape::kVehicleTypeCount
+  std::span<const float> shape;       // n_s <= shape::kMaxShapeComponents
+  float flipLogit = 0.0F;
+  std::span<const float> refine;  // kRefineCount (raw, before scale/offset)
+};
+
+struct SecondStageOptions {
+  bool applyFlip = true;               // turn the heading by 180 deg when flip prob > 0.5
+  bool applyRefine = true;             // centre/axis/size refinement (see the contract)
+  bool shapeForLargeVehicles = false;  // keep gamma when the top type is Large
+};
+
+enum class SecondStageStatus {
+  Ok,
+  NotInitialised,
+  BadGsd,      // GSD not finite or <= 0: the crop scale is unknown
+  BadOutputs,  // output sizes wrong or values not finite
+  CropFailed,  // frame not CV_8UC3 or empty
+  EngineFailed,
+};
+const char* toString(SecondStageStatus status);
+
+// Applies one crop's outputs to the detection whose box was the crop pose (see contract).
+SecondStageStatus applyCropOutputs(const CropNetOutputs& outputs, double gsd_m,
+                                   const SecondStageOptions& options, Detection* detection);
+
+class VehicleCropper {
+ public:
+  VehicleCropper() = default;
+  VehicleCropper(const VehicleCropper&) = delete;
+  VehicleCropper& operator=(const VehicleCropper&) = delete;
+
+  // Start-up: loads the crop model (input 1 x 3 x 48 x 96; outputs type_logits 7, shape n_s,
+  // flip_logit 1, refine 5, each 1 x 1) and checks its interface; *why names the file and the
+  // offending output.
+  bool init(const std::string& cropModelPath, const inference::EngineOptions& engineOptions,
+            const SecondStageOptions& options, std::string* why = nullptr);
+  bool initialised() const { return engine_.loaded(); }
+
+  // Real-time: crop at the detection's box with gsd_m, run the network, apply its outputs.
+  SecondStageStatus classify(const cv::Mat& frame, double gsd_m, Detection* detection);
+
+  const cv::Mat& lastCrop() const { return crop_; }  // diagnostics and tests
+  int shapeCount() const { return shapeCount_; }
+
+ private:
+  inference::Engine engine_;
+  SecondStageOptions options_{};
+  cv::Mat crop_;
+  std::size_t typeIndex_ = 0;
+  std::size_t shapeIndex_ = 0;
+  std::size_t flipIndex_ = 0;
+  std::size_t refineIndex_ = 0;
+  int shapeCount_ = 0;
+};
+
+}  // namespace vp::detection

@@ -1,0 +1,112 @@
+// perception/detection_lifter: one frame's image detections placed in the world.
+//
+// Contract: DetectionLifter::liftFrame() takes the frame's capture time, the pose status and
+// drone pose at that time (telemetry::PoseBuffer::poseAt), the Lifter whose camera model is
+// the one of the frame the detections are in (the pinhole of the undistorted frame when the
+// pipeline undistorts, else the raw lens model), and the detections, and fills one
+// VehicleObservation per detection in a caller-owned array. Every detection is kept, in
+// order: its image-space values are always copied, and its world values are filled only when
+// liftStatus is Ok. A missing, stale or invalid pose, a box that is not finite or not
+// positive, or a ray that misses the lens field or the DTM gives the matching status and
+// leaves the world values zero: never a made-up position. For a lifted detection: the ground
+// footprint (Lifter::boxToGround: the four box corners and the box centre intersected with
+// the DTM; the centre is the vehicle's position; the width is taken across the lifted forward
+// axis, which perspective skew would otherwise inflate), the most likely type's geometry
+// (shape/vehicle_geometry: ASM keypoints scaled in plan to the footprint, standing on the
+// DTM) and the rear-axle reference point of seed 002 in ENU and WGS84. Keypoints or the rear
+// axle whose ground lies off the DTM are left out (hasKeypoints / hasRearAxle false) while
+// the footprint stays lifted. The terrain, frame and ASM given to init() must be the ones the
+// Lifter was built with; all are borrowed and must outlive the DetectionLifter.
+// liftFrame() is const, never allocates and never throws.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "detection/detection.hpp"
+#include "geodesy/geodesy.hpp"
+#include "lifting/lifting.hpp"
+#include "shape/vehicle_geometry.hpp"
+#include "shape/vehicle_model.hpp"
+#include "telemetry/pose_buffer.hpp"
+#include "terrain/terrain_model.hpp"
+
+namespace vp::perception {
+
+enum class LiftStatus : std::uint8_t {
+  Ok,
+  NoPose,          // no telemetry at the frame's time
+  StalePose,       // nearest telemetry sample older than the buffer's max age
+  InvalidPose,     // telemetry rejected (NaN/inf, zero quaternion) or the pose is unusable
+  InvalidBox,      // the detection's box is not finite or has a size <= 0
+  OutsideLens,     // a box point lies beyond the lens model's valid field
+  BehindCamera,    // (projection only) a point behind the image plane
+  OutsideDtm,      // a viewing ray meets the ground off the DTM
+  NoData,          // a viewing ray meets the DTM where it has no data
+  NoIntersection,  // a viewing ray points above the horizon or leaves the DTM first
+};
+const char* toString(LiftStatus status);
+LiftStatus liftStatusFrom(lifting::LiftError error);
+LiftStatus liftStatusFrom(telemetry::PoseStatus status);  // Ok -> Ok
+
+struct VehicleObservation {
+  std::int64_t timestampNs = 0;      // frame capture time
+  detection::Detection detection{};  // the image-space detection, copied
+  LiftStatus liftStatus = LiftStatus::NoPose;
+  // World values: set only when liftStatus is Ok, zero otherwise.
+  lifting::GroundBox ground{};  // footprint centre (ENU, WGS84), corners, heading, size
+  shape::VehicleType type = shape::VehicleType::Sedan;  // most likely type (shape source)
+  double heightM = 0.0;                                 // ASM shape height, m (0 without keypoints)
+  bool hasKeypoints = false;                            // a car shape stood on the DTM
+  shape::KeypointModel keypointsEnu = shape::KeypointModel::Zero();  // world ENU, m
+  bool hasRearAxle = false;
+  Eigen::Vector3d rearAxleEnu = Eigen::Vector3d::Zero();  // seed 002 reference point, m
+  geodesy::GeodeticPoint rearAxleWgs84{};
+};
+
+// What a frame's lift did.
+struct FrameLiftSummary {
+  LiftStatus poseStatus = LiftStatus::NoPose;  // Ok when the camera pose was computed
+  lifting::CameraPoseWorld cameraPose{};       // valid when poseStatus is Ok
+  std::size_t written = 0;  // observations filled (min of detections and capacity)
+  std::size_t lifted = 0;   // of those, with liftStatus Ok
+  std::size_t dropped = 0;  // detections beyond the output's capacity
+};
+
+// The most likely type of a detection and its probability (first on ties).
+shape::VehicleType mostLikelyType(const detection::Detection& detection, float* probability);
+
+lifting::DronePose toDronePose(const telemetry::PoseSample& sample);
+
+class DetectionLifter {
+ public:
+  DetectionLifter() = default;
+
+  // Borrows the terrain and the world frame the Lifters are built with, and the ASM.
+  bool init(const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
+            const shape::ActiveShapeModel& shapeModel, std::string* why = nullptr);
+
+  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+                             telemetry::PoseStatus poseStatus, const lifting::DronePose& pose,
+                             std::span<const detection::Detection> detections,
+                             std::span<VehicleObservation> out) const;
+  // The same with the buffer's estimate (its pose is used only when its status is Ok).
+  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+                             const telemetry::PoseEstimate& pose,
+                             std::span<const detection::Detection> detections,
+                             std::span<VehicleObservation> out) const;
+
+ private:
+  void liftOne(const lifting::Lifter& lifter, const lifting::CameraPoseWorld& cameraPose,
+               VehicleObservation& observation) const;
+
+  const terrain::TerrainModel* terrain_ = nullptr;
+  const geodesy::LocalFrame* frame_ = nullptr;
+  const shape::ActiveShapeModel* shapeModel_ = nullptr;
+};
+
+}  // namespace vp::perception

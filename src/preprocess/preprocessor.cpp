@@ -1,0 +1,243 @@
+#include "preprocess/preprocessor.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace vp::preprocess {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+bool fail(std::string* why, const std::string& message) {
+  if (why != nullptr) {
+    *why = "preprocess: " + message;
+  }
+  return false;
+}
+
+bool overlaps(const cv::Mat& a, const cv::Mat& b) {
+  return !a.empty() && !b.empty() && a.datastart < b.dataend && b.datastart < a.dataend;
+}
+
+}  // namespace
+
+const char* toString(PreprocessStatus status) {
+  switch (status) {
+    case PreprocessStatus::Ok:
+      return "ok";
+    case PreprocessStatus::NotInitialised:
+      return "not initialised";
+    case PreprocessStatus::EmptyFrame:
+      return "empty frame";
+    case PreprocessStatus::WrongFrameType:
+      return "wrong frame type";
+    case PreprocessStatus::WrongFrameSize:
+      return "wrong frame size";
+    case PreprocessStatus::FrameIsOutput:
+      return "frame is the preprocessor's own buffer";
+  }
+  return "unknown";
+}
+
+bool validate(const PreprocessOptions& options, std::string* why) {
+  if (!(options.workingScale > 0.0 && options.workingScale <= 1.0)) {
+    return fail(why,
+                "working_scale: must be in (0, 1], got " + std::to_string(options.workingScale));
+  }
+  if (options.networkWidthPx < 32 || options.networkHeightPx < 32) {
+    return fail(why, "network input: must be >= 32 x 32 px, got " +
+                         std::to_string(options.networkWidthPx) + " x " +
+                         std::to_string(options.networkHeightPx));
+  }
+  const int smallerSide = std::min(options.networkWidthPx, options.networkHeightPx);
+  if (options.tileOverlapPx < 0 || options.tileOverlapPx >= smallerSide / 2) {
+    return fail(why, "tile_overlap_px: must be in [0, " + std::to_string(smallerSide / 2) +
+                         ") (half the network input), got " +
+                         std::to_string(options.tileOverlapPx));
+  }
+  if (options.padValue < 0 || options.padValue > 255) {
+    return fail(why, "pad_value: must be in [0, 255], got " + std::to_string(options.padValue));
+  }
+  if (options.threads < 1 || options.threads > 16) {
+    return fail(why, "threads: must be in [1, 16], got " + std::to_string(options.threads));
+  }
+  std::string detail;
+  if (options.whiteBalance && !validate(options.whiteBalanceOptions, &detail)) {
+    return fail(why, detail);
+  }
+  return true;
+}
+
+bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraModel& camera,
+                        cv::Size frameSize, std::string* why) {
+  initialised_ = false;
+  if (!validate(options, why)) {
+    return false;
+  }
+  const camera::Intrinsics& k = camera.intrinsics();
+  if (frameSize.width <= 0 || frameSize.height <= 0) {
+    return fail(why, "frame size must be > 0, got " + std::to_string(frameSize.width) + "x" +
+                         std::to_string(frameSize.height));
+  }
+  if (k.widthPx != frameSize.width || k.heightPx != frameSize.height) {
+    return fail(why, "frame size " + std::to_string(frameSize.width) + "x" +
+                         std::to_string(frameSize.height) + " differs from the camera model's " +
+                         std::to_string(k.widthPx) + "x" + std::to_string(k.heightPx) +
+                         " (calibrate at the capture resolution)");
+  }
+  std::string detail;
+  if (!parallel_.init(options.threads, &detail)) {
+    return fail(why, detail);
+  }
+
+  // 1. Undistortion: only when the lens is not already a pinhole.
+  remapActive_ = options.undistort && camera.distortion().model != camera::LensModel::Pinhole;
+  frameCamera_ = camera;
+  if (remapActive_) {
+    if (!remap_.init(camera, k, &detail)) {
+      return fail(why, detail);
+    }
+    if (!frameCamera_.init(k, camera::Distortion{}, &detail)) {
+      return fail(why, "undistorted camera: " + detail);
+    }
+  }
+  if (remapActive_ || options.whiteBalance) {
+    corrected_.create(frameSize, CV_8UC3);
+    corrected_.setTo(cv::Scalar::all(0));
+  } else {
+    corrected_.release();
+  }
+
+  // 2. White balance.
+  if (options.whiteBalance && !balancer_.init(options.whiteBalanceOptions, frameSize, &detail)) {
+    return fail(why, detail);
+  }
+
+  // 3. Working image: Python's int(round(w * s)) (half to even), padded to the network input.
+  FrameGeometry geometry;
+  geometry.frameWidthPx = frameSize.width;
+  geometry.frameHeightPx = frameSize.height;
+  geometry.workingWidthPx =
+      std::max(1, static_cast<int>(std::nearbyint(frameSize.width * options.workingScale)));
+  geometry.workingHeightPx =
+      std::max(1, static_cast<int>(std::nearbyint(frameSize.height * options.workingScale)));
+  geometry.scaleX = static_cast<double>(geometry.workingWidthPx) / frameSize.width;
+  geometry.scaleY = static_cast<double>(geometry.workingHeightPx) / frameSize.height;
+  const cv::Size content(geometry.workingWidthPx, geometry.workingHeightPx);
+  if (!resizer_.init(frameSize, content, parallel_.slots(), &detail)) {
+    return fail(why, detail);
+  }
+  working_.create(std::max(content.height, options.networkHeightPx),
+                  std::max(content.width, options.networkWidthPx), CV_8UC3);
+  working_.setTo(cv::Scalar::all(options.padValue));
+  workingContent_ = working_(cv::Rect(0, 0, content.width, content.height));
+
+  // 4. Tiles.
+  std::array<TileRect, kMaxTiles> rects{};
+  tileCount_ = layoutTiles(content.width, content.height, options.networkWidthPx,
+                           options.networkHeightPx, options.tileOverlapPx, rects);
+  if (tileCount_ == 0) {
+    const int nx = tilesAlongAxis(content.width, options.networkWidthPx, options.tileOverlapPx);
+    const int ny = tilesAlongAxis(content.height, options.networkHeightPx, options.tileOverlapPx);
+    return fail(why, "working image " + std::to_string(content.width) + "x" +
+                         std::to_string(content.height) + " needs " + std::to_string(nx) + " x " +
+                         std::to_string(ny) + " tiles, more than " + std::to_string(kMaxTiles) +
+                         ": lower working_scale or raise tile sizes");
+  }
+  for (std::size_t i = 0; i < tileCount_; ++i) {
+    TileView& tile = tiles_[i];
+    tile.rect = rects[i];
+    tile.index = static_cast<int>(i);
+    tile.data =
+        working_.ptr<std::uint8_t>(rects[i].y0Px) + static_cast<std::size_t>(rects[i].x0Px) * 3;
+    tile.strideBytes = working_.step[0];
+  }
+
+  options_ = options;
+  frameSize_ = frameSize;
+  output_ = PreprocessedFrame{};
+  output_.geometry = geometry;
+  output_.tiles = std::span<const TileView>(tiles_.data(), tileCount_);
+  lastError_[0] = '\0';
+  initialised_ = true;
+  return true;
+}
+
+PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
+  char* message = lastError_.data();
+  const std::size_t size = lastError_.size();
+  if (!initialised_) {
+    std::snprintf(message, size, "preprocess: init() has not succeeded");
+    return PreprocessStatus::NotInitialised;
+  }
+  if (bgrFrame.empty() || bgrFrame.data == nullptr) {
+    std::snprintf(message, size, "preprocess: empty frame (expected %dx%d, CV_8UC3)",
+                  frameSize_.width, frameSize_.height);
+    return PreprocessStatus::EmptyFrame;
+  }
+  if (bgrFrame.type() != CV_8UC3 || bgrFrame.dims != 2) {
+    std::snprintf(message, size,
+                  "preprocess: frame has %d channel(s) of OpenCV depth %d, expected 3 x 8 bit "
+                  "(CV_8UC3, BGR)",
+                  bgrFrame.channels(), bgrFrame.depth());
+    return PreprocessStatus::WrongFrameType;
+  }
+  if (bgrFrame.cols != frameSize_.width || bgrFrame.rows != frameSize_.height) {
+    std::snprintf(message, size, "preprocess: frame is %dx%d, expected %dx%d", bgrFrame.cols,
+                  bgrFrame.rows, frameSize_.width, frameSize_.height);
+    return PreprocessStatus::WrongFrameSize;
+  }
+  if (overlaps(bgrFrame, corrected_) || overlaps(bgrFrame, working_)) {
+    std::snprintf(message, size,
+                  "preprocess: the frame shares memory with the preprocessor's own output");
+    return PreprocessStatus::FrameIsOutput;
+  }
+  lastError_[0] = '\0';
+  const Clock::time_point start = Clock::now();
+  const cv::Mat* current = &bgrFrame;
+
+  if (remapActive_) {
+    auto body = [&](int begin, int end, int /*slot*/) {
+      remap_.applyRows(bgrFrame, corrected_, begin, end);
+    };
+    parallel_.run(frameSize_.height, body);
+    current = &corrected_;
+  }
+  const Clock::time_point undistorted = Clock::now();
+  output_.timings.undistort_ms =
+      std::chrono::duration<double, std::milli>(undistorted - start).count();
+
+  if (options_.whiteBalance) {
+    output_.whiteBalance = balancer_.estimate(*current);
+    balancer_.setGains(output_.whiteBalance);
+    const cv::Mat& source = *current;
+    auto body = [&](int begin, int end, int /*slot*/) {
+      balancer_.applyRows(source, corrected_, begin, end);
+    };
+    parallel_.run(frameSize_.height, body);
+    current = &corrected_;
+  } else {
+    output_.whiteBalance = WhiteBalanceGains{};
+  }
+  const Clock::time_point balanced = Clock::now();
+  output_.timings.whiteBalance_ms =
+      std::chrono::duration<double, std::milli>(balanced - undistorted).count();
+
+  const cv::Mat& source = *current;
+  auto resizeBody = [&](int begin, int end, int slot) {
+    resizer_.applyRows(source, workingContent_, begin, end, slot);
+  };
+  parallel_.run(workingContent_.rows, resizeBody);
+  output_.timings.resize_ms = millisecondsSince(balanced);
+  output_.timings.total_ms = millisecondsSince(start);
+  output_.frame = source;  // header copy: no allocation
+  return PreprocessStatus::Ok;
+}
+
+}  // namespace vp::preprocess

@@ -1,0 +1,153 @@
+// preprocess/preprocessor: turns one camera frame into the corrected full-resolution frame and
+// the detector's input tiles at the working resolution, in memory fixed at init().
+//
+// Contract (per frame, in this order; docs/perception.md):
+//  1. undistortion (optional; skipped for a pinhole camera): the BGR frame is remapped
+//     through a precomputed fixed-point map (FrameRemap) into an owned buffer; frameCamera()
+//     is then the pinhole camera of that undistorted frame (same intrinsics, no distortion),
+//     which is what lifting must use for the detections' pixels;
+//  2. white balance (optional; seed 001's near-white points, WhiteBalancer): gains estimated
+//     on this frame and applied to the full-resolution frame (into the owned buffer; the
+//     caller's frame is never written);
+//  3. area downscale by workingScale (AreaResizer, = cv::resize INTER_AREA) into the working
+//     image, whose padding right/bottom (to at least the network input) holds padValue;
+//  4. tiles of the network input size over the working image (tiling.hpp): one tile when the
+//     scaled frame fits, else overlapping tiles, each a view with its offset.
+// process() returns a status and never throws: an empty frame, a type other than CV_8UC3, a
+// size other than the one given to init(), or the preprocessor's own output passed back in
+// are refused with lastError() naming what was wrong. After init() it performs no heap
+// allocation. Results (output()) stay valid until the next process(); when neither correction
+// runs, output().frame is a view of the caller's frame, which must then outlive its use.
+// Not thread-safe; `threads` > 1 splits the row loops over an owned pool.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "camera/camera_model.hpp"
+#include "preprocess/area_resizer.hpp"
+#include "preprocess/frame_remap.hpp"
+#include "preprocess/row_parallel.hpp"
+#include "preprocess/tiling.hpp"
+#include "preprocess/white_balance.hpp"
+
+namespace vp::preprocess {
+
+// Most tiles one frame may be cut into (fixed memory downstream).
+constexpr int kMaxTiles = 64;
+// Default working scale: the 2592 px wide camera frame to 648 px (~12 cm/px at 90 m), the
+// resolution the detector is trained at (tools/detector/README.md).
+constexpr double kDefaultWorkingScale = 648.0 / 2592.0;
+
+struct PreprocessOptions {
+  bool undistort = true;      // remove lens distortion (no-op for a pinhole camera)
+  bool whiteBalance = false;  // seed 001 AWB (the detector is trained without it)
+  WhiteBalanceOptions whiteBalanceOptions{};
+  double workingScale = kDefaultWorkingScale;  // working px per frame px, (0, 1]
+  int networkWidthPx = 672;                    // detector input (must equal the model's input)
+  int networkHeightPx = 512;
+  int tileOverlapPx = 96;  // working px, >= the longest vehicle at the working scale
+  int padValue = 128;      // 8-bit grey of the padding (the networks' mean: input 0)
+  int threads = 1;         // row-loop threads (1 = the caller's thread)
+};
+
+// Checks ranges; false with a message naming the option otherwise.
+bool validate(const PreprocessOptions& options, std::string* why);
+
+// Frame <-> working pixels (pixel-centre convention, docs/conventions.md):
+// working = (frame + 0.5) * scale - 0.5, as tools/detector/evaluate.py maps detections back.
+struct FrameGeometry {
+  int frameWidthPx = 0;
+  int frameHeightPx = 0;
+  int workingWidthPx = 0;  // round(frame * workingScale): the scaled content, no padding
+  int workingHeightPx = 0;
+  double scaleX = 1.0;  // workingWidthPx / frameWidthPx
+  double scaleY = 1.0;
+  double workingToFrameU(double u) const { return (u + 0.5) / scaleX - 0.5; }
+  double workingToFrameV(double v) const { return (v + 0.5) / scaleY - 0.5; }
+};
+
+// One detector input: a network-sized window of the working image.
+struct TileView {
+  const std::uint8_t* data = nullptr;  // BGR interleaved, first pixel of the tile
+  std::size_t strideBytes = 0;         // bytes between rows
+  TileRect rect{};                     // placement in the working image, inner edges
+  int index = 0;
+};
+
+struct PreprocessTimings {
+  double undistort_ms = 0.0;
+  double whiteBalance_ms = 0.0;  // estimate + apply
+  double resize_ms = 0.0;
+  double total_ms = 0.0;
+};
+
+struct PreprocessedFrame {
+  cv::Mat frame;  // corrected full-resolution BGR frame (detections live in its pixels)
+  FrameGeometry geometry{};
+  std::span<const TileView> tiles;
+  WhiteBalanceGains whiteBalance{};  // gains of this frame (found = false when AWB is off)
+  PreprocessTimings timings{};
+};
+
+enum class PreprocessStatus {
+  Ok,
+  NotInitialised,
+  EmptyFrame,
+  WrongFrameType,  // not 8-bit, 3 channels
+  WrongFrameSize,  // not the size given to init()
+  FrameIsOutput,   // the frame aliases the preprocessor's own buffer
+};
+const char* toString(PreprocessStatus status);
+
+class Preprocessor {
+ public:
+  Preprocessor() = default;
+  Preprocessor(const Preprocessor&) = delete;
+  Preprocessor& operator=(const Preprocessor&) = delete;
+
+  // Start-up: validates the options, checks that frameSize equals the camera model's image
+  // size, builds the undistortion map, the resize tables and the tile layout, and allocates
+  // every buffer. False with *why naming the problem.
+  bool init(const PreprocessOptions& options, const camera::CameraModel& camera, cv::Size frameSize,
+            std::string* why = nullptr);
+  bool initialised() const { return initialised_; }
+
+  // Real-time path: no allocation, no exceptions.
+  PreprocessStatus process(const cv::Mat& bgrFrame);
+
+  const PreprocessedFrame& output() const { return output_; }
+  // The camera of output().frame: pinhole when undistortion runs, else the input camera.
+  const camera::CameraModel& frameCamera() const { return frameCamera_; }
+  const PreprocessOptions& options() const { return options_; }
+  std::size_t tileCount() const { return tileCount_; }
+  bool undistorts() const { return remapActive_; }
+  // Message of the last refused frame ("" after a good one).
+  const char* lastError() const { return lastError_.data(); }
+
+ private:
+  bool initialised_ = false;
+  bool remapActive_ = false;
+  PreprocessOptions options_{};
+  camera::CameraModel frameCamera_{};
+  cv::Size frameSize_{};
+  FrameRemap remap_{};
+  WhiteBalancer balancer_{};
+  AreaResizer resizer_{};
+  RowParallel parallel_{};
+  cv::Mat corrected_;       // owned full-resolution frame (undistortion / white balance output)
+  cv::Mat working_;         // working image incl. padding
+  cv::Mat workingContent_;  // view: the scaled frame inside working_
+  std::array<TileView, kMaxTiles> tiles_{};
+  std::size_t tileCount_ = 0;
+  PreprocessedFrame output_{};
+  std::array<char, 200> lastError_{};
+};
+
+}  // namespace vp::preprocess

@@ -1,0 +1,761 @@
+#include "sequence/detections_file.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <utility>
+
+namespace vp::sequence {
+namespace {
+
+constexpr double kProbabilitySumTolerance = 1e-3;  // |sum p - 1| allowed (float rounding)
+constexpr std::size_t kRowBufferBytes = 4096;      // > the longest row (~42 fields * 26 + stem)
+constexpr std::size_t kIoBufferBytes = 64 * 1024;  // stdio buffer: a few hundred rows
+
+constexpr std::array<const char*, kLiftStatusCount> kLiftStatusWords{
+    "ok",           "not_lifted",    "no_pose",     "stale_pose", "invalid_pose",   "invalid_box",
+    "outside_lens", "behind_camera", "outside_dtm", "no_data",    "no_intersection"};
+
+constexpr std::array<const char*, shape::kVehicleTypeCount> kProbabilityColumns{
+    "p_estate", "p_compact", "p_sports", "p_sedan", "p_suv", "p_van", "p_large"};
+constexpr std::array<const char*, 10> kWorldColumns{
+    "east_m",   "north_m",         "up_m",     "lat_deg", "lon_deg",
+    "height_m", "heading_enu_rad", "length_m", "width_m", "height_m_vehicle"};
+
+// Column layout of one file: fixed head, 7 probabilities, n gamma, lift status, world tail.
+struct Layout {
+  int gammaColumns = 0;
+  static constexpr int kKey = 0;
+  static constexpr int kDetId = 1;
+  static constexpr int kScore = 2;
+  static constexpr int kBox = 3;  // cx, cy, length, width, angle
+  static constexpr int kDirection = 8;
+  static constexpr int kType = 9;
+  static constexpr int kProbabilities = 10;
+  static constexpr int kGamma = kProbabilities + shape::kVehicleTypeCount;
+  int liftStatus() const { return kGamma + gammaColumns; }
+  int world() const { return liftStatus() + 1; }
+  int count() const { return world() + static_cast<int>(kWorldColumns.size()); }
+};
+
+// A problem found in a record, without allocating: the column and a static description.
+struct Problem {
+  int column = -1;
+  const char* what = "";
+};
+
+bool finite(double value) {
+  return std::isfinite(value);
+}
+
+// Semantic checks shared by the writer (before formatting) and the reader (after parsing).
+std::optional<Problem> checkRecord(const DetectionRecord& r, DetectionsKey key, int gammaColumns) {
+  const Layout layout{gammaColumns};
+  if (key == DetectionsKey::FrameId && r.frameId < 0) {
+    return Problem{Layout::kKey, "must be >= 0"};
+  }
+  if (key == DetectionsKey::Image) {
+    const std::string_view stem = r.imageStem();
+    if (stem.empty()) {
+      return Problem{Layout::kKey, "empty image stem"};
+    }
+    if (stem.find_first_of(",\"\n\r") != std::string_view::npos) {
+      return Problem{Layout::kKey, "image stem holds a comma, quote or line break"};
+    }
+  }
+  if (r.detId < 0) {
+    return Problem{Layout::kDetId, "must be >= 0"};
+  }
+  if (!(r.score >= 0.0F && r.score <= 1.0F)) {
+    return Problem{Layout::kScore, "must be in [0, 1]"};
+  }
+  if (!finite(r.box.cx)) {
+    return Problem{Layout::kBox, "not finite"};
+  }
+  if (!finite(r.box.cy)) {
+    return Problem{Layout::kBox + 1, "not finite"};
+  }
+  if (!(r.box.length > 0.0 && finite(r.box.length))) {
+    return Problem{Layout::kBox + 2, "must be > 0 and finite"};
+  }
+  if (!(r.box.width > 0.0 && finite(r.box.width))) {
+    return Problem{Layout::kBox + 3, "must be > 0 and finite"};
+  }
+  if (!(r.box.angle >= 0.0 && r.box.angle < geometry::kTwoPi)) {
+    return Problem{Layout::kBox + 4, "must be in [0, 2 pi)"};
+  }
+  double sum = 0.0;
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    const float p = r.typeProbabilities[static_cast<std::size_t>(t)];
+    if (!(p >= 0.0F && p <= 1.0F)) {
+      return Problem{Layout::kProbabilities + t, "must be in [0, 1]"};
+    }
+    sum += static_cast<double>(p);
+  }
+  if (std::abs(sum - 1.0) > kProbabilitySumTolerance) {
+    return Problem{Layout::kProbabilities, "probabilities p_estate..p_large do not sum to 1"};
+  }
+  if (r.gamma.count < 0 || r.gamma.count > gammaColumns) {
+    return Problem{Layout::kGamma, "more gamma values than gamma columns"};
+  }
+  for (int s = 0; s < r.gamma.count; ++s) {
+    if (!std::isfinite(r.gamma.gamma[static_cast<std::size_t>(s)])) {
+      return Problem{Layout::kGamma + s, "not finite"};
+    }
+  }
+  if (static_cast<int>(r.liftStatus) >= kLiftStatusCount) {
+    return Problem{layout.liftStatus(), "unknown lift status"};
+  }
+  if (r.liftStatus == LiftStatus::Ok) {
+    const std::array<double, 10> world{r.positionEnu.x(), r.positionEnu.y(), r.positionEnu.z(),
+                                       r.latitudeDeg,     r.longitudeDeg,    r.heightM,
+                                       r.headingEnuRad,   r.dimensionsM.x(), r.dimensionsM.y(),
+                                       r.dimensionsM.z()};
+    for (std::size_t i = 0; i < world.size(); ++i) {
+      if (!finite(world[i])) {
+        return Problem{layout.world() + static_cast<int>(i), "not finite"};
+      }
+    }
+    if (std::abs(r.latitudeDeg) > 90.0) {
+      return Problem{layout.world() + 3, "must be in [-90, 90]"};
+    }
+    if (std::abs(r.longitudeDeg) > 180.0) {
+      return Problem{layout.world() + 4, "must be in [-180, 180]"};
+    }
+    if (!(r.headingEnuRad >= 0.0 && r.headingEnuRad < geometry::kTwoPi)) {
+      return Problem{layout.world() + 6, "must be in [0, 2 pi)"};
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (r.dimensionsM[i] < 0.0) {
+        return Problem{layout.world() + 7 + i, "must be >= 0"};
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// ---- formatting (no allocation) ------------------------------------------------------------
+
+class RowFormatter {
+ public:
+  RowFormatter(char* begin, std::size_t size) : pos_(begin), end_(begin + size) {}
+
+  template <typename T>
+  void number(T value) {
+    if (!ok_) {
+      return;
+    }
+    const auto result = std::to_chars(pos_, end_, value);
+    if (result.ec != std::errc()) {
+      ok_ = false;
+      return;
+    }
+    pos_ = result.ptr;
+  }
+  void text(std::string_view value) {
+    if (!ok_ || static_cast<std::size_t>(end_ - pos_) < value.size()) {
+      ok_ = false;
+      return;
+    }
+    std::memcpy(pos_, value.data(), value.size());
+    pos_ += value.size();
+  }
+  void character(char c) {
+    if (!ok_ || pos_ == end_) {
+      ok_ = false;
+      return;
+    }
+    *pos_++ = c;
+  }
+  bool ok() const { return ok_; }
+  char* position() const { return pos_; }
+
+ private:
+  char* pos_;
+  char* end_;
+  bool ok_ = true;
+};
+
+void formatRow(const DetectionRecord& r, const DetectionsFileInfo& info, RowFormatter& out) {
+  if (info.key == DetectionsKey::FrameId) {
+    out.number(r.frameId);
+  } else {
+    out.text(r.imageStem());
+  }
+  out.character(',');
+  out.number(r.detId);
+  out.character(',');
+  out.number(r.score);
+  for (const double v : {r.box.cx, r.box.cy, r.box.length, r.box.width, r.box.angle}) {
+    out.character(',');
+    out.number(v);
+  }
+  out.character(',');
+  out.character(r.directionKnown ? '1' : '0');
+  out.character(',');
+  out.text(shape::toString(r.topType()));
+  for (const float p : r.typeProbabilities) {
+    out.character(',');
+    out.number(p);
+  }
+  for (int s = 0; s < info.gammaColumns; ++s) {
+    out.character(',');
+    if (s < r.gamma.count) {
+      out.number(r.gamma.gamma[static_cast<std::size_t>(s)]);
+    }
+  }
+  out.character(',');
+  out.text(toString(r.liftStatus));
+  const bool lifted = r.liftStatus == LiftStatus::Ok;
+  for (const double v :
+       {r.positionEnu.x(), r.positionEnu.y(), r.positionEnu.z(), r.latitudeDeg, r.longitudeDeg,
+        r.heightM, r.headingEnuRad, r.dimensionsM.x(), r.dimensionsM.y(), r.dimensionsM.z()}) {
+    out.character(',');
+    if (lifted) {
+      out.number(v);
+    }
+  }
+  out.character('\n');
+}
+
+std::string joinColumns(const std::vector<std::string>& names) {
+  std::string line;
+  for (const std::string& name : names) {
+    line += (line.empty() ? "" : ",") + name;
+  }
+  return line;
+}
+
+// ---- parsing -------------------------------------------------------------------------------
+
+// A complete message; thrown inside readDetectionsFile() only (start-up code) and returned.
+struct ReadError {
+  std::string message;
+};
+
+std::string quote(std::string_view text) {
+  return "'" + std::string(text) + "'";
+}
+
+class RowParser {
+ public:
+  RowParser(const std::string& file, int line, std::string_view text,
+            const std::vector<std::string>& names)
+      : file_(file), line_(line), text_(text), names_(names) {}
+
+  void split() {
+    fields_.clear();
+    starts_.clear();
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t comma = text_.find(',', start);
+      starts_.push_back(start);
+      if (comma == std::string_view::npos) {
+        fields_.push_back(text_.substr(start));
+        break;
+      }
+      fields_.push_back(text_.substr(start, comma - start));
+      start = comma + 1;
+    }
+    for (std::size_t i = 0; i < fields_.size(); ++i) {
+      if (fields_[i].find('"') != std::string_view::npos) {
+        fail(static_cast<int>(i), "quoted fields are not supported (fields never contain commas)");
+      }
+    }
+    if (fields_.size() != names_.size()) {
+      throw ReadError{file_ + ":" + std::to_string(line_) + ": expected " +
+                      std::to_string(names_.size()) + " fields, got " +
+                      std::to_string(fields_.size())};
+    }
+  }
+
+  std::string_view field(int i) const { return fields_[static_cast<std::size_t>(i)]; }
+
+  [[noreturn]] void fail(int column, const std::string& problem) const {
+    const std::size_t c = static_cast<std::size_t>(column);
+    const std::string name = c < names_.size() ? names_[c] : "field " + std::to_string(c + 1);
+    const std::size_t at = c < starts_.size() ? starts_[c] + 1 : 1;
+    throw ReadError{file_ + ":" + std::to_string(line_) + ":" + std::to_string(at) + ": " + name +
+                    ": " + problem};
+  }
+
+  std::int64_t integer(int i, std::int64_t low, std::int64_t high) const {
+    const std::string_view t = field(i);
+    std::int64_t value = 0;
+    const auto [ptr, error] = std::from_chars(t.data(), t.data() + t.size(), value);
+    if (t.empty() || error != std::errc() || ptr != t.data() + t.size()) {
+      fail(i, "not an integer " + quote(t));
+    }
+    if (value < low || value > high) {
+      fail(i, "must be in [" + std::to_string(low) + ", " + std::to_string(high) + "], got " +
+                  std::string(t));
+    }
+    return value;
+  }
+
+  template <typename T>
+  T real(int i) const {
+    const std::string_view t = field(i);
+    T value = 0;
+    const auto [ptr, error] = std::from_chars(t.data(), t.data() + t.size(), value);
+    if (t.empty()) {
+      fail(i, "empty (a value is required here)");
+    }
+    if (error != std::errc() || ptr != t.data() + t.size()) {
+      fail(i, "not a number " + quote(t));
+    }
+    if (!std::isfinite(value)) {
+      fail(i, "not finite " + quote(t));
+    }
+    return value;
+  }
+
+ private:
+  const std::string& file_;
+  int line_;
+  std::string_view text_;
+  const std::vector<std::string>& names_;
+  std::vector<std::string_view> fields_;
+  std::vector<std::size_t> starts_;
+};
+
+DetectionRecord parseRow(const RowParser& p, const DetectionsFileInfo& info) {
+  const Layout layout{info.gammaColumns};
+  DetectionRecord r;
+  if (info.key == DetectionsKey::FrameId) {
+    r.frameId = p.integer(Layout::kKey, 0, std::numeric_limits<std::int64_t>::max());
+  } else if (!r.setImageStem(p.field(Layout::kKey))) {
+    p.fail(Layout::kKey,
+           "image stem longer than " + std::to_string(kMaxImageStemChars) + " characters");
+  }
+  r.detId = static_cast<int>(p.integer(Layout::kDetId, 0, std::numeric_limits<int>::max()));
+  r.score = p.real<float>(Layout::kScore);
+  r.box.cx = p.real<double>(Layout::kBox);
+  r.box.cy = p.real<double>(Layout::kBox + 1);
+  r.box.length = p.real<double>(Layout::kBox + 2);
+  r.box.width = p.real<double>(Layout::kBox + 3);
+  r.box.angle = p.real<double>(Layout::kBox + 4);
+  const std::string_view direction = p.field(Layout::kDirection);
+  if (direction != "0" && direction != "1") {
+    p.fail(Layout::kDirection, "expected 0 or 1, got " + quote(direction));
+  }
+  r.directionKnown = direction == "1";
+  const std::string_view typeName = p.field(Layout::kType);
+  const std::optional<shape::VehicleType> type = shape::vehicleTypeFromString(typeName);
+  if (!type || typeName != shape::toString(*type)) {
+    p.fail(Layout::kType, "unknown vehicle type " + quote(typeName) +
+                              " (estate, compact, sports, sedan, suv, van, large)");
+  }
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    r.typeProbabilities[static_cast<std::size_t>(t)] = p.real<float>(Layout::kProbabilities + t);
+  }
+  bool gap = false;
+  for (int s = 0; s < info.gammaColumns; ++s) {
+    if (p.field(Layout::kGamma + s).empty()) {
+      gap = true;
+      continue;
+    }
+    if (gap) {
+      p.fail(Layout::kGamma + s, "value after an empty gamma field");
+    }
+    r.gamma.gamma[static_cast<std::size_t>(s)] = p.real<float>(Layout::kGamma + s);
+    r.gamma.count = s + 1;
+  }
+  const std::string_view status = p.field(layout.liftStatus());
+  const std::optional<LiftStatus> lift = liftStatusFromString(status);
+  if (!lift) {
+    p.fail(layout.liftStatus(),
+           "unknown lift status " + quote(status) +
+               " (ok, not_lifted, no_pose, stale_pose, invalid_pose, "
+               "invalid_box, outside_lens, behind_camera, outside_dtm, no_data, "
+               "no_intersection)");
+  }
+  r.liftStatus = *lift;
+  const int w = layout.world();
+  if (r.liftStatus == LiftStatus::Ok) {
+    r.positionEnu = {p.real<double>(w), p.real<double>(w + 1), p.real<double>(w + 2)};
+    r.latitudeDeg = p.real<double>(w + 3);
+    r.longitudeDeg = p.real<double>(w + 4);
+    r.heightM = p.real<double>(w + 5);
+    r.headingEnuRad = p.real<double>(w + 6);
+    r.dimensionsM = {p.real<double>(w + 7), p.real<double>(w + 8), p.real<double>(w + 9)};
+  } else {
+    for (int i = 0; i < static_cast<int>(kWorldColumns.size()); ++i) {
+      if (!p.field(w + i).empty()) {
+        p.fail(w + i, "must be empty when lift_status is " + std::string(status) + ", got " +
+                          quote(p.field(w + i)));
+      }
+    }
+  }
+  if (const std::optional<Problem> problem = checkRecord(r, info.key, info.gammaColumns)) {
+    p.fail(problem->column,
+           std::string(problem->what) + ", got " + quote(p.field(problem->column)));
+  }
+  // The type column must name a most probable type (any of them when several tie).
+  const float top = r.typeProbabilities[static_cast<std::size_t>(r.topType())];
+  if (r.typeProbabilities[static_cast<std::size_t>(*type)] != top) {
+    p.fail(Layout::kType,
+           quote(typeName) + " is not the most probable type (" +
+               kProbabilityColumns[static_cast<std::size_t>(r.topType())] + " " +
+               std::string(p.field(Layout::kProbabilities + static_cast<int>(r.topType()))) + ")");
+  }
+  return r;
+}
+
+// Parses the "# key: value" metadata lines before the header.
+void parseMetadata(const std::string& file, int line, std::string_view text, DetectionsFile* out,
+                   std::set<std::string>& seen) {
+  std::string_view body = text.substr(1);
+  while (!body.empty() && body.front() == ' ') {
+    body.remove_prefix(1);
+  }
+  const std::size_t colon = body.find(':');
+  const std::string where = file + ":" + std::to_string(line) + ": ";
+  if (colon == std::string_view::npos) {
+    throw ReadError{where + "metadata line must be '# key: value', got " + quote(text)};
+  }
+  const std::string key(body.substr(0, colon));
+  std::string_view value = body.substr(colon + 1);
+  while (!value.empty() && value.front() == ' ') {
+    value.remove_prefix(1);
+  }
+  if (!seen.insert(key).second) {
+    throw ReadError{where + key + ": duplicate metadata key"};
+  }
+  if (key == "format_version") {
+    int version = 0;
+    const auto [ptr, error] = std::from_chars(value.data(), value.data() + value.size(), version);
+    if (error != std::errc() || ptr != value.data() + value.size()) {
+      throw ReadError{where + "format_version: not an integer " + quote(value)};
+    }
+    if (version != kDetectionsFormatVersion) {
+      throw ReadError{where + "format_version: " + std::string(value) +
+                      " not supported (this reader reads " +
+                      std::to_string(kDetectionsFormatVersion) + ")"};
+    }
+    out->formatVersion = version;
+  } else if (key == "model") {
+    out->info.model = std::string(value);
+  } else if (key == "source") {
+    out->info.source = std::string(value);
+  } else {
+    throw ReadError{where + "unknown metadata key " + quote(key) +
+                    " (format_version, model, source)"};
+  }
+}
+
+// Reads the header: the key column and the gamma count follow from it.
+void parseHeader(const std::string& file, int line, std::string_view text, DetectionsFile* out,
+                 std::vector<std::string>* names) {
+  DetectionsFileInfo& info = out->info;
+  const std::string where = file + ":" + std::to_string(line) + ": header: ";
+  if (text.starts_with("frame_id,")) {
+    info.key = DetectionsKey::FrameId;
+  } else if (text.starts_with("image,")) {
+    info.key = DetectionsKey::Image;
+  } else {
+    throw ReadError{where +
+                    "must start with 'frame_id,' (sequences) or 'image,' (image "
+                    "folders), got " +
+                    (text.empty() ? std::string("an empty line") : quote(text))};
+  }
+  const std::size_t fields =
+      static_cast<std::size_t>(std::count(text.begin(), text.end(), ',')) + 1;
+  const int gamma = static_cast<int>(fields) - Layout{0}.count();
+  if (gamma < 0 || gamma > shape::kMaxShapeComponents) {
+    throw ReadError{where + "expected " + std::to_string(Layout{0}.count()) + " to " +
+                    std::to_string(Layout{shape::kMaxShapeComponents}.count()) +
+                    " columns (0 to 8 gamma columns), got " + std::to_string(fields)};
+  }
+  info.gammaColumns = gamma;
+  *names = detectionsColumns(info.key, gamma);
+  const std::string expected = joinColumns(*names);
+  if (text != expected) {
+    throw ReadError{where + "expected " + quote(expected) + ", got " + quote(text)};
+  }
+}
+
+}  // namespace
+
+const char* toString(LiftStatus status) {
+  const auto i = static_cast<std::size_t>(status);
+  return i < kLiftStatusWords.size() ? kLiftStatusWords[i] : "unknown";
+}
+
+std::optional<LiftStatus> liftStatusFromString(std::string_view word) {
+  for (std::size_t i = 0; i < kLiftStatusWords.size(); ++i) {
+    if (word == kLiftStatusWords[i]) {
+      return static_cast<LiftStatus>(i);
+    }
+  }
+  return std::nullopt;
+}
+
+std::string_view DetectionRecord::imageStem() const {
+  return std::string_view(image.data(), strnlen(image.data(), image.size()));
+}
+
+bool DetectionRecord::setImageStem(std::string_view stem) {
+  if (stem.size() > kMaxImageStemChars) {
+    return false;
+  }
+  image.fill('\0');
+  std::memcpy(image.data(), stem.data(), stem.size());
+  return true;
+}
+
+shape::VehicleType DetectionRecord::topType() const {
+  std::size_t best = 0;
+  for (std::size_t t = 1; t < typeProbabilities.size(); ++t) {
+    if (typeProbabilities[t] > typeProbabilities[best]) {
+      best = t;
+    }
+  }
+  return static_cast<shape::VehicleType>(best);
+}
+
+std::vector<std::string> detectionsColumns(DetectionsKey key, int gammaColumns) {
+  std::vector<std::string> names{key == DetectionsKey::FrameId ? "frame_id" : "image",
+                                 "det_id",
+                                 "score",
+                                 "box_cx_px",
+                                 "box_cy_px",
+                                 "box_length_px",
+                                 "box_width_px",
+                                 "box_angle_rad",
+                                 "direction_known",
+                                 "type"};
+  names.insert(names.end(), kProbabilityColumns.begin(), kProbabilityColumns.end());
+  for (int s = 0; s < gammaColumns; ++s) {
+    names.push_back("gamma_" + std::to_string(s));
+  }
+  names.emplace_back("lift_status");
+  names.insert(names.end(), kWorldColumns.begin(), kWorldColumns.end());
+  return names;
+}
+
+// ---- writer --------------------------------------------------------------------------------
+
+DetectionsFileWriter::DetectionsFileWriter() = default;
+
+DetectionsFileWriter::~DetectionsFileWriter() {
+  if (file_ != nullptr) {
+    std::fclose(file_);
+  }
+}
+
+bool DetectionsFileWriter::open(const std::string& path, const DetectionsFileInfo& info,
+                                std::string* why) {
+  const auto failWith = [&](const std::string& message) {
+    if (why != nullptr) {
+      *why = message;
+    }
+    return false;
+  };
+  if (file_ != nullptr) {
+    return failWith(path + ": writer already open on " + path_);
+  }
+  if (info.gammaColumns < 0 || info.gammaColumns > shape::kMaxShapeComponents) {
+    return failWith(path + ": gammaColumns must be in [0, " +
+                    std::to_string(shape::kMaxShapeComponents) + "], got " +
+                    std::to_string(info.gammaColumns));
+  }
+  for (const std::string* text : {&info.model, &info.source}) {
+    if (text->find_first_of("\n\r") != std::string::npos) {
+      return failWith(path + ": model/source metadata must be one line");
+    }
+  }
+  ioBuffer_ = std::make_unique<char[]>(kIoBufferBytes);
+  row_ = std::make_unique<char[]>(kRowBufferBytes);
+  file_ = std::fopen(path.c_str(), "wb");
+  if (file_ == nullptr) {
+    return failWith(path + ": cannot create file: " + std::strerror(errno));
+  }
+  // Our buffer, set before any I/O: stdio then never allocates one on the first write.
+  std::setvbuf(file_, ioBuffer_.get(), _IOFBF, kIoBufferBytes);
+  info_ = info;
+  path_ = path;
+  rowsWritten_ = 0;
+  failed_ = false;
+  std::string head = "# format_version: " + std::to_string(kDetectionsFormatVersion) + "\n";
+  if (!info.model.empty()) {
+    head += "# model: " + info.model + "\n";
+  }
+  if (!info.source.empty()) {
+    head += "# source: " + info.source + "\n";
+  }
+  head += joinColumns(detectionsColumns(info.key, info.gammaColumns)) + "\n";
+  if (std::fwrite(head.data(), 1, head.size(), file_) != head.size()) {
+    failed_ = true;
+    return failWith(path + ": write failed: " + std::strerror(errno));
+  }
+  return true;
+}
+
+bool DetectionsFileWriter::writeRow(const DetectionRecord& record, std::string* why) {
+  // Messages are built only on failure (they allocate; the success path does not).
+  const auto failWith = [&](const char* column, const char* problem) {
+    if (why != nullptr) {
+      *why = path_ + ": row " + std::to_string(rowsWritten_ + 1) + ": " + column + ": " + problem;
+    }
+    return false;
+  };
+  if (file_ == nullptr) {
+    return failWith("-", "writer is not open");
+  }
+  if (const std::optional<Problem> problem = checkRecord(record, info_.key, info_.gammaColumns)) {
+    const Layout layout{info_.gammaColumns};
+    const int c = problem->column;
+    const char* name = "";
+    if (c == Layout::kKey) {
+      name = info_.key == DetectionsKey::FrameId ? "frame_id" : "image";
+    } else if (c < Layout::kProbabilities) {
+      static constexpr std::array<const char*, 10> kHead{"",
+                                                         "det_id",
+                                                         "score",
+                                                         "box_cx_px",
+                                                         "box_cy_px",
+                                                         "box_length_px",
+                                                         "box_width_px",
+                                                         "box_angle_rad",
+                                                         "direction_known",
+                                                         "type"};
+      name = kHead[static_cast<std::size_t>(c)];
+    } else if (c < Layout::kGamma) {
+      name = kProbabilityColumns[static_cast<std::size_t>(c - Layout::kProbabilities)];
+    } else if (c < layout.liftStatus()) {
+      name = "gamma";
+    } else if (c == layout.liftStatus()) {
+      name = "lift_status";
+    } else {
+      name = kWorldColumns[static_cast<std::size_t>(c - layout.world())];
+    }
+    return failWith(name, problem->what);
+  }
+  RowFormatter out(row_.get(), kRowBufferBytes);
+  formatRow(record, info_, out);
+  if (!out.ok()) {
+    return failWith("-", "row longer than the row buffer");
+  }
+  const auto size = static_cast<std::size_t>(out.position() - row_.get());
+  if (std::fwrite(row_.get(), 1, size, file_) != size) {
+    failed_ = true;
+    return failWith("-", "write failed (disk full or file closed?)");
+  }
+  ++rowsWritten_;
+  return true;
+}
+
+bool DetectionsFileWriter::flush(std::string* why) {
+  if (file_ == nullptr || std::fflush(file_) != 0 || failed_) {
+    if (why != nullptr) {
+      *why = path_ + ": flush failed" + (file_ == nullptr ? " (writer is not open)" : "");
+    }
+    return false;
+  }
+  return true;
+}
+
+bool DetectionsFileWriter::close(std::string* why) {
+  if (file_ == nullptr) {
+    if (why != nullptr) {
+      *why = "detections writer: close() without open()";
+    }
+    return false;
+  }
+  const bool flushed = std::fflush(file_) == 0 && std::ferror(file_) == 0;
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (!flushed || !closed || failed_) {
+    if (why != nullptr) {
+      *why = path_ + ": write failed (disk full?)";
+    }
+    return false;
+  }
+  return true;
+}
+
+// ---- reader --------------------------------------------------------------------------------
+
+bool readDetectionsFile(const std::string& path, DetectionsFile* out, std::string* why) {
+  *out = DetectionsFile{};
+  out->path = path;
+  try {
+    std::ifstream stream(path, std::ios::binary);
+    if (!stream) {
+      throw ReadError{path + ": cannot open (missing or unreadable)"};
+    }
+    std::ostringstream buffer;
+    buffer << stream.rdbuf();
+    const std::string text = buffer.str();
+    std::vector<std::string> names;
+    std::set<std::string> metadataKeys;
+    std::set<std::pair<std::string, int>> keys;  // (frame or image, det_id)
+    std::optional<std::int64_t> lastFrame;
+    bool haveHeader = false;
+    std::size_t position = 0;
+    int line = 0;
+    while (position < text.size()) {
+      const std::size_t end = std::min(text.find('\n', position), text.size());
+      std::string_view row = std::string_view(text).substr(position, end - position);
+      position = end + 1;
+      ++line;
+      if (!row.empty() && row.back() == '\r') {
+        row.remove_suffix(1);
+      }
+      if (!haveHeader) {
+        if (row.starts_with("#")) {
+          parseMetadata(path, line, row, out, metadataKeys);
+          continue;
+        }
+        parseHeader(path, line, row, out, &names);
+        haveHeader = true;
+        continue;
+      }
+      if (row.empty()) {
+        throw ReadError{path + ":" + std::to_string(line) + ": empty line"};
+      }
+      RowParser parser(path, line, row, names);
+      parser.split();
+      DetectionRecord record = parseRow(parser, out->info);
+      std::string key;
+      if (out->info.key == DetectionsKey::FrameId) {
+        if (lastFrame && record.frameId < *lastFrame) {
+          parser.fail(0, "not in non-decreasing order (" + std::to_string(record.frameId) +
+                             " after " + std::to_string(*lastFrame) + ")");
+        }
+        lastFrame = record.frameId;
+        key = std::to_string(record.frameId);
+      } else {
+        key = std::string(record.imageStem());
+      }
+      if (!keys.emplace(key, record.detId).second) {
+        parser.fail(1, "det_id " + std::to_string(record.detId) + " appears twice in " +
+                           (out->info.key == DetectionsKey::FrameId ? "frame " : "image ") + key);
+      }
+      out->rows.push_back(record);
+      out->lines.push_back(line);
+    }
+    if (!haveHeader) {
+      throw ReadError{path + ":" + std::to_string(line + 1) +
+                      ": header: missing (empty file or only metadata lines)"};
+    }
+  } catch (const ReadError& error) {
+    const std::string file = out->path;
+    *out = DetectionsFile{};
+    out->path = file;
+    if (why != nullptr) {
+      *why = error.message;
+    }
+    return false;
+  }
+  return true;
+}
+
+}  // namespace vp::sequence

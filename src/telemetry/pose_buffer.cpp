@@ -1,0 +1,273 @@
+#include "telemetry/pose_buffer.hpp"
+
+#include <cmath>
+
+namespace vp::telemetry {
+
+namespace {
+
+// Signed smallest difference b - a of two angles in degrees, in (-180, 180].
+double deltaDeg(double a, double b) {
+  double d = std::fmod(b - a, 360.0);
+  if (d <= -180.0) {
+    d += 360.0;
+  } else if (d > 180.0) {
+    d -= 360.0;
+  }
+  return d;
+}
+
+double wrapDeg180(double angle) {
+  double a = std::fmod(angle, 360.0);
+  if (a <= -180.0) {
+    a += 360.0;
+  } else if (a > 180.0) {
+    a -= 360.0;
+  }
+  return a;
+}
+
+bool finite(const geodesy::EulerAnglesDeg& e) {
+  return std::isfinite(e.rollDeg) && std::isfinite(e.pitchDeg) && std::isfinite(e.yawDeg);
+}
+
+// a * (a^-1 b)^s along the shorter arc; s outside [0, 1] extrapolates at the same rate.
+Eigen::Quaterniond slerp(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double s) {
+  Eigen::Quaterniond delta = a.conjugate() * b;
+  if (delta.w() < 0.0) {
+    delta.coeffs() = -delta.coeffs();  // q and -q are the same rotation: take the short way
+  }
+  const Eigen::AngleAxisd step(delta);
+  Eigen::Quaterniond out = a * Eigen::Quaterniond(Eigen::AngleAxisd(s * step.angle(), step.axis()));
+  out.normalize();
+  return out;
+}
+
+PoseSample blend(const PoseSample& a, const PoseSample& b, std::int64_t t) {
+  const double s =
+      static_cast<double>(t - a.timestampNs) / static_cast<double>(b.timestampNs - a.timestampNs);
+  PoseSample out;
+  out.timestampNs = t;
+  out.position = interpolatePosition(a.position, b.position, s);
+  out.bodyToNed = slerp(a.bodyToNed, b.bodyToNed, s);
+  // Gimbal angles are only comparable in one reference; across a switch take the nearer one.
+  if (a.gimbal.reference == b.gimbal.reference) {
+    out.gimbal.reference = a.gimbal.reference;
+    out.gimbal.angles = interpolateAnglesDeg(a.gimbal.angles, b.gimbal.angles, s);
+  } else {
+    out.gimbal = s < 0.5 ? a.gimbal : b.gimbal;
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* toString(PoseStatus status) {
+  switch (status) {
+    case PoseStatus::Ok:
+      return "ok";
+    case PoseStatus::NoPose:
+      return "no pose";
+    case PoseStatus::Stale:
+      return "stale pose";
+    case PoseStatus::Invalid:
+      return "invalid pose";
+  }
+  return "unknown pose status";
+}
+
+const char* toString(PushResult result) {
+  switch (result) {
+    case PushResult::Accepted:
+      return "accepted";
+    case PushResult::NotFinite:
+      return "not finite";
+    case PushResult::OutOfRange:
+      return "position out of range";
+    case PushResult::ZeroQuaternion:
+      return "zero attitude quaternion";
+    case PushResult::OutOfOrder:
+      return "timestamp not after the newest sample";
+    case PushResult::NotInitialised:
+      return "pose buffer not initialised";
+  }
+  return "unknown push result";
+}
+
+geodesy::GeodeticPoint interpolatePosition(const geodesy::GeodeticPoint& a,
+                                           const geodesy::GeodeticPoint& b, double s) {
+  geodesy::GeodeticPoint out;
+  out.latitudeDeg = a.latitudeDeg + s * (b.latitudeDeg - a.latitudeDeg);
+  out.longitudeDeg = wrapDeg180(a.longitudeDeg + s * deltaDeg(a.longitudeDeg, b.longitudeDeg));
+  out.heightM = a.heightM + s * (b.heightM - a.heightM);
+  return out;
+}
+
+geodesy::EulerAnglesDeg interpolateAnglesDeg(const geodesy::EulerAnglesDeg& a,
+                                             const geodesy::EulerAnglesDeg& b, double s) {
+  return {wrapDeg180(a.rollDeg + s * deltaDeg(a.rollDeg, b.rollDeg)),
+          wrapDeg180(a.pitchDeg + s * deltaDeg(a.pitchDeg, b.pitchDeg)),
+          wrapDeg180(a.yawDeg + s * deltaDeg(a.yawDeg, b.yawDeg))};
+}
+
+bool PoseBuffer::init(const PoseBufferConfig& config, std::string* why) {
+  const auto fail = [why](const std::string& message) {
+    if (why != nullptr) {
+      *why = "pose buffer: " + message;
+    }
+    return false;
+  };
+  if (config.capacity < 2) {
+    return fail("capacity must be at least 2 samples, got " + std::to_string(config.capacity));
+  }
+  if (config.maxAgeNs <= 0) {
+    return fail("maxAgeNs must be > 0, got " + std::to_string(config.maxAgeNs));
+  }
+  if (config.startToleranceNs < 0) {
+    return fail("startToleranceNs must be >= 0, got " + std::to_string(config.startToleranceNs));
+  }
+  config_ = config;
+  ring_.assign(config.capacity, PoseSample{});
+  oldest_ = 0;
+  count_ = 0;
+  rejectedSinceNewest_ = false;
+  counters_ = {};
+  return true;
+}
+
+void PoseBuffer::clear() {
+  oldest_ = 0;
+  count_ = 0;
+  rejectedSinceNewest_ = false;
+}
+
+const PoseSample& PoseBuffer::at(std::size_t i) const {
+  return ring_[(oldest_ + i) % ring_.size()];
+}
+
+PushResult PoseBuffer::push(const PoseSample& sample) {
+  const geodesy::GeodeticPoint& p = sample.position;
+  const Eigen::Vector4d q = sample.bodyToNed.coeffs();
+  PushResult result = PushResult::Accepted;
+  if (ring_.empty()) {
+    return PushResult::NotInitialised;
+  }
+  if (!std::isfinite(p.latitudeDeg) || !std::isfinite(p.longitudeDeg) ||
+      !std::isfinite(p.heightM) || !q.allFinite() || !finite(sample.gimbal.angles)) {
+    result = PushResult::NotFinite;
+  } else if (std::abs(p.latitudeDeg) > 90.0 || std::abs(p.longitudeDeg) > 180.0) {
+    result = PushResult::OutOfRange;
+  } else if (q.norm() < kMinQuaternionNorm) {
+    result = PushResult::ZeroQuaternion;
+  } else if (count_ > 0 && sample.timestampNs <= at(count_ - 1).timestampNs) {
+    result = PushResult::OutOfOrder;
+  }
+  switch (result) {
+    case PushResult::NotFinite:
+      ++counters_.notFinite;
+      rejectedSinceNewest_ = true;
+      return result;
+    case PushResult::OutOfRange:
+      ++counters_.outOfRange;
+      rejectedSinceNewest_ = true;
+      return result;
+    case PushResult::ZeroQuaternion:
+      ++counters_.zeroQuaternion;
+      rejectedSinceNewest_ = true;
+      return result;
+    case PushResult::OutOfOrder:
+      // A late or repeated sample (e.g. two links) says nothing about the link's health.
+      ++counters_.outOfOrder;
+      return result;
+    case PushResult::Accepted:
+    case PushResult::NotInitialised:
+      break;
+  }
+  std::size_t slot = 0;
+  if (count_ == ring_.size()) {
+    slot = oldest_;
+    oldest_ = (oldest_ + 1) % ring_.size();
+    ++counters_.overwritten;
+  } else {
+    slot = (oldest_ + count_) % ring_.size();
+    ++count_;
+  }
+  ring_[slot] = sample;
+  ring_[slot].bodyToNed.normalize();
+  rejectedSinceNewest_ = false;
+  ++counters_.accepted;
+  return PushResult::Accepted;
+}
+
+PoseEstimate PoseBuffer::poseAt(std::int64_t timestampNs) const {
+  PoseEstimate out;
+  if (count_ == 0) {
+    return out;  // NoPose, ageNs -1
+  }
+  const PoseSample& oldest = at(0);
+  const PoseSample& newest = at(count_ - 1);
+
+  if (timestampNs < oldest.timestampNs) {
+    out.pose = oldest;
+    out.ageNs = oldest.timestampNs - timestampNs;
+    out.status = out.ageNs <= config_.startToleranceNs ? PoseStatus::Ok : PoseStatus::NoPose;
+    if (out.status == PoseStatus::Ok) {
+      out.pose.timestampNs = timestampNs;  // held: the drone barely moves in a few ms
+    }
+    return out;
+  }
+
+  if (timestampNs >= newest.timestampNs) {
+    out.ageNs = timestampNs - newest.timestampNs;
+    out.pose = newest;
+    if (timestampNs > newest.timestampNs && rejectedSinceNewest_) {
+      out.status = PoseStatus::Invalid;
+      return out;
+    }
+    if (out.ageNs > config_.maxAgeNs) {
+      out.status = PoseStatus::Stale;
+      return out;
+    }
+    out.status = PoseStatus::Ok;
+    if (out.ageNs == 0) {
+      return out;
+    }
+    // Extrapolate with the last interval's rates when it is recent enough to speak for now.
+    if (count_ >= 2) {
+      const PoseSample& previous = at(count_ - 2);
+      if (newest.timestampNs - previous.timestampNs <= config_.maxAgeNs) {
+        out.pose = blend(previous, newest, timestampNs);
+        return out;
+      }
+    }
+    out.pose.timestampNs = timestampNs;  // hold
+    return out;
+  }
+
+  // oldest <= t < newest: binary search for the first sample after t.
+  std::size_t lo = 0;
+  std::size_t hi = count_ - 1;  // at(hi) > t, at(lo) <= t
+  while (hi - lo > 1) {
+    const std::size_t mid = lo + (hi - lo) / 2;
+    if (at(mid).timestampNs <= timestampNs) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  const PoseSample& a = at(lo);
+  const PoseSample& b = at(hi);
+  const std::int64_t toA = timestampNs - a.timestampNs;
+  const std::int64_t toB = b.timestampNs - timestampNs;
+  out.ageNs = std::min(toA, toB);
+  if (out.ageNs > config_.maxAgeNs) {
+    out.pose = toA <= toB ? a : b;
+    out.status = PoseStatus::Stale;
+    return out;
+  }
+  out.pose = toA == 0 ? a : blend(a, b, timestampNs);
+  out.status = PoseStatus::Ok;
+  return out;
+}
+
+}  // namespace vp::telemetry

@@ -1,0 +1,120 @@
+// telemetry/pose_buffer: the drone's recent poses, and its pose at a frame's capture time.
+//
+// Contract: producers (the recording reader, a MAVLink or DDS telemetry link) push
+// timestamped pose samples: the WGS84 position of the body origin (ellipsoidal height), the
+// autopilot attitude q_nb and the gimbal state (docs/conventions.md). The loop asks
+// poseAt(t) for the pose at a frame's capture time, on the same clock. A sample with a
+// non-finite or out-of-range value, a (near) zero quaternion or a timestamp not after the
+// newest accepted one is rejected at push(), counted, and never used. poseAt() interpolates
+// between the two samples around t: position linearly in latitude, longitude and height
+// (longitude across the antimeridian), attitude by slerp, gimbal angles each along the
+// shorter way round the circle. After the newest sample it extrapolates with the rate of the
+// last two samples (hold when they are further apart than maxAgeNs). The status says whether
+// the pose may be used: Ok; NoPose (nothing usable at t: empty buffer, t before the oldest
+// kept sample by more than startToleranceNs); Stale (the nearest accepted sample is more than
+// maxAgeNs away from t, while interpolating or extrapolating); Invalid (t is after the newest
+// accepted sample and the producer has pushed only rejected samples since: the telemetry is
+// currently broken). Only an Ok estimate carries a pose meant for lifting; the others carry
+// the nearest sample for diagnostics.
+// Memory: the ring of `capacity` samples is allocated by init(); push() and poseAt() never
+// allocate and never throw. Threading: not synchronised. The app serialises access: the loop
+// thread drains the telemetry link's queue into the buffer before it queries it (the
+// recording reader does the same synchronously).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "geodesy/attitude.hpp"
+#include "geodesy/geodesy.hpp"
+
+namespace vp::telemetry {
+
+struct PoseSample {
+  std::int64_t timestampNs = 0;       // capture clock of the frames
+  geodesy::GeodeticPoint position{};  // body origin, WGS84, ellipsoidal height
+  Eigen::Quaterniond bodyToNed{Eigen::Quaterniond::Identity()};  // autopilot attitude q_nb
+  geodesy::GimbalState gimbal{};
+};
+
+enum class PoseStatus : std::uint8_t { Ok, NoPose, Stale, Invalid };
+const char* toString(PoseStatus status);
+
+enum class PushResult : std::uint8_t {
+  Accepted,
+  NotFinite,       // NaN/inf in the position, attitude or gimbal angles
+  OutOfRange,      // latitude beyond +-90 deg or longitude beyond +-180 deg
+  ZeroQuaternion,  // attitude norm below kMinQuaternionNorm
+  OutOfOrder,      // timestamp not after the newest accepted sample
+  NotInitialised,  // push() before a successful init()
+};
+const char* toString(PushResult result);
+
+// Attitudes are normalised at push; a quaternion shorter than this carries no rotation.
+constexpr double kMinQuaternionNorm = 1e-6;
+
+struct PoseBufferConfig {
+  std::size_t capacity = 256;                 // samples kept (25 s of 10 Hz telemetry)
+  std::int64_t maxAgeNs = 200'000'000;        // 200 ms: nearest sample further -> Stale
+  std::int64_t startToleranceNs = 5'000'000;  // 5 ms: t this far before the oldest -> held
+};
+
+struct PoseBufferCounters {
+  std::uint64_t accepted = 0;
+  std::uint64_t notFinite = 0;
+  std::uint64_t outOfRange = 0;
+  std::uint64_t zeroQuaternion = 0;
+  std::uint64_t outOfOrder = 0;
+  std::uint64_t overwritten = 0;  // oldest samples dropped because the ring was full
+  std::uint64_t rejected() const { return notFinite + outOfRange + zeroQuaternion + outOfOrder; }
+};
+
+struct PoseEstimate {
+  PoseStatus status = PoseStatus::NoPose;
+  PoseSample pose{};        // at the queried time when Ok; nearest sample otherwise
+  std::int64_t ageNs = -1;  // |t - nearest accepted sample|, ns; -1 when the buffer is empty
+};
+
+class PoseBuffer {
+ public:
+  PoseBuffer() = default;
+
+  // Allocates the ring. Fails (with *why) on capacity < 2 or non-positive/negative times.
+  bool init(const PoseBufferConfig& config, std::string* why = nullptr);
+
+  // Validates and stores one sample; on the ring being full the oldest sample is dropped.
+  PushResult push(const PoseSample& sample);
+  // The pose at the capture time t (same clock as the samples).
+  PoseEstimate poseAt(std::int64_t timestampNs) const;
+
+  void clear();  // forgets every sample (e.g. after a telemetry link restart); keeps counters
+  std::size_t size() const { return count_; }
+  std::size_t capacity() const { return ring_.size(); }
+  const PoseBufferConfig& config() const { return config_; }
+  const PoseBufferCounters& counters() const { return counters_; }
+
+ private:
+  const PoseSample& at(std::size_t i) const;  // i-th oldest sample, i < count_
+
+  PoseBufferConfig config_{};
+  std::vector<PoseSample> ring_;  // sized once by init()
+  std::size_t oldest_ = 0;        // ring index of the oldest sample
+  std::size_t count_ = 0;
+  bool rejectedSinceNewest_ = false;  // a sample was rejected after the newest accepted one
+  PoseBufferCounters counters_{};
+};
+
+// Interpolation primitives, exposed for the tests and other telemetry producers.
+// Position: linear in latitude, longitude (shorter way across the antimeridian) and height.
+geodesy::GeodeticPoint interpolatePosition(const geodesy::GeodeticPoint& a,
+                                           const geodesy::GeodeticPoint& b, double s);
+// Each Euler angle along the shorter way round, result in (-180, 180] deg.
+geodesy::EulerAnglesDeg interpolateAnglesDeg(const geodesy::EulerAnglesDeg& a,
+                                             const geodesy::EulerAnglesDeg& b, double s);
+
+}  // namespace vp::telemetry

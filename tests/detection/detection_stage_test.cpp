@@ -1,0 +1,240 @@
+// DetectionStage on the shipped models (models/detector/, an untrained interim export with
+// the final interface: nothing here assumes accuracy): a 2592 x 2048 frame runs end to end,
+// performs zero heap allocations per frame after the first, and bad input gives statuses.
+#include "detection/detection_stage.hpp"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "alloc_counter.hpp"
+
+namespace vp::detection {
+namespace {
+
+const std::string kDetectorModel =
+    std::string(VP_SOURCE_DIR) + "/models/detector/detector_int8.onnx";
+const std::string kCropModel = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
+
+camera::CameraModel camera2592() {
+  camera::Intrinsics k;
+  k.widthPx = 2592;
+  k.heightPx = 2048;
+  k.fxPx = 3000.0;  // ~3 cm/px at 90 m
+  k.fyPx = 3000.0;
+  k.cxPx = 1295.5;
+  k.cyPx = 1023.5;
+  camera::Distortion d;
+  d.model = camera::LensModel::BrownConrady;
+  d.k1 = -0.1;
+  d.k2 = 0.03;
+  camera::CameraModel camera;
+  EXPECT_TRUE(camera.init(k, d));
+  return camera;
+}
+
+// A grey road texture with car-sized bright and dark rotated rectangles (not realistic; the
+// interim models only have to see some structure).
+cv::Mat sceneFrame() {
+  cv::Mat frame(2048, 2592, CV_8UC3);
+  cv::RNG rng(17);
+  rng.fill(frame, cv::RNG::NORMAL, 110, 12);
+  for (int i = 0; i < 40; ++i) {
+    const cv::RotatedRect car(
+        {static_cast<float>(rng.uniform(100, 2500)), static_cast<float>(rng.uniform(100, 1950))},
+        {150.0F, 60.0F}, static_cast<float>(rng.uniform(0, 360)));
+    cv::Point2f corners[4];
+    car.points(corners);
+    std::array<cv::Point, 4> polygon;
+    for (int k = 0; k < 4; ++k) {
+      polygon[k] = corners[k];
+    }
+    const int shade = rng.uniform(0, 2) == 0 ? 30 : 230;
+    cv::fillConvexPoly(frame, polygon.data(), 4, cv::Scalar(shade, shade, shade + 10));
+  }
+  return frame;
+}
+
+DetectionStageOptions stageOptions(int threads) {
+  DetectionStageOptions options;
+  options.detectorModelPath = kDetectorModel;
+  options.cropModelPath = kCropModel;
+  options.engine.threads = threads;
+  // The interim heatmap is weak: a low threshold makes sure the decoder, the NMS and the
+  // second stage all have work to do.
+  options.decoder.scoreThreshold = 0.0F;
+  options.decoder.topKPerTile = 64;
+  options.maxCrops = 32;
+  return options;
+}
+
+TEST(DetectionStage, RunsTheShippedModelsOnAFullFrame) {
+  preprocess::Preprocessor pre;
+  std::string why;
+  ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}, &why)) << why;
+  DetectionStage stage;
+  ASSERT_TRUE(stage.init(stageOptions(1), static_cast<int>(pre.tileCount()), &why)) << why;
+  EXPECT_EQ(stage.detectorInputWidth(), 672);
+  EXPECT_EQ(stage.detectorInputHeight(), 512);
+  EXPECT_EQ(stage.stridePx(), 4);
+  const cv::Mat frame = sceneFrame();
+  ASSERT_EQ(pre.process(frame), preprocess::PreprocessStatus::Ok);
+  std::array<Detection, kMaxDetectionsPerFrame> out{};
+  std::size_t count = 0;
+  ASSERT_EQ(stage.run(pre.output(), out, &count), DetectionStatus::Ok);
+  const DetectionStats& stats = stage.stats();
+  EXPECT_EQ(stats.tiles, 1);
+  EXPECT_GT(count, 0U);
+  EXPECT_LE(count, static_cast<std::size_t>(stats.candidates));
+  EXPECT_EQ(stats.crops, std::min<int>(static_cast<int>(count), 32));
+  EXPECT_GT(stats.frameGsd_m, 0.0);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Detection& d = out[i];
+    EXPECT_TRUE(std::isfinite(d.box.cx) && std::isfinite(d.box.cy));
+    EXPECT_GE(d.box.cx, -0.5);
+    EXPECT_LT(d.box.cx, 2591.5);
+    EXPECT_GT(d.box.length, 0.0);
+    EXPECT_GE(d.box.angle, 0.0);
+    EXPECT_LT(d.box.angle, 2.0 * geometry::kPi);
+    if (i > 0) {
+      EXPECT_GE(out[i - 1].score, d.score);  // best first
+    }
+    double sum = 0.0;
+    for (const float p : d.typeProbabilities) {
+      sum += static_cast<double>(p);
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-5);
+    if (static_cast<int>(i) < stats.crops) {
+      EXPECT_TRUE(d.gamma.count == 3 || topTwoTypes(d).first == shape::VehicleType::Large);
+    }
+  }
+  // Deterministic: the same frame gives the same detections.
+  std::array<Detection, kMaxDetectionsPerFrame> again{};
+  std::size_t countAgain = 0;
+  ASSERT_EQ(pre.process(frame), preprocess::PreprocessStatus::Ok);
+  ASSERT_EQ(stage.run(pre.output(), again, &countAgain), DetectionStatus::Ok);
+  ASSERT_EQ(countAgain, count);
+  for (std::size_t i = 0; i < count; ++i) {
+    EXPECT_EQ(again[i].box.cx, out[i].box.cx);
+    EXPECT_EQ(again[i].box.angle, out[i].box.angle);
+    EXPECT_EQ(again[i].typeProbabilities, out[i].typeProbabilities);
+  }
+}
+
+class FixedGsd : public GsdProvider {
+ public:
+  double groundSampleDistance_m(const Detection& detection) const override {
+    ++calls;
+    return detection.box.cx < 1296.0 ? 0.03 : -1.0;  // unknown on the right half
+  }
+  mutable int calls = 0;
+};
+
+TEST(DetectionStage, GsdProviderIsAskedPerDetection) {
+  preprocess::Preprocessor pre;
+  ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}));
+  DetectionStage stage;
+  DetectionStageOptions options = stageOptions(1);
+  options.maxCrops = 8;
+  ASSERT_TRUE(stage.init(options, 1));
+  ASSERT_EQ(pre.process(sceneFrame()), preprocess::PreprocessStatus::Ok);
+  std::array<Detection, kMaxDetectionsPerFrame> out{};
+  std::size_t count = 0;
+  const FixedGsd provider;
+  ASSERT_EQ(stage.run(pre.output(), out, &count, &provider), DetectionStatus::Ok);
+  EXPECT_EQ(provider.calls, std::min<int>(static_cast<int>(count), 8));
+  EXPECT_EQ(stage.stats().crops, provider.calls);  // unknown ones fall back to the frame GSD
+}
+
+TEST(DetectionStage, NoHeapAllocationPerFrame) {
+  const cv::Mat frame = sceneFrame();
+  for (const int threads : {1, 2}) {
+    preprocess::PreprocessOptions preOptions;
+    preOptions.threads = threads;
+    preOptions.whiteBalance = true;
+    preprocess::Preprocessor pre;
+    ASSERT_TRUE(pre.init(preOptions, camera2592(), {2592, 2048}));
+    DetectionStage stage;
+    std::string why;
+    ASSERT_TRUE(stage.init(stageOptions(threads), 1, &why)) << why;
+    std::array<Detection, kMaxDetectionsPerFrame> out{};
+    std::size_t count = 0;
+    ASSERT_EQ(pre.process(frame), preprocess::PreprocessStatus::Ok);  // first frame: warm-up
+    ASSERT_EQ(stage.run(pre.output(), out, &count), DetectionStatus::Ok);
+    test::AllocationCounter counter;
+    ASSERT_EQ(pre.process(frame), preprocess::PreprocessStatus::Ok);
+    ASSERT_EQ(stage.run(pre.output(), out, &count), DetectionStatus::Ok);
+    counter.stop();
+    const DetectionStats& stats = stage.stats();
+    EXPECT_GT(stats.crops, 0);
+    EXPECT_EQ(counter.count(), 0U) << "threads " << threads;
+    std::printf(
+        "  threads %d: preprocess %.1f ms, detector %.1f ms, decode %.2f ms, %d crops %.1f ms\n",
+        threads, pre.output().timings.total_ms, stats.detector_ms, stats.decode_ms, stats.crops,
+        stats.crops_ms);
+  }
+}
+
+TEST(DetectionStage, BadInputGivesStatuses) {
+  DetectionStage stage;
+  std::array<Detection, 16> out{};
+  std::size_t count = 7;
+  preprocess::PreprocessedFrame frame;
+  EXPECT_EQ(stage.run(frame, out, &count), DetectionStatus::NotInitialised);
+  EXPECT_EQ(count, 0U);
+  std::string why;
+  ASSERT_TRUE(stage.init(stageOptions(1), 1, &why)) << why;
+  EXPECT_EQ(stage.run(frame, out, &count), DetectionStatus::NoTiles);
+
+  // A frame preprocessed for another network size: wrong tiles.
+  preprocess::PreprocessOptions small;
+  small.networkWidthPx = 320;
+  small.networkHeightPx = 256;
+  small.tileOverlapPx = 64;
+  preprocess::Preprocessor pre;
+  ASSERT_TRUE(pre.init(small, camera2592(), {2592, 2048}, &why)) << why;
+  ASSERT_EQ(pre.process(sceneFrame()), preprocess::PreprocessStatus::Ok);
+  EXPECT_EQ(stage.run(pre.output(), out, &count), DetectionStatus::TooManyTiles);
+  DetectionStage wide;
+  ASSERT_TRUE(wide.init(stageOptions(1), 64, &why)) << why;
+  EXPECT_EQ(wide.run(pre.output(), out, &count), DetectionStatus::WrongTileSize);
+
+  // Tiles but no frame to crop from.
+  preprocess::Preprocessor good;
+  ASSERT_TRUE(good.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}));
+  ASSERT_EQ(good.process(sceneFrame()), preprocess::PreprocessStatus::Ok);
+  preprocess::PreprocessedFrame noFrame = good.output();
+  noFrame.frame = cv::Mat();
+  EXPECT_EQ(stage.run(noFrame, out, &count), DetectionStatus::EmptyFrame);
+  // A bad frame never reaches the stage: the preprocessor refuses it first.
+  EXPECT_EQ(good.process(cv::Mat(100, 100, CV_8UC3)), preprocess::PreprocessStatus::WrongFrameSize);
+}
+
+TEST(DetectionStage, InitNamesModelProblems) {
+  DetectionStage stage;
+  std::string why;
+  DetectionStageOptions options = stageOptions(1);
+  options.detectorModelPath = kCropModel;  // the wrong network
+  EXPECT_FALSE(stage.init(options, 1, &why));
+  EXPECT_NE(why.find("no output named 'heatmap'"), std::string::npos) << why;
+  EXPECT_NE(why.find("crop_int8.onnx"), std::string::npos) << why;
+  options = stageOptions(1);
+  options.cropModelPath = kDetectorModel;
+  EXPECT_FALSE(stage.init(options, 1, &why));
+  EXPECT_NE(why.find("crop network needs 3x48x96"), std::string::npos) << why;
+  options = stageOptions(1);
+  options.detectorModelPath = "/nonexistent/detector.onnx";
+  EXPECT_FALSE(stage.init(options, 1, &why));
+  EXPECT_NE(why.find("detector.onnx"), std::string::npos) << why;
+  options = stageOptions(1);
+  options.maxCrops = -1;
+  EXPECT_FALSE(stage.init(options, 1, &why));
+  EXPECT_NE(why.find("max_crops"), std::string::npos) << why;
+  EXPECT_FALSE(stage.initialised());
+}
+
+}  // namespace
+}  // namespace vp::detection

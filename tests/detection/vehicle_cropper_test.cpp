@@ -1,0 +1,234 @@
+// Second stage: the crop map is Python's crops.crop_affine, the crop is cv2.warpAffine's
+// (bit for bit), and the crop network's outputs are applied as the training targets define
+// them (crops.refine_target inverted).
+#include "detection/vehicle_cropper.hpp"
+
+#include <array>
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "detection/ground_sample_distance.hpp"
+#include "geometry/rotated_box.hpp"
+
+namespace vp::detection {
+namespace {
+
+// Made with /usr/bin/python3 in tools/: print(crops.crop_affine(center, angle, gsd).tolist()).
+TEST(VehicleCropper, CropMapEqualsPythonCropAffine) {
+  struct Case {
+    double u, v, angle, gsd;
+    double m[2][3];
+  };
+  const Case cases[] = {
+      {1234.5,
+       987.25,
+       2.1,
+       0.03,
+       {{-1.0096922091997151, -1.7264187332977474, 1323.0312201694835},
+        {1.7264187332977474, -1.0096922091997151, 928.9728770845503}}},
+      {10.0,
+       2040.75,
+       5.9,
+       0.0475,
+       {{1.1715517019924664, 0.4722652608381928, -56.74693947433968},
+        {-0.4722652608381928, 1.1715517019924664, 2035.6511348929912}}},
+      {2591.0, 0.0, 0.0, 0.06, {{1.0, -0.0, 2543.5}, {0.0, 1.0, -23.5}}},
+  };
+  for (const Case& c : cases) {
+    const CropMap map = cropAffine(c.u, c.v, c.angle, c.gsd);
+    for (int r = 0; r < 2; ++r) {
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(map(r, k), c.m[r][k], 1e-9 * std::max(1.0, std::abs(c.m[r][k])))
+            << "angle " << c.angle << " element " << r << "," << k;
+      }
+    }
+  }
+  // Crop centre -> box centre; crop +x -> the driving direction.
+  const CropMap map = cropAffine(500.0, 300.0, 1.0, 0.03);
+  const Eigen::Vector2d centre =
+      map * Eigen::Vector3d((kCropWidthPx - 1) / 2.0, (kCropHeightPx - 1) / 2.0, 1.0);
+  EXPECT_NEAR(centre.x(), 500.0, 1e-9);
+  EXPECT_NEAR(centre.y(), 300.0, 1e-9);
+  const Eigen::Vector2d forward = map.leftCols<2>() * Eigen::Vector2d(1.0, 0.0);
+  EXPECT_NEAR(std::atan2(forward.y(), forward.x()), 1.0, 1e-12);
+  EXPECT_NEAR(forward.norm(), 2.0, 1e-12);  // 6 cm crop px = 2 frame px at 3 cm/px
+}
+
+TEST(VehicleCropper, CropIsBitIdenticalToOpenCvWarpAffine) {
+  cv::Mat frame(400, 600, CV_8UC3);
+  cv::RNG rng(21);
+  rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(frame, frame, {5, 5}, 1.5);  // some structure besides noise
+  struct Pose {
+    double u, v, angle, gsd;
+  };
+  const Pose poses[] = {
+      {300.0, 200.0, 0.0, 0.06},      // identity scale, integer position
+      {301.37, 188.91, 0.73, 0.031},  // fractional, rotated, 2x zoom out
+      {5.2, 7.9, 2.6, 0.045},         // near the top-left corner: replicate border
+      {598.6, 395.3, 4.1, 0.02},      // bottom-right corner, large footprint
+      {250.0, 150.0, 5.5, 0.12},      // crop finer than the frame (upsampling)
+      {-40.0, 420.0, 1.2, 0.05},      // centre outside the frame
+  };
+  cv::Mat ours(kCropHeightPx, kCropWidthPx, CV_8UC3);
+  for (const Pose& p : poses) {
+    SCOPED_TRACE(std::to_string(p.u) + ", " + std::to_string(p.v));
+    const CropMap map = cropAffine(p.u, p.v, p.angle, p.gsd);
+    ASSERT_TRUE(cutCrop(frame, map, ours));
+    cv::Mat m(2, 3, CV_64F);
+    for (int r = 0; r < 2; ++r) {
+      for (int k = 0; k < 3; ++k) {
+        m.at<double>(r, k) = map(r, k);
+      }
+    }
+    cv::Mat reference;
+    cv::warpAffine(frame, reference, m, {kCropWidthPx, kCropHeightPx},
+                   cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+    EXPECT_EQ(cv::norm(ours, reference, cv::NORM_INF), 0.0);
+  }
+  cv::Mat grey(10, 10, CV_8UC1);
+  EXPECT_FALSE(cutCrop(grey, cropAffine(5, 5, 0, 0.06), ours));
+}
+
+// Round trip against the training targets: for a true box, a crop pose and a GSD, Python's
+// crops.refine_target gave (flip, refine); the raw outputs are (refine - REFINE_OFFSET) /
+// REFINE_SCALE and flip_logit = +-3. Applying them to the crop pose must give the true box.
+// Made with /usr/bin/python3 in tools/: f, r = crops.refine_target(box, gsd, centre, angle).
+TEST(VehicleCropper, AppliedOutputsInvertThePythonTrainingTargets) {
+  struct Case {
+    double box[5];  // true cx, cy, length, width, angle (frame px, rad)
+    double gsd;
+    double cropU, cropV, cropAngle;
+    int flip;
+    std::array<float, 5> raw;
+  };
+  const Case cases[] = {
+      {{1500.3, 820.7, 151.0, 61.5, 0.4},
+       0.03,
+       1497.0,
+       823.5,
+       0.47,
+       0,
+       {0.10044562816619873F, -0.2394549548625946F, -0.3500000014901161F, 0.03000020980834961F,
+        0.04500002861022945F}},
+      {{200.0, 300.0, 120.0, 50.0, 6.1},
+       0.04,
+       203.5,
+       296.25,
+       2.9,
+       1,
+       {0.34364309906959534F, -0.2242976427078247F, 0.2920367382466793F, 0.3000001907348633F,
+        0.19999999999999996F}},
+      {{640.0, 480.0, 90.0, 40.0, 3.3},
+       0.05,
+       641.0,
+       479.0,
+       3.3,
+       0,
+       {0.0829734057188034F, -0.1145225465297699F, 0.0F, 0.0F, 0.19999999999999996F}},
+  };
+  const std::array<float, 7> logits{0.1F, 2.0F, -1.0F, 0.5F, 0.0F, -0.3F, 1.0F};
+  const std::array<float, 3> gamma{0.25F, -1.5F, 0.125F};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.box[4]);
+    Detection d;
+    d.box = {c.cropU, c.cropV, 100.0, 40.0, c.cropAngle};
+    CropNetOutputs outputs;
+    outputs.typeLogits = logits;
+    outputs.shape = gamma;
+    outputs.flipLogit = c.flip != 0 ? 3.0F : -3.0F;
+    outputs.refine = c.raw;
+    ASSERT_EQ(applyCropOutputs(outputs, c.gsd, SecondStageOptions{}, &d), SecondStageStatus::Ok);
+    EXPECT_NEAR(d.box.cx, c.box[0], 1e-4);
+    EXPECT_NEAR(d.box.cy, c.box[1], 1e-4);
+    EXPECT_NEAR(d.box.length, c.box[2], 1e-4);
+    EXPECT_NEAR(d.box.width, c.box[3], 1e-4);
+    EXPECT_NEAR(geometry::absAngleDifference(d.box.angle, c.box[4]), 0.0, 1e-6);
+    EXPECT_NEAR(d.flipProbability, c.flip != 0 ? 0.952574 : 0.047426, 1e-6);
+  }
+}
+
+TEST(VehicleCropper, TypesShapeAndFlipOnly) {
+  const std::array<float, 7> logits{0.1F, 2.0F, -1.0F, 0.5F, 0.0F, -0.3F, 1.0F};
+  const std::array<float, 3> gamma{0.25F, -1.5F, 0.125F};
+  const std::array<float, 5> refine{0.4F, 0.4F, 0.4F, 0.4F, 0.4F};
+  Detection d;
+  d.box = {100.0, 50.0, 150.0, 60.0, 0.5};
+  CropNetOutputs outputs{logits, gamma, 0.2F, refine};
+  SecondStageOptions options;
+  options.applyRefine = false;  // = Predictor.run_crops' boxes_flip_corrected
+  ASSERT_EQ(applyCropOutputs(outputs, 0.03, options, &d), SecondStageStatus::Ok);
+  EXPECT_NEAR(d.box.angle, 0.5 + geometry::kPi, 1e-12);
+  EXPECT_EQ(d.box.cx, 100.0);
+  EXPECT_EQ(d.box.length, 150.0);
+  double sum = 0.0;
+  double denominator = 0.0;
+  for (const float l : logits) {
+    denominator += std::exp(static_cast<double>(l));
+  }
+  for (int t = 0; t < 7; ++t) {
+    sum += static_cast<double>(d.typeProbabilities[t]);
+    EXPECT_NEAR(d.typeProbabilities[t], std::exp(static_cast<double>(logits[t])) / denominator,
+                1e-6);
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-6);
+  const TopTwoTypes top = topTwoTypes(d);
+  EXPECT_EQ(top.first, shape::VehicleType::Compact);
+  EXPECT_EQ(top.second, shape::VehicleType::Large);
+  ASSERT_EQ(d.gamma.count, 3);
+  EXPECT_EQ(d.gamma.gamma[1], -1.5F);
+
+  // Flip logit <= 0 keeps the heading; a vehicle most likely Large has no ASM shape.
+  std::array<float, 7> largeLogits{};
+  largeLogits[6] = 5.0F;
+  Detection large;
+  large.box = {100.0, 50.0, 150.0, 60.0, 0.5};
+  outputs = CropNetOutputs{largeLogits, gamma, -0.1F, refine};
+  ASSERT_EQ(applyCropOutputs(outputs, 0.03, options, &large), SecondStageStatus::Ok);
+  EXPECT_EQ(large.box.angle, 0.5);
+  EXPECT_EQ(large.gamma.count, 0);
+  options.shapeForLargeVehicles = true;
+  ASSERT_EQ(applyCropOutputs(outputs, 0.03, options, &large), SecondStageStatus::Ok);
+  EXPECT_EQ(large.gamma.count, 3);
+
+  // Bad inputs are statuses and leave the detection alone.
+  Detection untouched = large;
+  EXPECT_EQ(applyCropOutputs(outputs, 0.0, options, &untouched), SecondStageStatus::BadGsd);
+  const std::array<float, 4> shortRefine{};
+  outputs.refine = shortRefine;
+  EXPECT_EQ(applyCropOutputs(outputs, 0.03, options, &untouched), SecondStageStatus::BadOutputs);
+  std::array<float, 5> nanRefine{};
+  nanRefine[2] = std::nanf("");
+  outputs.refine = nanRefine;
+  EXPECT_EQ(applyCropOutputs(outputs, 0.03, options, &untouched), SecondStageStatus::BadOutputs);
+  EXPECT_EQ(untouched.box.angle, large.box.angle);
+}
+
+TEST(GroundSampleDistance, MedianBoxIsANominalCar) {
+  std::array<Detection, 5> detections{};
+  const double lengths[] = {150.0, 160.0, 400.0, 140.0, 155.0};  // a bus among cars
+  for (int i = 0; i < 5; ++i) {
+    detections[i].box.length = lengths[i];
+  }
+  std::array<double, 5> scratch{};
+  GsdOptions options;
+  EXPECT_NEAR(medianLengthGsd(detections, options, scratch), 4.5 / 155.0, 1e-12);
+  EXPECT_NEAR(medianLengthGsd(std::span(detections).first(4), options, scratch), 4.5 / 155.0,
+              1e-12);  // even count: mean of 150 and 160
+  EXPECT_EQ(medianLengthGsd({}, options, scratch), 0.0);
+  detections[0].box.length = 1.0;
+  detections[1].box.length = 1.0;
+  detections[2].box.length = 1.0;
+  EXPECT_EQ(medianLengthGsd(detections, options, scratch), options.maxGsd_m);  // clamped
+  EXPECT_NEAR(nadirGsd(90.0, 3000.0), 0.03, 1e-15);
+  EXPECT_EQ(nadirGsd(-1.0, 3000.0), 0.0);
+  std::string why;
+  options.minGsd_m = 0.0;
+  EXPECT_FALSE(validate(options, &why));
+  EXPECT_NE(why.find("min_gsd_m"), std::string::npos) << why;
+}
+
+}  // namespace
+}  // namespace vp::detection

@@ -1,0 +1,312 @@
+// The detections file (docs/detections_file.md): exact write/read round trip for both key
+// variants, errors naming file:line:column, and a writer that allocates nothing per row.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "alloc_counter.hpp"
+#include "sequence/detections_file.hpp"
+
+namespace vp::sequence {
+namespace {
+
+namespace fs = std::filesystem;
+
+class DetectionsFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ =
+        fs::temp_directory_path() /
+        ("vp_detections_file_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+         "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  void writeText(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name), std::ios::binary) << text;
+  }
+
+  fs::path dir_;
+};
+
+// A record with every field used, from a random generator (values that are not round in
+// decimal, so the round trip tests the shortest-form formatting).
+DetectionRecord randomRecord(std::mt19937_64& rng, std::int64_t frameId, int detId, bool lifted) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  DetectionRecord r;
+  r.frameId = frameId;
+  r.detId = detId;
+  r.score = static_cast<float>(unit(rng));
+  r.box = {unit(rng) * 2592.0, unit(rng) * 2048.0, 20.0 + 40.0 * unit(rng), 8.0 + 10 * unit(rng),
+           unit(rng) * 6.28};
+  r.directionKnown = unit(rng) > 0.3;
+  float sum = 0.0F;
+  for (float& p : r.typeProbabilities) {
+    p = static_cast<float>(unit(rng));
+    sum += p;
+  }
+  for (float& p : r.typeProbabilities) {
+    p /= sum;
+  }
+  r.gamma.count = 3;
+  for (int s = 0; s < 3; ++s) {
+    r.gamma.gamma[static_cast<std::size_t>(s)] = static_cast<float>(4.0 * unit(rng) - 2.0);
+  }
+  r.liftStatus = lifted ? LiftStatus::Ok : LiftStatus::OutsideDtm;
+  if (lifted) {
+    r.positionEnu = {100 * unit(rng) - 50, 100 * unit(rng) - 50, 260 + unit(rng)};
+    r.latitudeDeg = 43.07 + 1e-3 * unit(rng);
+    r.longitudeDeg = -89.4 + 1e-3 * unit(rng);
+    r.heightM = 260 + unit(rng);
+    r.headingEnuRad = 6.28 * unit(rng);
+    r.dimensionsM = {4 + unit(rng), 1.7 + 0.2 * unit(rng), 1.4 + 0.3 * unit(rng)};
+  }
+  return r;
+}
+
+void expectSame(const DetectionRecord& a, const DetectionRecord& b) {
+  EXPECT_EQ(a.frameId, b.frameId);
+  EXPECT_EQ(a.imageStem(), b.imageStem());
+  EXPECT_EQ(a.detId, b.detId);
+  EXPECT_EQ(a.score, b.score);
+  EXPECT_EQ(a.box.cx, b.box.cx);
+  EXPECT_EQ(a.box.cy, b.box.cy);
+  EXPECT_EQ(a.box.length, b.box.length);
+  EXPECT_EQ(a.box.width, b.box.width);
+  EXPECT_EQ(a.box.angle, b.box.angle);
+  EXPECT_EQ(a.directionKnown, b.directionKnown);
+  EXPECT_EQ(a.typeProbabilities, b.typeProbabilities);
+  ASSERT_EQ(a.gamma.count, b.gamma.count);
+  for (int i = 0; i < a.gamma.count; ++i) {
+    EXPECT_EQ(a.gamma.gamma[static_cast<std::size_t>(i)],
+              b.gamma.gamma[static_cast<std::size_t>(i)]);
+  }
+  EXPECT_EQ(a.liftStatus, b.liftStatus);
+  if (a.liftStatus == LiftStatus::Ok) {
+    EXPECT_EQ(a.positionEnu, b.positionEnu);
+    EXPECT_EQ(a.latitudeDeg, b.latitudeDeg);
+    EXPECT_EQ(a.longitudeDeg, b.longitudeDeg);
+    EXPECT_EQ(a.heightM, b.heightM);
+    EXPECT_EQ(a.headingEnuRad, b.headingEnuRad);
+    EXPECT_EQ(a.dimensionsM, b.dimensionsM);
+  }
+}
+
+TEST_F(DetectionsFileTest, RoundTripIsExactForFrameRows) {
+  std::mt19937_64 rng(7);
+  std::vector<DetectionRecord> written;
+  for (int frame = 0; frame < 20; ++frame) {
+    for (int det = 0; det < 5; ++det) {
+      written.push_back(randomRecord(rng, frame * 3, det, (frame + det) % 3 != 0));
+    }
+  }
+  written[4].gamma.count = 0;  // a large vehicle: no shape
+  written[6].gamma.count = 2;  // fewer components than columns: trailing fields empty
+  DetectionsFileInfo info;
+  info.model = "detector r1 int8 (sha256 0123abcd)";
+  info.source = "sim seed 7";
+  DetectionsFileWriter writer;
+  std::string why;
+  ASSERT_TRUE(writer.open(path("d.csv"), info, &why)) << why;
+  for (const DetectionRecord& r : written) {
+    ASSERT_TRUE(writer.writeRow(r, &why)) << why;
+  }
+  ASSERT_TRUE(writer.close(&why)) << why;
+
+  DetectionsFile file;
+  ASSERT_TRUE(readDetectionsFile(path("d.csv"), &file, &why)) << why;
+  EXPECT_EQ(file.info.key, DetectionsKey::FrameId);
+  EXPECT_EQ(file.info.gammaColumns, 3);
+  EXPECT_EQ(file.info.model, info.model);
+  EXPECT_EQ(file.info.source, info.source);
+  ASSERT_EQ(file.rows.size(), written.size());
+  for (std::size_t i = 0; i < written.size(); ++i) {
+    SCOPED_TRACE(i);
+    expectSame(written[i], file.rows[i]);
+  }
+  EXPECT_EQ(file.lines.front(), 5);  // 3 metadata lines + the header
+}
+
+TEST_F(DetectionsFileTest, RoundTripIsExactForImageRows) {
+  std::mt19937_64 rng(8);
+  DetectionsFileInfo info;
+  info.key = DetectionsKey::Image;
+  info.gammaColumns = 0;
+  DetectionsFileWriter writer;
+  std::string why;
+  ASSERT_TRUE(writer.open(path("y.csv"), info, &why)) << why;
+  std::vector<DetectionRecord> written;
+  for (const char* stem : {"0_13", "Drone2_(363)", "0_13x"}) {
+    DetectionRecord r = randomRecord(rng, 0, static_cast<int>(written.size()), false);
+    r.liftStatus = LiftStatus::NotLifted;
+    r.gamma.count = 0;
+    ASSERT_TRUE(r.setImageStem(stem));
+    ASSERT_TRUE(writer.writeRow(r, &why)) << why;
+    written.push_back(r);
+  }
+  ASSERT_TRUE(writer.close(&why)) << why;
+  DetectionsFile file;
+  ASSERT_TRUE(readDetectionsFile(path("y.csv"), &file, &why)) << why;
+  EXPECT_EQ(file.info.key, DetectionsKey::Image);
+  ASSERT_EQ(file.rows.size(), 3U);
+  for (std::size_t i = 0; i < 3; ++i) {
+    expectSame(written[i], file.rows[i]);
+  }
+  EXPECT_EQ(file.rows[1].imageStem(), "Drone2_(363)");
+}
+
+TEST_F(DetectionsFileTest, WriterAllocatesNothingPerRow) {
+  std::mt19937_64 rng(9);
+  std::vector<DetectionRecord> rows;
+  for (int i = 0; i < 2000; ++i) {
+    rows.push_back(randomRecord(rng, i / 10, i % 10, i % 2 == 0));
+  }
+  DetectionsFileWriter writer;
+  std::string why;
+  ASSERT_TRUE(writer.open(path("a.csv"), DetectionsFileInfo{}, &why)) << why;
+  ASSERT_TRUE(writer.writeRow(rows[0], &why)) << why;  // warm-up
+  test::AllocationCounter counter;
+  bool ok = true;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    ok = writer.writeRow(rows[i], nullptr) && ok;  // ~150 KB: the stdio buffer is flushed
+  }
+  ok = writer.flush(nullptr) && ok;
+  counter.stop();
+  EXPECT_TRUE(ok);
+  EXPECT_EQ(counter.count(), 0U) << "allocations while writing 1999 rows";
+  ASSERT_TRUE(writer.close(&why)) << why;
+  DetectionsFile file;
+  ASSERT_TRUE(readDetectionsFile(path("a.csv"), &file, &why)) << why;
+  EXPECT_EQ(file.rows.size(), rows.size());
+}
+
+TEST_F(DetectionsFileTest, WriterRejectsBadRecordsWithoutWriting) {
+  DetectionsFileWriter writer;
+  std::string why;
+  ASSERT_TRUE(writer.open(path("b.csv"), DetectionsFileInfo{}, &why)) << why;
+  std::mt19937_64 rng(10);
+  DetectionRecord r = randomRecord(rng, 1, 0, true);
+  r.score = 1.5F;
+  EXPECT_FALSE(writer.writeRow(r, &why));
+  EXPECT_NE(why.find("score: must be in [0, 1]"), std::string::npos) << why;
+  r = randomRecord(rng, 1, 0, true);
+  r.box.angle = -0.1;
+  EXPECT_FALSE(writer.writeRow(r, &why));
+  EXPECT_NE(why.find("box_angle_rad"), std::string::npos) << why;
+  r = randomRecord(rng, 1, 0, true);
+  r.headingEnuRad = std::nan("");
+  EXPECT_FALSE(writer.writeRow(r, &why));
+  EXPECT_NE(why.find("heading_enu_rad: not finite"), std::string::npos) << why;
+  EXPECT_EQ(writer.rowsWritten(), 0);
+  ASSERT_TRUE(writer.close(&why)) << why;
+}
+
+TEST_F(DetectionsFileTest, WriterReportsAnUnwritablePath) {
+  DetectionsFileWriter writer;
+  std::string why;
+  EXPECT_FALSE(writer.open(path("missing_dir/d.csv"), DetectionsFileInfo{}, &why));
+  EXPECT_NE(why.find("missing_dir/d.csv: cannot create file"), std::string::npos) << why;
+  EXPECT_FALSE(writer.writeRow(DetectionRecord{}, &why));
+  EXPECT_NE(why.find("not open"), std::string::npos) << why;
+}
+
+// A valid two-row file, broken one way at a time.
+const std::string kHeader =
+    "frame_id,det_id,score,box_cx_px,box_cy_px,box_length_px,box_width_px,box_angle_rad,"
+    "direction_known,type,p_estate,p_compact,p_sports,p_sedan,p_suv,p_van,p_large,gamma_0,"
+    "gamma_1,gamma_2,lift_status,east_m,north_m,up_m,lat_deg,lon_deg,height_m,heading_enu_rad,"
+    "length_m,width_m,height_m_vehicle";
+const std::string kRow1 =
+    "3,0,0.9,100.5,200.25,40,16,1.5,1,sedan,0,0,0,1,0,0,0,0.5,-1,0.25,ok,1,2,260,43.07,-89.4,"
+    "260,0.5,4.5,1.8,1.45";
+const std::string kRow2 =
+    "4,0,0.8,10,20,30,12,0,0,van,0.1,0.1,0.1,0.1,0.1,0.3,0.2,,,,outside_dtm,,,,,,,,,,";
+
+TEST_F(DetectionsFileTest, ValidFixtureReads) {
+  writeText("ok.csv", "# model: m1\n" + kHeader + "\n" + kRow1 + "\n" + kRow2 + "\n");
+  DetectionsFile file;
+  std::string why;
+  ASSERT_TRUE(readDetectionsFile(path("ok.csv"), &file, &why)) << why;
+  ASSERT_EQ(file.rows.size(), 2U);
+  EXPECT_EQ(file.rows[0].topType(), shape::VehicleType::Sedan);
+  EXPECT_EQ(file.rows[0].gamma.count, 3);
+  EXPECT_EQ(file.rows[1].gamma.count, 0);
+  EXPECT_EQ(file.rows[1].liftStatus, LiftStatus::OutsideDtm);
+  EXPECT_DOUBLE_EQ(file.rows[0].positionEnu.z(), 260.0);
+  EXPECT_EQ(file.lines, (std::vector<int>{3, 4}));
+}
+
+TEST_F(DetectionsFileTest, MalformedRowsNameFileLineAndColumn) {
+  struct Case {
+    std::string text;
+    std::string expected;
+  };
+  const auto replaced = [](std::string row, const std::string& from, const std::string& to) {
+    row.replace(row.find(from), from.size(), to);
+    return row;
+  };
+  const std::vector<Case> cases{
+      {kHeader + "\n" + replaced(kRow1, "100.5", "10x") + "\n",
+       "bad.csv:2:9: box_cx_px: not a number '10x'"},
+      {kHeader + "\n" + kRow1 + "\n" + replaced(kRow2, "outside_dtm", "lost") + "\n",
+       "bad.csv:3:60: lift_status: unknown lift status 'lost'"},
+      {kHeader + "\n" + replaced(kRow1, ",sedan,", ",van,") + "\n",
+       "bad.csv:2:34: type: 'van' is not the most probable type (p_sedan 1)"},
+      {kHeader + "\n" + replaced(kRow1, ",sedan,", ",truck,") + "\n",
+       "bad.csv:2:34: type: unknown vehicle type 'truck'"},
+      {kHeader + "\n" + replaced(kRow1, "0.9,", "1.2,") + "\n",
+       "bad.csv:2:5: score: must be in [0, 1], got '1.2'"},
+      {kHeader + "\n" + replaced(kRow1, "0,0,0,1,0,0,0,", "0,0,0,0.5,0,0,0,") + "\n",
+       "p_estate: probabilities p_estate..p_large do not sum to 1"},
+      {kHeader + "\n" + replaced(kRow1, "0.5,-1,0.25", "0.5,,0.25") + "\n",
+       "gamma_2: value after an empty gamma field"},
+      {kHeader + "\n" + replaced(kRow2, "outside_dtm,,,", "outside_dtm,1,,") + "\n",
+       "east_m: must be empty when lift_status is outside_dtm, got '1'"},
+      {kHeader + "\n" + replaced(kRow1, ",1.45", "") + "\n",
+       "bad.csv:2: expected 31 fields, got 30"},
+      {kHeader + "\n" + kRow2 + "\n" + kRow1 + "\n",
+       "bad.csv:3:1: frame_id: not in non-decreasing order (3 after 4)"},
+      {kHeader + "\n" + kRow1 + "\n" + kRow1 + "\n",
+       "bad.csv:3:3: det_id: det_id 0 appears twice in frame 3"},
+      {kHeader + "\n" + kRow1 + "\n\n", "bad.csv:3: empty line"},
+      {"# model: a\n# colour: red\n" + kHeader + "\n", "bad.csv:2: unknown metadata key 'colour'"},
+      {"# format_version: 2\n" + kHeader + "\n", "bad.csv:1: format_version: 2 not supported"},
+      {"id,det_id\n", "bad.csv:1: header: must start with 'frame_id,'"},
+      {replaced(kHeader, "p_van", "p_bus") + "\n", "bad.csv:1: header: expected"},
+      {"# model: only metadata\n", "bad.csv:2: header: missing"},
+  };
+  for (const Case& c : cases) {
+    writeText("bad.csv", c.text);
+    DetectionsFile file;
+    std::string why;
+    EXPECT_FALSE(readDetectionsFile(path("bad.csv"), &file, &why)) << c.text;
+    EXPECT_NE(why.find(c.expected), std::string::npos)
+        << "got: " << why << "\nexpected: " << c.expected;
+    EXPECT_TRUE(file.rows.empty());
+  }
+  DetectionsFile file;
+  std::string why;
+  EXPECT_FALSE(readDetectionsFile(path("nothing.csv"), &file, &why));
+  EXPECT_NE(why.find("nothing.csv: cannot open"), std::string::npos) << why;
+}
+
+TEST(LiftStatusWords, RoundTripEveryStatus) {
+  for (int i = 0; i < kLiftStatusCount; ++i) {
+    const auto status = static_cast<LiftStatus>(i);
+    EXPECT_EQ(liftStatusFromString(toString(status)), status);
+  }
+  EXPECT_EQ(std::string(toString(LiftStatus::StalePose)), "stale_pose");
+  EXPECT_FALSE(liftStatusFromString("OK").has_value());
+}
+
+}  // namespace
+}  // namespace vp::sequence

@@ -1,0 +1,330 @@
+#include "perception/detection_lifter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "geometry/rotated_box.hpp"
+#include "telemetry/pose_buffer.hpp"
+#include "test_scene.hpp"
+
+namespace vp::perception {
+namespace {
+
+using testworld::Scene;
+using testworld::TruthVehicle;
+
+struct LiftCase {
+  const char* name;
+  bool fixture;  // the shipped sloped DTM with its bump, else a plane
+  double slopeEast;
+  double slopeNorth;
+  camera::LensModel lens;
+  double gimbalPitchDeg;
+};
+
+class GroundTruthLift : public ::testing::TestWithParam<LiftCase> {};
+
+// Acceptance (issue 5): a perfect detection of a ground-truth vehicle (its footprint
+// projected through the Lifter) lifts back to the vehicle's world position within 1 cm, on
+// flat and sloped terrain, nadir and tilted, pinhole and distorted lens.
+TEST_P(GroundTruthLift, PositionWithinOneCentimetre) {
+  const LiftCase& tc = GetParam();
+  Scene scene(tc.fixture ? testworld::fixtureDtm() : testworld::plane(tc.slopeEast, tc.slopeNorth),
+              tc.lens);
+  const lifting::DronePose pose = testworld::hoveringPose(30.0, tc.gimbalPitchDeg);
+  const auto cameraPose = scene.lifter.cameraPose(pose);
+  ASSERT_TRUE(cameraPose);
+
+  const std::vector<TruthVehicle> truths = testworld::truthVehicles(scene.terrain, 90.0, 7.5);
+  std::vector<detection::Detection> detections;
+  std::vector<TruthVehicle> seen;
+  for (const TruthVehicle& t : truths) {
+    detection::Detection d;
+    if (testworld::perfectDetection(scene, *cameraPose, t, &d)) {
+      detections.push_back(d);
+      seen.push_back(t);
+    }
+  }
+  ASSERT_GT(detections.size(), 40U);
+  std::vector<VehicleObservation> out(detections.size() + 3);
+  const FrameLiftSummary summary = scene.detectionLifter.liftFrame(
+      scene.lifter, 1234, telemetry::PoseStatus::Ok, pose, detections, out);
+  ASSERT_EQ(summary.poseStatus, LiftStatus::Ok);
+  ASSERT_EQ(summary.written, detections.size());
+  ASSERT_EQ(summary.lifted, detections.size());
+  EXPECT_EQ(summary.dropped, 0U);
+
+  double maxPositionM = 0.0, maxHeadingDeg = 0.0, maxLengthM = 0.0, maxWidthM = 0.0;
+  double maxRearAxleM = 0.0;
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    const VehicleObservation& o = out[i];
+    const shape::GroundFootprint& truth = seen[i].footprint;
+    ASSERT_EQ(o.liftStatus, LiftStatus::Ok) << toString(o.liftStatus);
+    EXPECT_EQ(o.timestampNs, 1234);
+    EXPECT_EQ(o.detection.box.cx, detections[i].box.cx);
+    EXPECT_EQ(o.type, seen[i].type);
+    maxPositionM = std::max(maxPositionM, (o.ground.centreEnu - truth.centreEnu).norm());
+    maxHeadingDeg = std::max(
+        maxHeadingDeg, geometry::absAngleDifference(o.ground.headingEnuRad, truth.headingEnuRad) *
+                           180.0 / geometry::kPi);
+    // GroundBox sizes run along the ground: the true ones are the distances between the
+    // edge midpoints standing on the DTM.
+    const Eigen::Vector2d fw(std::cos(truth.headingEnuRad), std::sin(truth.headingEnuRad));
+    const Eigen::Vector2d nw(-fw.y(), fw.x());
+    const auto onGround = [&](const Eigen::Vector2d& xy) {
+      return *scene.terrain.groundPointEnu(xy.x(), xy.y());
+    };
+    const Eigen::Vector2d c = truth.centreEnu.head<2>();
+    const double trueLength =
+        (onGround(c + 0.5 * truth.lengthM * fw) - onGround(c - 0.5 * truth.lengthM * fw)).norm();
+    const double trueWidth =
+        (onGround(c + 0.5 * truth.widthM * nw) - onGround(c - 0.5 * truth.widthM * nw)).norm();
+    maxLengthM = std::max(maxLengthM, std::abs(o.ground.lengthM - trueLength));
+    maxWidthM = std::max(maxWidthM, std::abs(o.ground.widthM - trueWidth));
+    // The WGS84 centre is the ENU centre's.
+    EXPECT_LT((scene.frame.toEnu(o.ground.centreWgs84) - o.ground.centreEnu).norm(), 1e-6);
+
+    // Shape: keypoints on the DTM, footprint extent = lifted size; rear axle from the ASM.
+    ASSERT_TRUE(o.hasKeypoints);
+    ASSERT_TRUE(o.hasRearAxle);
+    const shape::VehicleGeometry g =
+        shape::vehicleGeometry(scene.asmModel, seen[i].type, detections[i].gamma);
+    EXPECT_NEAR(o.heightM, g.sizeM.z(), 1e-12);
+    const Eigen::Vector2d f(std::cos(truth.headingEnuRad), std::sin(truth.headingEnuRad));
+    const Eigen::Vector2d axleWant =
+        truth.centreEnu.head<2>() + f * (g.rearAxleM.x() * truth.lengthM / g.sizeM.x());
+    maxRearAxleM = std::max(maxRearAxleM, (o.rearAxleEnu.head<2>() - axleWant).norm());
+    const auto axleGround = scene.terrain.groundPointEnu(o.rearAxleEnu.x(), o.rearAxleEnu.y());
+    ASSERT_TRUE(axleGround);
+    EXPECT_NEAR(o.rearAxleEnu.z(), axleGround->z(), 2e-3);
+    EXPECT_LT((scene.frame.toEnu(o.rearAxleWgs84) - o.rearAxleEnu).norm(), 1e-6);
+    const int roofFrontLeft = 10;
+    const auto roofGround = scene.terrain.groundPointEnu(o.keypointsEnu(0, roofFrontLeft),
+                                                         o.keypointsEnu(1, roofFrontLeft));
+    ASSERT_TRUE(roofGround);
+    EXPECT_NEAR(o.keypointsEnu(2, roofFrontLeft) - roofGround->z(), g.keypointsM(2, roofFrontLeft),
+                2e-3);
+  }
+  std::printf(
+      "[ %s ] %zu vehicles: max position error %.3g m, heading %.3g deg, length %.3g m, width "
+      "%.3g m, rear axle %.3g m\n",
+      tc.name, detections.size(), maxPositionM, maxHeadingDeg, maxLengthM, maxWidthM, maxRearAxleM);
+  EXPECT_LT(maxPositionM, 0.01);
+  EXPECT_LT(maxHeadingDeg, 0.01);
+  EXPECT_LT(maxLengthM, 0.005);
+  EXPECT_LT(maxWidthM, 0.01);
+  EXPECT_LT(maxRearAxleM, 0.005);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Terrains, GroundTruthLift,
+    ::testing::Values(
+        LiftCase{"flat_nadir_pinhole", false, 0.0, 0.0, camera::LensModel::Pinhole, -90.0},
+        LiftCase{"flat_tilted_brown", false, 0.0, 0.0, camera::LensModel::BrownConrady, -70.0},
+        LiftCase{"sloped_tilted_brown", false, 0.12, -0.07, camera::LensModel::BrownConrady, -70.0},
+        LiftCase{"steep_tilted_pinhole", false, 0.35, 0.2, camera::LensModel::Pinhole, -75.0},
+        LiftCase{"fixture_dtm_tilted_brown", true, 0.0, 0.0, camera::LensModel::BrownConrady,
+                 -80.0}),
+    [](const auto& testInfo) { return std::string(testInfo.param.name); });
+
+// Returns true when the observation carries no world value (all zero, flags off).
+bool noWorldValues(const VehicleObservation& o) {
+  return o.ground.centreEnu == Eigen::Vector3d::Zero() && o.ground.lengthM == 0.0 &&
+         o.ground.centreWgs84.latitudeDeg == 0.0 && !o.hasKeypoints && !o.hasRearAxle &&
+         o.rearAxleEnu == Eigen::Vector3d::Zero() && o.keypointsEnu.isZero();
+}
+
+TEST(DetectionLifter, MissingStaleOrInvalidPoseKeepsDetectionsWithoutWorldPosition) {
+  Scene scene(testworld::plane(0.0, 0.0), camera::LensModel::Pinhole);
+  const lifting::DronePose pose = testworld::hoveringPose(0.0, -90.0);
+  const auto cameraPose = scene.lifter.cameraPose(pose);
+  ASSERT_TRUE(cameraPose);
+  std::vector<detection::Detection> detections;
+  for (const TruthVehicle& t : testworld::truthVehicles(scene.terrain, 20.0, 10.0)) {
+    detection::Detection d;
+    if (testworld::perfectDetection(scene, *cameraPose, t, &d)) {
+      detections.push_back(d);
+    }
+  }
+  ASSERT_GE(detections.size(), 9U);
+  std::vector<VehicleObservation> out(detections.size());
+
+  telemetry::PoseBuffer buffer;
+  ASSERT_TRUE(buffer.init({}));
+  constexpr std::int64_t kMs = 1'000'000;
+  const auto lift = [&](std::int64_t t) {
+    return scene.detectionLifter.liftFrame(scene.lifter, t, buffer.poseAt(t), detections, out);
+  };
+  const auto expectAll = [&](const FrameLiftSummary& s, LiftStatus want) {
+    EXPECT_EQ(s.poseStatus, want);
+    EXPECT_EQ(s.lifted, 0U);
+    ASSERT_EQ(s.written, detections.size());
+    for (std::size_t i = 0; i < s.written; ++i) {
+      EXPECT_EQ(out[i].liftStatus, want);
+      EXPECT_EQ(out[i].detection.box.cx, detections[i].box.cx);  // kept in image space
+      EXPECT_TRUE(noWorldValues(out[i])) << i;
+    }
+  };
+  // No telemetry at all.
+  expectAll(lift(1000 * kMs), LiftStatus::NoPose);
+
+  telemetry::PoseSample sample;
+  sample.timestampNs = 1000 * kMs;
+  sample.position = pose.position;
+  sample.bodyToNed = pose.bodyToNed;
+  sample.gimbal = pose.gimbal;
+  ASSERT_EQ(buffer.push(sample), telemetry::PushResult::Accepted);
+  EXPECT_EQ(lift(1000 * kMs).lifted, detections.size());
+  // Telemetry stopped 300 ms before the frame.
+  expectAll(lift(1300 * kMs), LiftStatus::StalePose);
+  // The frame is before any telemetry.
+  expectAll(lift(500 * kMs), LiftStatus::NoPose);
+  // The link now sends NaN: rejected, counted, and the next frame has an invalid pose.
+  sample.timestampNs = 1050 * kMs;
+  sample.position.latitudeDeg = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(buffer.push(sample), telemetry::PushResult::NotFinite);
+  EXPECT_EQ(buffer.counters().notFinite, 1U);
+  expectAll(lift(1060 * kMs), LiftStatus::InvalidPose);
+
+  // A pose handed over directly as Ok but unusable (NaN, zero quaternion) is caught too.
+  lifting::DronePose bad = pose;
+  bad.position.heightM = std::numeric_limits<double>::infinity();
+  expectAll(scene.detectionLifter.liftFrame(scene.lifter, 0, telemetry::PoseStatus::Ok, bad,
+                                            detections, out),
+            LiftStatus::InvalidPose);
+  bad = pose;
+  bad.bodyToNed.coeffs().setZero();
+  expectAll(scene.detectionLifter.liftFrame(scene.lifter, 0, telemetry::PoseStatus::Ok, bad,
+                                            detections, out),
+            LiftStatus::InvalidPose);
+}
+
+TEST(DetectionLifter, RaysLeavingTheDtmOrMeetingNoDataGiveAStatus) {
+  // The fixture DTM covers +-100 m; a camera 35 deg below the horizon sees past its edge.
+  Scene scene(testworld::fixtureDtm(), camera::LensModel::Pinhole);
+  const lifting::DronePose pose = testworld::hoveringPose(0.0, -35.0);
+  const auto cameraPose = scene.lifter.cameraPose(pose);
+  ASSERT_TRUE(cameraPose);
+  std::vector<detection::Detection> detections(4);
+  for (auto& d : detections) {
+    d.box = {1295.5, 1023.5, 60.0, 25.0, 0.5};
+    d.directionKnown = true;
+    d.typeProbabilities.fill(1.0F / shape::kVehicleTypeCount);
+  }
+  detections[0].box.cy = 5.0;     // top row: far beyond the DTM's north edge
+  detections[1].box.cy = 2040.0;  // bottom row: on the DTM
+  detections[2].box.length = std::numeric_limits<double>::quiet_NaN();
+  detections[3].box.width = 0.0;
+  // NoData: the south-east corner sample of the fixture (col 40, row 40) is missing.
+  const geodesy::UtmPoint centre = geodesy::toUtm(testworld::kOrigin);
+  geodesy::UtmPoint corner = centre;
+  corner.eastingM = 304510.0 + 99.0;
+  corner.northingM = 4771731.0 - 99.0;
+  corner.heightM = 260.0 + 0.03 * 99.0;
+  const Eigen::Vector3d cornerEnu = scene.frame.toEnu(geodesy::fromUtm(corner));
+  // A nadir view from 100 m above that corner.
+  lifting::DronePose nadir = testworld::hoveringPose(0.0, -90.0);
+  nadir.position = geodesy::fromUtm(corner);
+  nadir.position.heightM += testworld::kAltitudeM;
+  const auto nadirPose = scene.lifter.cameraPose(nadir);
+  ASSERT_TRUE(nadirPose);
+  const auto cornerPixel = scene.lifter.worldToPixel(*nadirPose, cornerEnu);
+  ASSERT_TRUE(cornerPixel);
+  ASSERT_TRUE(scene.camera.inImage(*cornerPixel));
+
+  std::vector<VehicleObservation> out(detections.size());
+  const FrameLiftSummary s = scene.detectionLifter.liftFrame(
+      scene.lifter, 7, telemetry::PoseStatus::Ok, pose, detections, out);
+  EXPECT_EQ(s.poseStatus, LiftStatus::Ok);
+  EXPECT_EQ(s.lifted, 1U);
+  EXPECT_TRUE(out[0].liftStatus == LiftStatus::OutsideDtm ||
+              out[0].liftStatus == LiftStatus::NoIntersection)
+      << toString(out[0].liftStatus);
+  EXPECT_TRUE(noWorldValues(out[0]));
+  EXPECT_EQ(out[1].liftStatus, LiftStatus::Ok) << toString(out[1].liftStatus);
+  EXPECT_EQ(out[2].liftStatus, LiftStatus::InvalidBox);
+  EXPECT_EQ(out[3].liftStatus, LiftStatus::InvalidBox);
+  EXPECT_TRUE(noWorldValues(out[2]));
+
+  detection::Detection noData = detections[1];
+  noData.box.cx = cornerPixel->x();
+  noData.box.cy = cornerPixel->y();
+  noData.box.length = 20.0;
+  noData.box.width = 10.0;
+  VehicleObservation one;
+  scene.detectionLifter.liftFrame(scene.lifter, 7, telemetry::PoseStatus::Ok, nadir,
+                                  std::span(&noData, 1), std::span(&one, 1));
+  EXPECT_EQ(one.liftStatus, LiftStatus::NoData) << toString(one.liftStatus);
+  EXPECT_TRUE(noWorldValues(one));
+}
+
+TEST(DetectionLifter, CapacityAndOrderAreKept) {
+  Scene scene(testworld::plane(0.0, 0.0), camera::LensModel::Pinhole);
+  const lifting::DronePose pose = testworld::hoveringPose(0.0, -90.0);
+  std::vector<detection::Detection> detections(5);
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    detections[i].box = {1000.0 + 100.0 * static_cast<double>(i), 1000.0, 60.0, 25.0, 0.0};
+    detections[i].typeProbabilities[static_cast<std::size_t>(shape::VehicleType::Large)] = 1.0F;
+  }
+  std::vector<VehicleObservation> out(3);
+  const FrameLiftSummary s = scene.detectionLifter.liftFrame(
+      scene.lifter, 1, telemetry::PoseStatus::Ok, pose, detections, out);
+  EXPECT_EQ(s.written, 3U);
+  EXPECT_EQ(s.dropped, 2U);
+  EXPECT_EQ(s.lifted, 3U);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_EQ(out[i].detection.box.cx, detections[i].box.cx);
+    EXPECT_EQ(out[i].type, shape::VehicleType::Large);
+    EXPECT_FALSE(out[i].hasKeypoints);  // no ASM for large vehicles
+    EXPECT_TRUE(out[i].hasRearAxle);    // the length rule
+    EXPECT_EQ(out[i].heightM, 0.0);
+  }
+}
+
+TEST(DetectionLifter, LiftingAFrameDoesNotAllocate) {
+  Scene scene(testworld::plane(0.12, -0.07), camera::LensModel::BrownConrady);
+  const lifting::DronePose pose = testworld::hoveringPose(30.0, -70.0);
+  const auto cameraPose = scene.lifter.cameraPose(pose);
+  ASSERT_TRUE(cameraPose);
+  std::vector<detection::Detection> detections;
+  for (const TruthVehicle& t : testworld::truthVehicles(scene.terrain, 60.0, 10.0)) {
+    detection::Detection d;
+    if (testworld::perfectDetection(scene, *cameraPose, t, &d)) {
+      detections.push_back(d);
+    }
+  }
+  detections.push_back(detections.front());
+  detections.back().box.cy = -5000.0;  // a failing one too
+  ASSERT_GT(detections.size(), 40U);
+  std::vector<VehicleObservation> out(detection::kMaxDetectionsPerFrame);
+  telemetry::PoseBuffer buffer;
+  ASSERT_TRUE(buffer.init({}));
+  telemetry::PoseSample sample;
+  sample.position = pose.position;
+  sample.bodyToNed = pose.bodyToNed;
+  sample.gimbal = pose.gimbal;
+
+  vp::test::AllocationCounter counter;
+  std::size_t lifted = 0;
+  for (int frame = 0; frame < 5; ++frame) {
+    sample.timestampNs = frame * 100'000'000LL;
+    buffer.push(sample);
+    const FrameLiftSummary s = scene.detectionLifter.liftFrame(
+        scene.lifter, sample.timestampNs, buffer.poseAt(sample.timestampNs), detections, out);
+    lifted += s.lifted;
+  }
+  counter.stop();
+  std::printf("%zu detections x 5 frames lifted, %zu allocations\n", detections.size(),
+              counter.count());
+  EXPECT_EQ(lifted, 5 * (detections.size() - 1));
+  EXPECT_EQ(counter.count(), 0U);
+}
+
+}  // namespace
+}  // namespace vp::perception

@@ -1,0 +1,216 @@
+// Preprocessor: the whole frame -> corrected frame + tiles chain at the camera's resolution,
+// its statuses for bad frames, and zero heap allocation per frame after init().
+#include "preprocess/preprocessor.hpp"
+
+#include <cstring>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "alloc_counter.hpp"
+
+namespace vp::preprocess {
+namespace {
+
+constexpr int kFrameWidthPx = 2592;  // the camera of seed 000
+constexpr int kFrameHeightPx = 2048;
+
+camera::CameraModel camera2592(camera::LensModel lens) {
+  camera::Intrinsics k;
+  k.widthPx = kFrameWidthPx;
+  k.heightPx = kFrameHeightPx;
+  k.fxPx = 2300.0;
+  k.fyPx = 2300.0;
+  k.cxPx = 1297.5;
+  k.cyPx = 1021.0;
+  camera::Distortion d;
+  d.model = lens;
+  if (lens == camera::LensModel::BrownConrady) {
+    d.k1 = -0.12;
+    d.k2 = 0.04;
+    d.p1 = 2e-4;
+    d.p2 = -1e-4;
+  }
+  camera::CameraModel camera;
+  EXPECT_TRUE(camera.init(k, d));
+  return camera;
+}
+
+cv::Mat texturedFrame(std::uint64_t seed) {
+  cv::Mat frame(kFrameHeightPx, kFrameWidthPx, CV_8UC3);
+  cv::RNG rng(seed);
+  rng.fill(frame, cv::RNG::UNIFORM, 30, 220);
+  return frame;
+}
+
+TEST(Preprocessor, DefaultScaleGivesOnePaddedTile) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::BrownConrady);
+  Preprocessor pre;
+  std::string why;
+  ASSERT_TRUE(pre.init(PreprocessOptions{}, camera, {kFrameWidthPx, kFrameHeightPx}, &why)) << why;
+  EXPECT_TRUE(pre.undistorts());
+  const cv::Mat frame = texturedFrame(1);
+  ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok) << pre.lastError();
+  const PreprocessedFrame& out = pre.output();
+  EXPECT_EQ(out.geometry.workingWidthPx, 648);
+  EXPECT_EQ(out.geometry.workingHeightPx, 512);
+  EXPECT_DOUBLE_EQ(out.geometry.scaleX, 0.25);
+  EXPECT_DOUBLE_EQ(out.geometry.workingToFrameU(0.0), 1.5);  // pixel centres: 4 px block
+  ASSERT_EQ(out.tiles.size(), 1U);
+  const TileView& tile = out.tiles[0];
+  EXPECT_EQ(tile.rect.x0Px, 0);
+  EXPECT_EQ(tile.rect.widthPx, 672);
+  EXPECT_EQ(tile.rect.heightPx, 512);
+  EXPECT_FALSE(tile.rect.innerLeft || tile.rect.innerRight || tile.rect.innerTop ||
+               tile.rect.innerBottom);
+
+  // The corrected frame is the remap of the input, the tile its area downscale + grey pad.
+  FrameRemap remap;
+  ASSERT_TRUE(remap.init(camera, camera.intrinsics()));
+  cv::Mat undistorted(frame.size(), CV_8UC3);
+  ASSERT_TRUE(remap.apply(frame, undistorted));
+  EXPECT_EQ(cv::norm(out.frame, undistorted, cv::NORM_INF), 0.0);
+  cv::Mat small;
+  cv::resize(undistorted, small, {648, 512}, 0, 0, cv::INTER_AREA);
+  const cv::Mat tileMat(512, 672, CV_8UC3, const_cast<std::uint8_t*>(tile.data), tile.strideBytes);
+  EXPECT_EQ(cv::norm(tileMat(cv::Rect(0, 0, 648, 512)), small, cv::NORM_INF), 0.0);
+  EXPECT_EQ(tileMat.at<cv::Vec3b>(300, 660), cv::Vec3b(128, 128, 128));
+
+  // Lifting uses the pinhole of the undistorted frame.
+  EXPECT_EQ(pre.frameCamera().distortion().model, camera::LensModel::Pinhole);
+  EXPECT_DOUBLE_EQ(pre.frameCamera().intrinsics().fxPx, 2300.0);
+}
+
+TEST(Preprocessor, WithoutCorrectionsTheFrameIsTheCallersFrame) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
+  PreprocessOptions options;
+  options.undistort = true;  // a pinhole needs none: no remap, no copy
+  Preprocessor pre;
+  ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}));
+  EXPECT_FALSE(pre.undistorts());
+  const cv::Mat frame = texturedFrame(2);
+  ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+  EXPECT_EQ(pre.output().frame.data, frame.data);
+  EXPECT_EQ(pre.frameCamera().distortion().model, camera::LensModel::Pinhole);
+}
+
+TEST(Preprocessor, WhiteBalanceNeverWritesTheCallersFrame) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
+  PreprocessOptions options;
+  options.whiteBalance = true;
+  Preprocessor pre;
+  ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}));
+  cv::Mat frame = texturedFrame(3);
+  frame.forEach<cv::Vec3b>(
+      [](cv::Vec3b& p, const int*) { p[2] = cv::saturate_cast<std::uint8_t>(p[2] * 1.2); });
+  const cv::Mat copy = frame.clone();
+  ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+  EXPECT_EQ(cv::norm(frame, copy, cv::NORM_INF), 0.0);
+  EXPECT_NE(pre.output().frame.data, frame.data);
+  ASSERT_TRUE(pre.output().whiteBalance.found);
+  // The red cast is reduced in the corrected frame.
+  const cv::Scalar before = cv::mean(frame);
+  const cv::Scalar after = cv::mean(pre.output().frame);
+  EXPECT_LT(std::abs(after[2] / after[1] - 1.0), std::abs(before[2] / before[1] - 1.0));
+}
+
+TEST(Preprocessor, FinerWorkingScaleIsTiled) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
+  PreprocessOptions options;
+  options.workingScale = 0.5;
+  options.tileOverlapPx = 96;
+  Preprocessor pre;
+  std::string why;
+  ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why)) << why;
+  ASSERT_EQ(pre.tileCount(), 9U);
+  const cv::Mat frame = texturedFrame(4);
+  ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+  const PreprocessedFrame& out = pre.output();
+  EXPECT_EQ(out.geometry.workingWidthPx, 1296);
+  cv::Mat small;
+  cv::resize(frame, small, {1296, 1024}, 0, 0, cv::INTER_AREA);
+  for (const TileView& tile : out.tiles) {
+    // Each tile shows the working image at its offset.
+    const cv::Mat view(tile.rect.heightPx, tile.rect.widthPx, CV_8UC3,
+                       const_cast<std::uint8_t*>(tile.data), tile.strideBytes);
+    EXPECT_EQ(
+        cv::norm(view, small(cv::Rect(tile.rect.x0Px, tile.rect.y0Px, 672, 512)), cv::NORM_INF),
+        0.0)
+        << "tile " << tile.index;
+  }
+  EXPECT_TRUE(out.tiles[4].rect.innerLeft && out.tiles[4].rect.innerRight &&
+              out.tiles[4].rect.innerTop && out.tiles[4].rect.innerBottom);
+}
+
+TEST(Preprocessor, BadFramesAreStatusesNamingTheProblem) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::BrownConrady);
+  Preprocessor pre;
+  const cv::Mat frame = texturedFrame(5);
+  EXPECT_EQ(pre.process(frame), PreprocessStatus::NotInitialised);
+  ASSERT_TRUE(pre.init(PreprocessOptions{}, camera, {kFrameWidthPx, kFrameHeightPx}));
+  EXPECT_EQ(pre.process(cv::Mat()), PreprocessStatus::EmptyFrame);
+  EXPECT_NE(std::strstr(pre.lastError(), "empty frame"), nullptr) << pre.lastError();
+  const cv::Mat grey(kFrameHeightPx, kFrameWidthPx, CV_8UC1, cv::Scalar::all(0));
+  EXPECT_EQ(pre.process(grey), PreprocessStatus::WrongFrameType);
+  EXPECT_NE(std::strstr(pre.lastError(), "1 channel"), nullptr) << pre.lastError();
+  const cv::Mat deep(kFrameHeightPx, kFrameWidthPx, CV_16UC3, cv::Scalar::all(0));
+  EXPECT_EQ(pre.process(deep), PreprocessStatus::WrongFrameType);
+  const cv::Mat small(1024, 1296, CV_8UC3, cv::Scalar::all(0));
+  EXPECT_EQ(pre.process(small), PreprocessStatus::WrongFrameSize);
+  EXPECT_NE(std::strstr(pre.lastError(), "1296x1024, expected 2592x2048"), nullptr)
+      << pre.lastError();
+  ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+  EXPECT_STREQ(pre.lastError(), "");
+  // Its own output fed back in would be remapped in place.
+  EXPECT_EQ(pre.process(pre.output().frame), PreprocessStatus::FrameIsOutput);
+}
+
+TEST(Preprocessor, InitNamesBadOptions) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::BrownConrady);
+  Preprocessor pre;
+  std::string why;
+  EXPECT_FALSE(pre.init(PreprocessOptions{}, camera, {1296, 1024}, &why));
+  EXPECT_NE(why.find("differs from the camera model's 2592x2048"), std::string::npos) << why;
+  PreprocessOptions options;
+  options.workingScale = 1.5;
+  EXPECT_FALSE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why));
+  EXPECT_NE(why.find("working_scale"), std::string::npos) << why;
+  options = PreprocessOptions{};
+  options.tileOverlapPx = 400;
+  EXPECT_FALSE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why));
+  EXPECT_NE(why.find("tile_overlap_px"), std::string::npos) << why;
+  options = PreprocessOptions{};
+  options.workingScale = 1.0;
+  options.networkWidthPx = 64;
+  options.networkHeightPx = 64;
+  options.tileOverlapPx = 16;
+  EXPECT_FALSE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why));
+  EXPECT_NE(why.find("tiles, more than 64"), std::string::npos) << why;
+  EXPECT_FALSE(pre.initialised());
+}
+
+TEST(Preprocessor, NoHeapAllocationPerFrame) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::BrownConrady);
+  const cv::Mat frame = texturedFrame(6);
+  for (const int threads : {1, 2}) {
+    for (const double scale : {kDefaultWorkingScale, 0.3}) {
+      PreprocessOptions options;
+      options.whiteBalance = true;
+      options.threads = threads;
+      options.workingScale = scale;
+      Preprocessor pre;
+      ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}));
+      ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);  // first frame: warm-up
+      test::AllocationCounter counter;
+      for (int i = 0; i < 2; ++i) {
+        ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+      }
+      EXPECT_EQ(pre.process(cv::Mat()), PreprocessStatus::EmptyFrame);
+      counter.stop();
+      EXPECT_EQ(counter.count(), 0U) << "threads " << threads << " scale " << scale;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace vp::preprocess

@@ -1,0 +1,196 @@
+// Replay of a recorded sequence as frame and telemetry source: order, pacing, looping, and
+// damaged frame files reported by name while the replay goes on.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/frame_pool.hpp"
+#include "platform/clock/monotonic_clock.hpp"
+#include "platform/replay/sequence_replay.hpp"
+
+namespace vp::platform::replay {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::int64_t kFirstFrameNs = 1700000000000000000;
+constexpr std::int64_t kFrameIntervalNs = 100'000'000;
+
+// A private copy of tests/fixtures/sequence_min (and the DTM its rig.yaml points at, ../dtm),
+// so a test can damage frame files.
+class ReplayTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() /
+            ("vp_replay_" + std::to_string(::getpid()) + "_" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    fs::copy(fs::path(VP_FIXTURE_DIR) / "sequence_min", root_ / "sequence_min",
+             fs::copy_options::recursive);
+    fs::copy(fs::path(VP_FIXTURE_DIR) / "dtm", root_ / "dtm", fs::copy_options::recursive);
+    ASSERT_TRUE(pool.init(2, 32, 24));
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  std::string sequence() const { return (root_ / "sequence_min").string(); }
+  std::string framePath(int i) const {
+    return (root_ / "sequence_min" / "frames" / ("00000" + std::to_string(i) + ".png")).string();
+  }
+  Frame& frame() { return pool.frame(0); }
+
+  fs::path root_;
+  FramePool pool;
+  ManualClock clock{1'000'000'000};
+};
+
+TEST_F(ReplayTest, FramesComeInOrderWithRecordedIdsTimesAndPixels) {
+  SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {false, false}, &why)) << why;
+  const uchar* buffer = frame().image.data;
+  for (int i = 0; i < 2; ++i) {
+    ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
+    EXPECT_EQ(frame().frameId, i);
+    EXPECT_EQ(frame().timestampNs, kFirstFrameNs + i * kFrameIntervalNs);
+    EXPECT_EQ(frame().status, FrameStatus::Ok);
+    EXPECT_EQ(frame().image.data, buffer);  // filled in place
+    const cv::Mat expected = cv::imread(framePath(i), cv::IMREAD_COLOR);
+    EXPECT_EQ(cv::norm(frame().image, expected, cv::NORM_INF), 0.0);
+  }
+  EXPECT_EQ(replay.next(frame(), &why), ReplayStatus::End);
+  EXPECT_EQ(replay.counters().frames, 2u);
+  EXPECT_EQ(clock.sleeps(), 0);  // unpaced
+}
+
+TEST_F(ReplayTest, PacedReplayWaitsUntilEachFrameIsDue) {
+  SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {true, true}, &why)) << why;
+  const std::int64_t startNs = clock.nowNs();
+  for (int i = 0; i < 6; ++i) {
+    ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
+    // Due at start + (t_i - t_first): the loop period here is 2 frames of 100 ms.
+    EXPECT_EQ(clock.nowNs(), startNs + i * kFrameIntervalNs);
+  }
+  // A pipeline that fell behind gets the next frame at once (no sleep into the past).
+  clock.advanceNs(10 * kFrameIntervalNs);
+  const std::int64_t lateNs = clock.nowNs();
+  ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame);
+  EXPECT_EQ(clock.nowNs(), lateNs);
+}
+
+TEST_F(ReplayTest, LoopingKeepsTimestampsAndIdsIncreasing) {
+  SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {false, true}, &why)) << why;
+  EXPECT_EQ(replay.loopPeriodNs(), 2 * kFrameIntervalNs);
+  for (int i = 0; i < 7; ++i) {
+    ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
+    EXPECT_EQ(frame().frameId, i);
+    EXPECT_EQ(frame().timestampNs, kFirstFrameNs + i * kFrameIntervalNs);
+  }
+  EXPECT_EQ(replay.counters().loops, 3u);
+}
+
+TEST_F(ReplayTest, CorruptTruncatedAndMissingFramesAreNamedAndSkipped) {
+  {
+    std::ofstream corrupt(framePath(0), std::ios::binary | std::ios::trunc);
+    corrupt << "this is not a PNG file";
+  }
+  SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {false, true}, &why)) << why;
+  EXPECT_EQ(replay.next(frame(), &why), ReplayStatus::BadFrame);
+  EXPECT_NE(why.find("frames/000000.png"), std::string::npos) << why;
+  EXPECT_NE(why.find("frame 0"), std::string::npos) << why;
+  ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;  // goes on
+  EXPECT_EQ(frame().frameId, 1);
+
+  // Truncate frame 1 to half its size, delete frame 0: the second loop reports both.
+  const auto size = fs::file_size(framePath(1));
+  fs::resize_file(framePath(1), size / 2);
+  fs::remove(framePath(0));
+  EXPECT_EQ(replay.next(frame(), &why), ReplayStatus::BadFrame);
+  EXPECT_NE(why.find("frames/000000.png"), std::string::npos) << why;
+  EXPECT_EQ(replay.next(frame(), &why), ReplayStatus::BadFrame);
+  EXPECT_NE(why.find("frames/000001.png"), std::string::npos) << why;
+  EXPECT_NE(why.find("(frame 1, frames.csv line 3, loop 1)"), std::string::npos) << why;
+  EXPECT_EQ(replay.counters().badFrames, 3u);
+  EXPECT_EQ(replay.counters().frames, 1u);
+}
+
+TEST_F(ReplayTest, WrongOutputFrameIsRefusedWithoutAdvancing) {
+  SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {false, false}, &why)) << why;
+  Frame wrong;
+  wrong.image.create(48, 64, CV_8UC3);
+  EXPECT_EQ(replay.next(wrong, &why), ReplayStatus::Error);
+  EXPECT_NE(why.find("output frame is 64x48"), std::string::npos) << why;
+  EXPECT_NE(why.find("32x24"), std::string::npos) << why;
+  EXPECT_EQ(wrong.image.cols, 64);
+  EXPECT_EQ(replay.position(), 0u);
+  ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame);
+  EXPECT_EQ(frame().frameId, 0);
+}
+
+TEST_F(ReplayTest, OpenFailureNamesTheSequence) {
+  SequenceReplay replay(clock);
+  std::string why;
+  EXPECT_FALSE(replay.open((root_ / "nowhere").string(), {}, &why));
+  EXPECT_NE(why.find("nowhere"), std::string::npos) << why;
+}
+
+TEST_F(ReplayTest, TelemetryComesOutAsItFallsDue) {
+  SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {false, false}, &why)) << why;
+  const auto& records = replay.reader().telemetry();
+  ASSERT_EQ(records.size(), 4u);  // at -50, 0, +50, +100 ms around the first frame
+  TelemetryReplay telemetry;
+  telemetry.open(records, false, replay.loopPeriodNs());
+  std::vector<std::int64_t> due;
+  while (const auto* record = telemetry.nextDue(kFirstFrameNs)) {
+    due.push_back(record->timestampNs);
+  }
+  EXPECT_EQ(due, (std::vector<std::int64_t>{kFirstFrameNs - 50'000'000, kFirstFrameNs}));
+  const auto* next = telemetry.nextDue(kFirstFrameNs + 60'000'000);
+  ASSERT_NE(next, nullptr);
+  EXPECT_EQ(next->timestampNs, kFirstFrameNs + 50'000'000);
+  EXPECT_EQ(next->gimbal.reference, records[2].gimbal.reference);
+  EXPECT_EQ(telemetry.nextDue(kFirstFrameNs + 60'000'000), nullptr);
+  EXPECT_NE(telemetry.nextDue(kFirstFrameNs + kFrameIntervalNs), nullptr);
+  EXPECT_TRUE(telemetry.finished());
+  EXPECT_EQ(telemetry.nextDue(kFirstFrameNs * 2), nullptr);
+}
+
+TEST_F(ReplayTest, LoopedTelemetryFollowsTheFramesClock) {
+  SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {false, true}, &why)) << why;
+  TelemetryReplay telemetry;
+  telemetry.open(replay.reader().telemetry(), true, replay.loopPeriodNs());
+  std::vector<std::int64_t> times;
+  const std::int64_t untilNs = kFirstFrameNs + 3 * replay.loopPeriodNs();
+  while (const auto* record = telemetry.nextDue(untilNs)) {
+    times.push_back(record->timestampNs);
+  }
+  ASSERT_FALSE(telemetry.finished());
+  ASSERT_GE(times.size(), 12u);
+  for (std::size_t i = 1; i < times.size(); ++i) {
+    EXPECT_GE(times[i], times[i - 1]) << i;
+  }
+  EXPECT_LE(times.back(), untilNs);
+  // The first record of the second pass: the first record shifted by one loop period.
+  EXPECT_EQ(times[4], times[0] + replay.loopPeriodNs());
+}
+
+}  // namespace
+}  // namespace vp::platform::replay

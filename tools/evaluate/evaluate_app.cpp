@@ -1,0 +1,554 @@
+#include "evaluate_app.hpp"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <yaml-cpp/yaml.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "report.hpp"
+#include "sequence/detections_file.hpp"
+#include "sequence/recorded_sequence.hpp"
+#include "shape/vehicle_model.hpp"
+
+#ifndef VP_SOURCE_DIR
+#define VP_SOURCE_DIR "."
+#endif
+
+namespace vp::evaluate {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::array<std::string_view, 6> kImageExtensions{".png", ".jpg", ".jpeg",
+                                                           ".bmp", ".tif", ".tiff"};
+
+// A message for the user; caught at the top of each entry point.
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::string lowerCase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+bool isImageFile(const fs::path& path) {
+  const std::string ext = lowerCase(path.extension().string());
+  return std::find(kImageExtensions.begin(), kImageExtensions.end(), ext) != kImageExtensions.end();
+}
+
+double parseNumber(const std::string& option, const std::string& text) {
+  double value = 0.0;
+  const auto [ptr, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.empty() || error != std::errc() || ptr != text.data() + text.size() ||
+      !std::isfinite(value)) {
+    throw InputError(option + ": not a number '" + text + "'");
+  }
+  return value;
+}
+
+std::int64_t parseFrameId(const std::string& option, std::string_view text) {
+  std::int64_t value = 0;
+  const auto [ptr, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.empty() || error != std::errc() || ptr != text.data() + text.size() || value < 0) {
+    throw InputError(option + ": expected a frame id >= 0, got '" + std::string(text) + "'");
+  }
+  return value;
+}
+
+evaluation::PredictedObject toPrediction(const sequence::DetectionRecord& r) {
+  evaluation::PredictedObject p;
+  p.box = r.box;
+  p.score = r.score;
+  p.directionKnown = r.directionKnown;
+  p.hasTypeProbabilities = true;
+  p.typeProbabilities = r.typeProbabilities;
+  p.shape = r.gamma;
+  p.lifted = r.liftStatus == sequence::LiftStatus::Ok;
+  p.positionEnu = r.positionEnu;
+  p.headingEnuRad = r.headingEnuRad;
+  p.dimensionsM = r.dimensionsM;
+  return p;
+}
+
+}  // namespace
+
+std::string usage() {
+  return R"(vp_evaluate: the measures of seed 000 (sec. 5.1) on held-out data, with the seed's figures beside ours.
+
+Usage:
+  vp_evaluate --sequence DIR --detections FILE [--sequence DIR --detections FILE ...] --out DIR
+              [--asm PATH] [--iou 0.5] [--max-occlusion 0.7] [--max-truncation 0.5]
+              [--frames A:B] [--model-id TEXT]
+  vp_evaluate --yolo DIR --detections FILE [--val-list FILE] --out DIR [--iou 0.5] [--model-id TEXT]
+
+Inputs:
+  --sequence DIR       a recorded sequence with ground_truth/ (docs/recorded_sequence.md)
+  --detections FILE    the detections file run on it (docs/detections_file.md); one per
+                       --sequence, in the same order (several pairs: one held-out set)
+  --yolo DIR           real images: DIR/images/*.jpg|png and DIR/labels/<stem>.txt
+                       ('class cx cy w h', normalised; class 0 = car); the detections file
+                       then has the 'image' key column
+  --val-list FILE      evaluate only these images: one stem per line, or a JSON file with a
+                       "val_stems" array (the training run's split.json)
+Options:
+  --out DIR            output folder: report.md, report.json, orientation_cdf.png
+  --asm PATH           Active Shape Model for the shape measures (default: the source tree's
+                       models/asm/default_asm.yaml); 'none' skips the shape measures
+  --iou X              IoU threshold of a true positive, (0, 1] (default 0.5, seed 000)
+  --max-occlusion X    references more occluded are 'ignore' (default 0.7, as in training)
+  --max-truncation X   references more truncated are 'ignore' (default 0.5)
+  --frames A:B         evaluate only frame ids A..B (inclusive) of every sequence
+  --model-id TEXT      model name for the report (default: the files' '# model:' line)
+  --help               this text
+
+Exit status: 0 report written, 1 bad input (the message names the file and line), 2 usage.
+)";
+}
+
+bool parseArguments(std::span<const std::string> args, EvaluateOptions* options, std::string* why) {
+  EvaluateOptions o;
+  o.asmPath = std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml";
+  std::vector<std::string> sequenceDirs;
+  std::vector<std::string> detectionFiles;
+  try {
+    for (std::size_t i = 0; i < args.size(); ++i) {
+      const std::string& arg = args[i];
+      const auto value = [&]() -> const std::string& {
+        if (i + 1 >= args.size() || args[i + 1].starts_with("--")) {
+          throw InputError(arg + ": missing value");
+        }
+        return args[++i];
+      };
+      if (arg == "--help" || arg == "-h") {
+        o.help = true;
+      } else if (arg == "--sequence") {
+        sequenceDirs.push_back(value());
+      } else if (arg == "--detections") {
+        detectionFiles.push_back(value());
+      } else if (arg == "--yolo") {
+        o.yoloDir = value();
+      } else if (arg == "--val-list") {
+        o.valList = value();
+      } else if (arg == "--out") {
+        o.outDir = value();
+      } else if (arg == "--asm") {
+        const std::string path = value();
+        o.asmPath = path == "none" ? std::string() : path;
+      } else if (arg == "--iou") {
+        o.iouThreshold = parseNumber(arg, value());
+        if (!(o.iouThreshold > 0.0 && o.iouThreshold <= 1.0)) {
+          throw InputError("--iou: must be in (0, 1]");
+        }
+      } else if (arg == "--max-occlusion") {
+        o.maxOcclusion = parseNumber(arg, value());
+      } else if (arg == "--max-truncation") {
+        o.maxTruncation = parseNumber(arg, value());
+      } else if (arg == "--frames") {
+        const std::string range = value();
+        const std::size_t colon = range.find(':');
+        if (colon == std::string::npos) {
+          throw InputError("--frames: expected A:B (first and last frame id), got '" + range + "'");
+        }
+        o.firstFrame = parseFrameId(arg, std::string_view(range).substr(0, colon));
+        o.lastFrame = parseFrameId(arg, std::string_view(range).substr(colon + 1));
+        if (*o.lastFrame < *o.firstFrame) {
+          throw InputError("--frames: last frame before first in '" + range + "'");
+        }
+      } else if (arg == "--model-id") {
+        o.modelId = value();
+      } else {
+        throw InputError("unknown argument '" + arg + "' (see --help)");
+      }
+    }
+    if (o.help) {
+      *options = o;
+      return true;
+    }
+    if (o.outDir.empty()) {
+      throw InputError("--out DIR is required");
+    }
+    if (!o.yoloDir.empty()) {
+      if (!sequenceDirs.empty()) {
+        throw InputError("--yolo and --sequence cannot be mixed in one report");
+      }
+      if (detectionFiles.size() != 1) {
+        throw InputError("--yolo needs exactly one --detections FILE, got " +
+                         std::to_string(detectionFiles.size()));
+      }
+      o.sequences.push_back({o.yoloDir, detectionFiles[0]});
+    } else {
+      if (sequenceDirs.empty()) {
+        throw InputError("give --sequence DIR --detections FILE (or --yolo DIR --detections FILE)");
+      }
+      if (sequenceDirs.size() != detectionFiles.size()) {
+        throw InputError("each --sequence needs its --detections: got " +
+                         std::to_string(sequenceDirs.size()) + " sequences and " +
+                         std::to_string(detectionFiles.size()) + " detections files");
+      }
+      if (!o.valList.empty()) {
+        throw InputError("--val-list applies to --yolo only");
+      }
+      for (std::size_t k = 0; k < sequenceDirs.size(); ++k) {
+        o.sequences.push_back({sequenceDirs[k], detectionFiles[k]});
+      }
+    }
+  } catch (const InputError& error) {
+    if (why != nullptr) {
+      *why = error.what();
+    }
+    return false;
+  }
+  *options = o;
+  return true;
+}
+
+bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& options,
+                        LoadedInput* out, std::string* why) {
+  *out = LoadedInput{};
+  out->label = input.sequenceDir;
+  out->detectionsFile = input.detectionsFile;
+  sequence::SequenceReader reader;
+  if (!reader.open(input.sequenceDir, why)) {
+    return false;
+  }
+  if (!reader.hasGroundTruth()) {
+    *why = input.sequenceDir + ": no ground_truth/objects.csv: nothing to evaluate against";
+    return false;
+  }
+  sequence::DetectionsFile detections;
+  if (!sequence::readDetectionsFile(input.detectionsFile, &detections, why)) {
+    return false;
+  }
+  if (detections.info.key != sequence::DetectionsKey::FrameId) {
+    *why = input.detectionsFile +
+           ": header: a sequence needs the 'frame_id' key column (this file has 'image')";
+    return false;
+  }
+  out->model = detections.info.model;
+  const auto inRange = [&](std::int64_t frameId) {
+    return (!options.firstFrame || frameId >= *options.firstFrame) &&
+           (!options.lastFrame || frameId <= *options.lastFrame);
+  };
+  std::map<std::int64_t, std::size_t> imageOfFrame;
+  for (const sequence::FrameRecord& frame : reader.frames()) {
+    if (!inRange(frame.frameId)) {
+      continue;
+    }
+    imageOfFrame[frame.frameId] = out->images.size();
+    ImageData image;
+    image.name = input.sequenceDir + ":" + std::to_string(frame.frameId);
+    const auto keypoints = reader.keypoints(frame.frameId);
+    for (const sequence::ObjectTruth& object : reader.objects(frame.frameId)) {
+      evaluation::ReferenceObject ref;
+      ref.box = object.imageBox;
+      ref.box.angle = geometry::wrapTwoPi(ref.box.angle);
+      ref.ignore =
+          object.occlusion > options.maxOcclusion || object.truncation > options.maxTruncation;
+      ref.directionKnown = true;
+      ref.type = static_cast<int>(object.type);
+      ref.shape = object.shape;
+      ref.hasWorld = true;
+      ref.positionEnu = object.positionEnu;
+      ref.headingEnuRad = object.headingEnuRad;
+      ref.dimensionsM = object.dimensionsM;
+      // GSD from the wheel centres when their keypoints are given, else length / box length.
+      std::array<Eigen::Vector2d, shape::kWheelCount> pixels;
+      std::array<Eigen::Vector3d, shape::kWheelCount> world;
+      pixels.fill(Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+      world.fill(Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+      for (const sequence::KeypointTruth& k : keypoints) {
+        if (k.trackId != object.trackId) {
+          continue;
+        }
+        for (int w = 0; w < shape::kWheelCount; ++w) {
+          if (shape::wheelCentreKeypoints()[static_cast<std::size_t>(w)] == k.keypoint) {
+            pixels[static_cast<std::size_t>(w)] = k.pixel;
+            world[static_cast<std::size_t>(w)] = k.worldEnu;
+          }
+        }
+      }
+      ref.gsd_m = evaluation::gsdFromWheelKeypoints(pixels, world);
+      if (!std::isfinite(ref.gsd_m) && object.imageBox.length > 0.0) {
+        ref.gsd_m = object.dimensionsM.x() / object.imageBox.length;
+      }
+      image.references.push_back(ref);
+    }
+    out->images.push_back(std::move(image));
+  }
+  std::set<std::int64_t> sequenceFrames;
+  for (const sequence::FrameRecord& frame : reader.frames()) {
+    sequenceFrames.insert(frame.frameId);
+  }
+  for (std::size_t i = 0; i < detections.rows.size(); ++i) {
+    const sequence::DetectionRecord& row = detections.rows[i];
+    if (sequenceFrames.count(row.frameId) == 0) {
+      *why = input.detectionsFile + ":" + std::to_string(detections.lines[i]) +
+             ": frame_id: no frame " + std::to_string(row.frameId) + " in " + input.sequenceDir +
+             "/frames.csv (detections of another sequence?)";
+      return false;
+    }
+    const auto it = imageOfFrame.find(row.frameId);
+    if (it == imageOfFrame.end()) {
+      ++out->skippedRows;  // outside --frames
+      continue;
+    }
+    out->images[it->second].predictions.push_back(toPrediction(row));
+  }
+  return true;
+}
+
+bool readValidationList(const std::string& path, std::vector<std::string>* stems,
+                        std::string* why) {
+  stems->clear();
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    *why = path + ": cannot open (missing or unreadable)";
+    return false;
+  }
+  std::ostringstream buffer;
+  buffer << file.rdbuf();
+  const std::string text = buffer.str();
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && text[first] == '{') {
+    // JSON (a YAML 1.2 flow mapping, so yaml-cpp reads it).
+    try {
+      const YAML::Node root = YAML::Load(text);
+      const YAML::Node list = root["val_stems"];
+      if (!list || !list.IsSequence()) {
+        *why = path +
+               ": no \"val_stems\" list (tools/detector/train.py's split.json holds only "
+               "counts and groups until it writes the validation stems)";
+        return false;
+      }
+      for (const YAML::Node& item : list) {
+        if (!item.IsScalar() || item.Scalar().empty()) {
+          *why = path + ": \"val_stems\": every entry must be a non-empty string";
+          return false;
+        }
+        stems->push_back(item.Scalar());
+      }
+    } catch (const YAML::Exception& error) {
+      *why = path + ":" + std::to_string(error.mark.line + 1) + ": not valid JSON: " + error.msg;
+      return false;
+    }
+    return true;
+  }
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (!line.empty() && line.back() == '\r') {
+      line.pop_back();
+    }
+    const std::size_t start = line.find_first_not_of(" \t");
+    if (start == std::string::npos || line[start] == '#') {
+      continue;
+    }
+    const std::size_t end = line.find_last_not_of(" \t");
+    fs::path entry(line.substr(start, end - start + 1));
+    stems->push_back(isImageFile(entry) ? entry.stem().string() : entry.string());
+  }
+  return true;
+}
+
+bool loadYoloImages(const EvaluateOptions& options, LoadedInput* out, std::string* why) {
+  *out = LoadedInput{};
+  out->label = options.yoloDir;
+  out->detectionsFile = options.sequences.at(0).detectionsFile;
+  try {
+    const fs::path root(options.yoloDir);
+    const fs::path imageDir = root / "images";
+    std::error_code error;
+    if (!fs::is_directory(imageDir, error)) {
+      throw InputError(imageDir.string() + ": missing image folder (expected DIR/images/)");
+    }
+    std::map<std::string, fs::path> imageOfStem;
+    for (const fs::directory_entry& entry : fs::directory_iterator(imageDir)) {
+      if (entry.is_regular_file() && isImageFile(entry.path())) {
+        imageOfStem[entry.path().stem().string()] = entry.path();
+      }
+    }
+    std::vector<std::string> stems;
+    if (!options.valList.empty()) {
+      std::string problem;
+      if (!readValidationList(options.valList, &stems, &problem)) {
+        throw InputError(problem);
+      }
+      for (const std::string& stem : stems) {
+        if (imageOfStem.count(stem) == 0) {
+          throw InputError(options.valList + ": validation image '" + stem + "' not in " +
+                           imageDir.string());
+        }
+      }
+    } else {
+      for (const auto& [stem, path] : imageOfStem) {
+        stems.push_back(stem);
+      }
+    }
+    sequence::DetectionsFile detections;
+    std::string problem;
+    if (!sequence::readDetectionsFile(out->detectionsFile, &detections, &problem)) {
+      throw InputError(problem);
+    }
+    if (detections.info.key != sequence::DetectionsKey::Image) {
+      throw InputError(out->detectionsFile +
+                       ": header: an image folder needs the 'image' key column (this file has "
+                       "'frame_id')");
+    }
+    out->model = detections.info.model;
+    std::map<std::string, std::size_t> indexOfStem;
+    for (const std::string& stem : stems) {
+      indexOfStem[stem] = out->images.size();
+      ImageData image;
+      image.name = stem;
+      const fs::path imagePath = imageOfStem.at(stem);
+      const cv::Mat pixels = cv::imread(imagePath.string(), cv::IMREAD_COLOR);
+      if (pixels.empty()) {
+        throw InputError(imagePath.string() + ": cannot decode image (missing or corrupt)");
+      }
+      const fs::path labelPath = root / "labels" / (stem + ".txt");
+      std::ifstream labels(labelPath);  // a missing label file: an image without vehicles
+      std::string line;
+      int lineNumber = 0;
+      while (std::getline(labels, line)) {
+        ++lineNumber;
+        std::istringstream fields(line);
+        std::vector<std::string> parts;
+        for (std::string part; fields >> part;) {
+          parts.push_back(part);
+        }
+        if (parts.empty()) {
+          continue;
+        }
+        const std::string where = labelPath.string() + ":" + std::to_string(lineNumber);
+        if (parts.size() != 5) {
+          throw InputError(where + ": expected 'class cx cy w h', got '" + line + "'");
+        }
+        std::int64_t cls = 0;
+        const auto [ptr, ec] =
+            std::from_chars(parts[0].data(), parts[0].data() + parts[0].size(), cls);
+        if (ec != std::errc() || ptr != parts[0].data() + parts[0].size()) {
+          throw InputError(where + ": class: not an integer '" + parts[0] + "'");
+        }
+        std::array<double, 4> v{};
+        constexpr std::array<const char*, 4> kNames{"cx", "cy", "w", "h"};
+        for (std::size_t k = 0; k < 4; ++k) {
+          v[k] = parseNumber(where + ": " + kNames[k], parts[k + 1]);
+        }
+        if (cls != 0) {
+          continue;  // class 0 = car; others are not vehicles of this evaluation
+        }
+        evaluation::ReferenceObject ref;
+        ref.axisAligned = true;
+        ref.directionKnown = false;
+        // Normalised coordinates run from the image edges; pixel centres are at integers.
+        ref.box = {v[0] * pixels.cols - 0.5, v[1] * pixels.rows - 0.5, v[2] * pixels.cols,
+                   v[3] * pixels.rows, 0.0};
+        image.references.push_back(ref);
+      }
+      out->images.push_back(std::move(image));
+    }
+    for (std::size_t i = 0; i < detections.rows.size(); ++i) {
+      const sequence::DetectionRecord& row = detections.rows[i];
+      const std::string stem(row.imageStem());
+      if (imageOfStem.count(stem) == 0) {
+        throw InputError(out->detectionsFile + ":" + std::to_string(detections.lines[i]) +
+                         ": image: no image '" + stem + "' in " + imageDir.string());
+      }
+      const auto it = indexOfStem.find(stem);
+      if (it == indexOfStem.end()) {
+        ++out->skippedRows;  // a training image: not part of the held-out list
+        continue;
+      }
+      out->images[it->second].predictions.push_back(toPrediction(row));
+    }
+  } catch (const InputError& error) {
+    *why = error.what();
+    return false;
+  } catch (const fs::filesystem_error& error) {
+    *why = error.what();
+    return false;
+  }
+  return true;
+}
+
+int runEvaluate(const EvaluateOptions& options, std::ostream& out, std::ostream& err) {
+  if (options.help) {
+    out << usage();
+    return 0;
+  }
+  const bool yolo = !options.yoloDir.empty();
+  shape::ActiveShapeModel asmModel;
+  std::string why;
+  evaluation::EvaluationOptions evalOptions;
+  evalOptions.iouThreshold = options.iouThreshold;
+  evalOptions.axisAligned = yolo;
+  if (!yolo && !options.asmPath.empty()) {
+    if (!asmModel.load(options.asmPath, &why)) {
+      err << "vp_evaluate: " << why << "\n";
+      return 1;
+    }
+    evalOptions.asmModel = &asmModel;
+  }
+  ReportContext context;
+  context.commandLine = options.commandLine;
+  context.mode = yolo ? "yolo" : "sequences";
+  context.asmPath = yolo ? std::string() : options.asmPath;
+  context.iouThreshold = options.iouThreshold;
+  context.maxOcclusion = options.maxOcclusion;
+  context.maxTruncation = options.maxTruncation;
+  context.valList = options.valList;
+  evaluation::Evaluator total(evalOptions);
+  std::set<std::string> models;
+  for (const SequenceInput& input : options.sequences) {
+    LoadedInput loaded;
+    const bool ok = yolo ? loadYoloImages(options, &loaded, &why)
+                         : loadSequenceImages(input, options, &loaded, &why);
+    if (!ok) {
+      err << "vp_evaluate: " << why << "\n";
+      return 1;
+    }
+    evaluation::Evaluator own(evalOptions);
+    for (const ImageData& image : loaded.images) {
+      own.addImage(image.references, image.predictions);
+      total.addImage(image.references, image.predictions);
+    }
+    if (!loaded.model.empty()) {
+      models.insert(loaded.model);
+    }
+    context.inputs.push_back(
+        {loaded.label, loaded.detectionsFile, loaded.model, loaded.skippedRows, own.summary()});
+  }
+  context.total = total.summary();
+  if (!options.modelId.empty()) {
+    context.modelId = options.modelId;
+  } else {
+    for (const std::string& model : models) {
+      context.modelId += (context.modelId.empty() ? "" : "; ") + model;
+    }
+    if (context.modelId.empty()) {
+      context.modelId = "unknown (no '# model:' line, no --model-id)";
+    }
+  }
+  if (!writeReport(context, options.outDir, &why)) {
+    err << "vp_evaluate: " << why << "\n";
+    return 1;
+  }
+  const evaluation::EvaluationSummary& s = context.total;
+  out << "vp_evaluate: " << s.images << " images, " << s.references << " references, "
+      << s.predictions << " predictions: P " << s.precision << " R " << s.recall << " F1 " << s.f1
+      << "; report in " << options.outDir << "/report.md\n";
+  return 0;
+}
+
+}  // namespace vp::evaluate
