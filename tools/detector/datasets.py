@@ -519,7 +519,7 @@ def split_near_duplicate_free(samples: Sequence[Sample], val_fraction: float = 0
         "train_boxes": int(sum(len(samples[i]) for i in train_idx)),
         "val_boxes": int(sum(len(samples[i]) for i in final_val)),
         # file stems, so other tools (vp_evaluate --val-list) evaluate exactly this split
-        "val_images": sorted(os.path.splitext(os.path.basename(samples[i].image_path))[0]
+        "val_stems": sorted(os.path.splitext(os.path.basename(samples[i].image_path))[0]
                              for i in final_val if samples[i].image_path),
     }
     return [samples[i] for i in train_idx], [samples[i] for i in final_val], report

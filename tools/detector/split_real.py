@@ -5,7 +5,7 @@
 
 The split is the one train.py uses with the same --seed (datasets.split_near_duplicate_free:
 whole clips to one side, block cuts with a frame gap in the large clips, then a dHash check);
-the JSON's ``val_images`` lists the validation file stems for ``vp_evaluate --val-list``.
+the JSON's ``val_stems`` lists the validation file stems for ``vp_evaluate --val-list``.
 """
 
 from __future__ import annotations

@@ -1,0 +1,399 @@
+// vp_detect_images: runs the image side of the perception pipeline (preprocess -> detector ->
+// second stage) on a folder of still images and writes a detections file keyed by image stem
+// (docs/detections_file.md), for evaluation on labelled photo sets such as the real held-out
+// split (vp_evaluate --yolo). No pose, no DTM: nothing is lifted (lift_status not_lifted).
+//
+// Images may have any size; each gets its own pinhole camera of that size (no undistortion).
+// The working scale maps image pixels to the detector's training resolution (~12 cm/px), so
+// it must be chosen from the images' ground sample distance: working_scale = gsd / 0.12.
+#include <algorithm>
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "camera/camera_model.hpp"
+#include "detection/detection.hpp"
+#include "detection/detection_stage.hpp"
+#include "inference/engine.hpp"
+#include "preprocess/preprocessor.hpp"
+#include "sequence/detections_file.hpp"
+#include "sequence/recorded_sequence.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kUsage = R"(usage: vp_detect_images --images DIR --out FILE [options]
+
+Runs the detector (+ second stage) on every image of DIR (.jpg .jpeg .png .bmp) and writes a
+detections file with one row per detection, keyed by the image's file stem.
+
+options:
+  --images DIR          folder of images (a YOLO set's images/ folder, or the set's root)
+  --sequence DIR        instead: the frames of a recorded sequence (docs/recorded_sequence.md),
+                        rows keyed by frame_id, boxes in the raw frame's pixels (no undistortion:
+                        the detector is trained on raw frames), GSD for the crops from the rig's
+                        camera height and focal length unless --gsd-m is given
+  --out FILE            detections file to write (docs/detections_file.md)
+  --list FILE           only the images named in FILE: a text file with one stem per line, or
+                        the split.json of tools/detector/split_real.py (its "val_stems")
+  --detector PATH       detector ONNX (default: models/detector/detector_int8.onnx)
+  --crop PATH           second-stage ONNX (default: models/detector/crop_int8.onnx; "" = none)
+  --backend B           int8 | fp32 | opencv (default int8)
+  --working-scale S     working px per image px, (0, 1] (default 0.4: ~4.8 cm/px photos;
+                        with --sequence: 648 / frame width, the training resolution)
+  --gsd-m G             metres per image pixel for the second stage's crops (default: the
+                        image's median box length taken as a 4.5 m car)
+  --score-threshold T   detection score threshold, [0, 1] (default 0.3)
+  --threads N           detector threads (default 1)
+  --help                this text
+)";
+
+struct Options {
+  std::string images;
+  std::string sequence;
+  std::string out;
+  std::string list;
+  std::string detector;
+  std::string crop;
+  bool cropGiven = false;
+  std::string backend = "int8";
+  double workingScale = 0.4;
+  bool workingScaleGiven = false;
+  double gsd = 0.0;
+  double scoreThreshold = 0.3;
+  int threads = 1;
+};
+
+[[noreturn]] void usageError(const std::string& message) {
+  std::fprintf(stderr, "vp_detect_images: %s\n(see --help)\n", message.c_str());
+  std::exit(2);
+}
+
+double parseDouble(const std::string& option, const std::string& text, double lo, double hi) {
+  double value = 0.0;
+  const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (result.ec != std::errc() || result.ptr != text.data() + text.size() || !(value >= lo) ||
+      !(value <= hi)) {
+    usageError(option + ": expected a number in [" + std::to_string(lo) + ", " +
+               std::to_string(hi) + "], got '" + text + "'");
+  }
+  return value;
+}
+
+std::string repoPath(const char* relative) {
+  return std::string(VP_SOURCE_DIR) + "/" + relative;
+}
+
+Options parseArguments(int argc, char** argv) {
+  Options o;
+  o.detector = repoPath("models/detector/detector_int8.onnx");
+  o.crop = repoPath("models/detector/crop_int8.onnx");
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      std::fputs(kUsage, stdout);
+      std::exit(0);
+    }
+    if (i + 1 >= argc)
+      usageError(arg + ": missing value");
+    const std::string value = argv[++i];
+    if (arg == "--images")
+      o.images = value;
+    else if (arg == "--sequence")
+      o.sequence = value;
+    else if (arg == "--out")
+      o.out = value;
+    else if (arg == "--list")
+      o.list = value;
+    else if (arg == "--detector")
+      o.detector = value;
+    else if (arg == "--crop")
+      o.crop = value;
+    else if (arg == "--backend")
+      o.backend = value;
+    else if (arg == "--working-scale") {
+      o.workingScale = parseDouble(arg, value, 1e-3, 1.0);
+      o.workingScaleGiven = true;
+    } else if (arg == "--gsd-m")
+      o.gsd = parseDouble(arg, value, 1e-4, 10.0);
+    else if (arg == "--score-threshold")
+      o.scoreThreshold = parseDouble(arg, value, 0.0, 1.0);
+    else if (arg == "--threads")
+      o.threads = static_cast<int>(parseDouble(arg, value, 1, 64));
+    else
+      usageError("unknown option '" + arg + "'");
+  }
+  if (o.images.empty() == o.sequence.empty())
+    usageError("give one of --images and --sequence");
+  if (o.out.empty())
+    usageError("--out is required");
+  return o;
+}
+
+// Stems named by a list file: plain text (one per line) or split.json's "val_stems".
+std::set<std::string> readList(const std::string& path) {
+  std::ifstream in(path);
+  if (!in)
+    usageError("--list " + path + ": cannot open");
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  std::set<std::string> stems;
+  const std::size_t key = text.find("\"val_stems\"");
+  if (key != std::string::npos) {
+    const std::size_t open = text.find('[', key);
+    const std::size_t close = text.find(']', open);
+    if (open == std::string::npos || close == std::string::npos)
+      usageError("--list " + path + ": \"val_stems\" is not a list");
+    std::size_t pos = open;
+    while ((pos = text.find('"', pos + 1)) != std::string::npos && pos < close) {
+      const std::size_t end = text.find('"', pos + 1);
+      stems.insert(text.substr(pos + 1, end - pos - 1));
+      pos = end;
+    }
+  } else {
+    std::string line;
+    std::istringstream lines(text);
+    while (std::getline(lines, line)) {
+      line.erase(line.find_last_not_of(" \r\t") + 1);
+      if (!line.empty() && line[0] != '#')
+        stems.insert(line);
+    }
+  }
+  if (stems.empty())
+    usageError("--list " + path + ": names no image");
+  return stems;
+}
+
+// The detection stage of both modes (models, backend, thresholds from the options).
+bool initStage(const Options& options, vp::detection::DetectionStage& stage, std::string* why) {
+  vp::detection::DetectionStageOptions stageOptions;
+  stageOptions.detectorModelPath = options.detector;
+  stageOptions.cropModelPath = options.crop;
+  const auto backend = vp::inference::backendFromString(options.backend);
+  if (!backend)
+    usageError("--backend: expected int8, fp32 or opencv, got '" + options.backend + "'");
+  stageOptions.engine.backend = *backend;
+  stageOptions.engine.threads = options.threads;
+  stageOptions.decoder.scoreThreshold = static_cast<float>(options.scoreThreshold);
+  stageOptions.gsd.fixedGsd_m = options.gsd;
+  return stage.init(stageOptions, vp::preprocess::kMaxTiles, why);
+}
+
+std::string modelId(const Options& options) {
+  return fs::path(options.detector).filename().string() + " + " +
+         (options.crop.empty() ? std::string("no second stage")
+                               : fs::path(options.crop).filename().string()) +
+         " (" + options.backend + ")";
+}
+
+// Image-space row of one detection (never lifted here).
+vp::sequence::DetectionRecord toRecord(const vp::detection::Detection& d, int id) {
+  vp::sequence::DetectionRecord row;
+  row.detId = id;
+  row.score = d.score;
+  row.box = d.box;
+  row.directionKnown = d.directionKnown;
+  row.typeProbabilities = d.typeProbabilities;
+  row.gamma = d.gamma;
+  row.liftStatus = vp::sequence::LiftStatus::NotLifted;
+  return row;
+}
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "vp_detect_images: %s\n", message.c_str());
+  return 1;
+}
+
+int runSequence(const Options& options) {
+  vp::sequence::SequenceReader reader;
+  std::string why;
+  if (!reader.open(options.sequence, &why))
+    return fail(why);
+  const vp::config::AppConfig& rig = reader.rig();
+  vp::camera::CameraModel camera;
+  if (!camera.init(rig.camera.intrinsics, rig.camera.distortion, &why))
+    return fail(options.sequence + "/rig.yaml: camera: " + why);
+  vp::detection::DetectionStage stage;
+  if (!initStage(options, stage, &why))
+    return fail(why);
+  vp::preprocess::PreprocessOptions pre;
+  pre.undistort = false;  // the detector is trained on raw frames; the GT boxes are raw pixels
+  pre.workingScale =
+      options.workingScaleGiven ? options.workingScale : 648.0 / rig.camera.intrinsics.widthPx;
+  pre.networkWidthPx = stage.detectorInputWidth();
+  pre.networkHeightPx = stage.detectorInputHeight();
+  vp::preprocess::Preprocessor preprocessor;
+  const cv::Size size(rig.camera.intrinsics.widthPx, rig.camera.intrinsics.heightPx);
+  if (!preprocessor.init(pre, camera, size, &why))
+    return fail(why);
+
+  vp::sequence::DetectionsFileInfo info;
+  info.key = vp::sequence::DetectionsKey::FrameId;
+  info.gammaColumns = 3;
+  info.model = modelId(options);
+  info.source = "vp_detect_images --sequence " + options.sequence;
+  vp::sequence::DetectionsFileWriter writer;
+  if (!writer.open(options.out, info, &why))
+    return fail(why);
+
+  std::vector<vp::detection::Detection> detections(vp::detection::kMaxDetectionsPerFrame);
+  cv::Mat image;
+  std::size_t total = 0;
+  int failed = 0;
+  for (std::size_t f = 0; f < reader.frames().size(); ++f) {
+    const long long frameId = static_cast<long long>(reader.frames()[f].frameId);
+    why.clear();
+    if (!reader.loadFrame(f, image, &why) ||
+        preprocessor.process(image) != vp::preprocess::PreprocessStatus::Ok) {
+      std::fprintf(stderr, "vp_detect_images: frame %lld: %s, skipped\n", frameId,
+                   why.empty() ? preprocessor.lastError() : why.c_str());
+      ++failed;
+      continue;
+    }
+    std::size_t count = 0;
+    const auto status = stage.run(preprocessor.output(), detections, &count);
+    if (status != vp::detection::DetectionStatus::Ok) {
+      std::fprintf(stderr, "vp_detect_images: frame %lld: detection: %s, skipped\n", frameId,
+                   vp::detection::toString(status));
+      ++failed;
+      continue;
+    }
+    for (std::size_t i = 0; i < count; ++i) {
+      vp::sequence::DetectionRecord row = toRecord(detections[i], static_cast<int>(i));
+      row.frameId = frameId;
+      if (!writer.writeRow(row, &why))
+        return fail(why);
+    }
+    total += count;
+  }
+  if (!writer.close(&why))
+    return fail(why);
+  std::printf("vp_detect_images: %zu detections in %zu frames (%d skipped) -> %s\n", total,
+              reader.frames().size(), failed, options.out.c_str());
+  return 0;
+}
+
+// One preprocessor per image size (each size has its own camera); built on first use.
+struct SizedPreprocessor {
+  vp::preprocess::Preprocessor preprocessor;
+};
+
+int runImages(const Options& options) {
+  fs::path folder(options.images);
+  if (fs::is_directory(folder / "images"))
+    folder /= "images";
+  if (!fs::is_directory(folder))
+    usageError("--images " + options.images + ": not a directory");
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp")
+      files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  if (!options.list.empty()) {
+    const std::set<std::string> wanted = readList(options.list);
+    std::erase_if(files, [&](const fs::path& p) { return !wanted.count(p.stem().string()); });
+    if (files.size() != wanted.size())
+      std::fprintf(stderr, "vp_detect_images: warning: %zu of %zu listed images found in %s\n",
+                   files.size(), wanted.size(), folder.c_str());
+  }
+  if (files.empty())
+    usageError("no images in " + folder.string());
+
+  vp::detection::DetectionStage stage;
+  std::string why;
+  if (!initStage(options, stage, &why))
+    return fail(why);
+  vp::sequence::DetectionsFileInfo info;
+  info.key = vp::sequence::DetectionsKey::Image;
+  info.gammaColumns = 3;
+  info.model = modelId(options);
+  info.source = "vp_detect_images " + folder.string() + " working_scale " +
+                std::to_string(options.workingScale);
+  vp::sequence::DetectionsFileWriter writer;
+  if (!writer.open(options.out, info, &why))
+    return fail(why);
+
+  std::map<std::pair<int, int>, std::unique_ptr<SizedPreprocessor>> preprocessors;
+  std::vector<vp::detection::Detection> detections(vp::detection::kMaxDetectionsPerFrame);
+  std::size_t total = 0;
+  int failed = 0;
+  for (const fs::path& file : files) {
+    const cv::Mat image = cv::imread(file.string(), cv::IMREAD_COLOR);
+    if (image.empty()) {
+      std::fprintf(stderr, "vp_detect_images: %s: cannot decode, skipped\n", file.c_str());
+      ++failed;
+      continue;
+    }
+    auto& slot = preprocessors[{image.cols, image.rows}];
+    if (!slot) {
+      slot = std::make_unique<SizedPreprocessor>();
+      const vp::camera::Intrinsics k{image.cols,
+                                     image.rows,
+                                     double(image.cols),
+                                     double(image.cols),
+                                     (image.cols - 1) / 2.0,
+                                     (image.rows - 1) / 2.0};
+      vp::camera::CameraModel camera;
+      if (!camera.init(k, vp::camera::Distortion{}, &why))
+        return fail(file.string() + ": " + why);
+      vp::preprocess::PreprocessOptions pre;
+      pre.undistort = false;
+      pre.workingScale = options.workingScale;
+      pre.networkWidthPx = stage.detectorInputWidth();
+      pre.networkHeightPx = stage.detectorInputHeight();
+      if (!slot->preprocessor.init(pre, camera, image.size(), &why))
+        return fail(file.string() + ": " + why);
+    }
+    if (slot->preprocessor.process(image) != vp::preprocess::PreprocessStatus::Ok) {
+      std::fprintf(stderr, "vp_detect_images: %s: %s, skipped\n", file.c_str(),
+                   slot->preprocessor.lastError());
+      ++failed;
+      continue;
+    }
+    std::size_t count = 0;
+    const auto status = stage.run(slot->preprocessor.output(), detections, &count);
+    if (status != vp::detection::DetectionStatus::Ok) {
+      std::fprintf(stderr, "vp_detect_images: %s: detection: %s, skipped\n", file.c_str(),
+                   vp::detection::toString(status));
+      ++failed;
+      continue;
+    }
+    for (std::size_t i = 0; i < count; ++i) {
+      vp::sequence::DetectionRecord row = toRecord(detections[i], static_cast<int>(i));
+      if (!row.setImageStem(file.stem().string()))
+        return fail(file.string() + ": file stem longer than " +
+                    std::to_string(vp::sequence::kMaxImageStemChars) + " characters");
+      if (!writer.writeRow(row, &why))
+        return fail(why);
+    }
+    total += count;
+  }
+  if (!writer.close(&why))
+    return fail(why);
+  std::printf("vp_detect_images: %zu detections in %zu images (%d skipped) -> %s\n", total,
+              files.size() - static_cast<std::size_t>(failed), failed, options.out.c_str());
+  return failed == static_cast<int>(files.size()) ? 1 : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options options = parseArguments(argc, argv);
+  return options.sequence.empty() ? runImages(options) : runSequence(options);
+}
