@@ -17,6 +17,7 @@
 #include "report.hpp"
 #include "sequence/detections_file.hpp"
 #include "sequence/recorded_sequence.hpp"
+#include "sequence/trajectory_file.hpp"
 #include "shape/vehicle_model.hpp"
 
 #ifndef VP_SOURCE_DIR
@@ -90,12 +91,17 @@ Usage:
   vp_evaluate --sequence DIR --detections FILE [--sequence DIR --detections FILE ...] --out DIR
               [--asm PATH] [--iou 0.5] [--max-occlusion 0.7] [--max-truncation 0.5]
               [--frames A:B] [--model-id TEXT]
+  vp_evaluate --sequence DIR [--detections FILE] --tracks FILE [--sequence DIR ...] --out DIR
+              [--track-gate 2] [--moving-speed 0.5] [--frames A:B]
   vp_evaluate --yolo DIR --detections FILE [--val-list FILE] --out DIR [--iou 0.5] [--model-id TEXT]
 
 Inputs:
   --sequence DIR       a recorded sequence with ground_truth/ (docs/recorded_sequence.md)
   --detections FILE    the detections file run on it (docs/detections_file.md); one per
                        --sequence, in the same order (several pairs: one held-out set)
+  --tracks FILE        the trajectory file of the tracker run on it (docs/tracking.md); one
+                       per --sequence, in the same order: adds the tracking measures (with
+                       --detections too: the detector's own heading flips and type beside)
   --yolo DIR           real images: DIR/images/*.jpg|png and DIR/labels/<stem>.txt
                        ('class cx cy w h', normalised; class 0 = car); the detections file
                        then has the 'image' key column
@@ -109,6 +115,9 @@ Options:
   --max-occlusion X    references more occluded are 'ignore' (default 0.7, as in training)
   --max-truncation X   references more truncated are 'ignore' (default 0.5)
   --frames A:B         evaluate only frame ids A..B (inclusive) of every sequence
+  --track-gate M       tracks (and lifted detections) match a ground-truth vehicle within
+                       M metres in the world (default 2)
+  --moving-speed V     a ground-truth vehicle faster than V m/s is moving (default 0.5)
   --model-id TEXT      model name for the report (default: the files' '# model:' line)
   --help               this text
 
@@ -121,6 +130,7 @@ bool parseArguments(std::span<const std::string> args, EvaluateOptions* options,
   o.asmPath = std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml";
   std::vector<std::string> sequenceDirs;
   std::vector<std::string> detectionFiles;
+  std::vector<std::string> trackFiles;
   try {
     for (std::size_t i = 0; i < args.size(); ++i) {
       const std::string& arg = args[i];
@@ -136,6 +146,18 @@ bool parseArguments(std::span<const std::string> args, EvaluateOptions* options,
         sequenceDirs.push_back(value());
       } else if (arg == "--detections") {
         detectionFiles.push_back(value());
+      } else if (arg == "--tracks") {
+        trackFiles.push_back(value());
+      } else if (arg == "--track-gate") {
+        o.trackMatchDistance_m = parseNumber(arg, value());
+        if (!(o.trackMatchDistance_m > 0.0)) {
+          throw InputError("--track-gate: must be > 0 m");
+        }
+      } else if (arg == "--moving-speed") {
+        o.movingSpeed_mps = parseNumber(arg, value());
+        if (!(o.movingSpeed_mps >= 0.0)) {
+          throw InputError("--moving-speed: must be >= 0 m/s");
+        }
       } else if (arg == "--yolo") {
         o.yoloDir = value();
       } else if (arg == "--val-list") {
@@ -182,25 +204,39 @@ bool parseArguments(std::span<const std::string> args, EvaluateOptions* options,
       if (!sequenceDirs.empty()) {
         throw InputError("--yolo and --sequence cannot be mixed in one report");
       }
+      if (!trackFiles.empty()) {
+        throw InputError("--tracks needs --sequence (ground truth in the world), not --yolo");
+      }
       if (detectionFiles.size() != 1) {
         throw InputError("--yolo needs exactly one --detections FILE, got " +
                          std::to_string(detectionFiles.size()));
       }
-      o.sequences.push_back({o.yoloDir, detectionFiles[0]});
+      o.sequences.push_back({o.yoloDir, detectionFiles[0], ""});
     } else {
       if (sequenceDirs.empty()) {
-        throw InputError("give --sequence DIR --detections FILE (or --yolo DIR --detections FILE)");
+        throw InputError(
+            "give --sequence DIR --detections FILE and/or --tracks FILE (or --yolo DIR "
+            "--detections FILE)");
       }
-      if (sequenceDirs.size() != detectionFiles.size()) {
+      if (detectionFiles.empty() && trackFiles.empty()) {
+        throw InputError("each --sequence needs its --detections FILE and/or --tracks FILE");
+      }
+      if (!detectionFiles.empty() && sequenceDirs.size() != detectionFiles.size()) {
         throw InputError("each --sequence needs its --detections: got " +
                          std::to_string(sequenceDirs.size()) + " sequences and " +
                          std::to_string(detectionFiles.size()) + " detections files");
+      }
+      if (!trackFiles.empty() && sequenceDirs.size() != trackFiles.size()) {
+        throw InputError("each --sequence needs its --tracks: got " +
+                         std::to_string(sequenceDirs.size()) + " sequences and " +
+                         std::to_string(trackFiles.size()) + " trajectory files");
       }
       if (!o.valList.empty()) {
         throw InputError("--val-list applies to --yolo only");
       }
       for (std::size_t k = 0; k < sequenceDirs.size(); ++k) {
-        o.sequences.push_back({sequenceDirs[k], detectionFiles[k]});
+        o.sequences.push_back({sequenceDirs[k], detectionFiles.empty() ? "" : detectionFiles[k],
+                               trackFiles.empty() ? "" : trackFiles[k]});
       }
     }
   } catch (const InputError& error) {
@@ -304,6 +340,117 @@ bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& optio
       continue;
     }
     out->images[it->second].predictions.push_back(toPrediction(row));
+  }
+  return true;
+}
+
+bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& options,
+                          LoadedTracking* out, std::string* why) {
+  *out = LoadedTracking{};
+  out->label = input.sequenceDir;
+  out->tracksFile = input.tracksFile;
+  out->detectionsFile = input.detectionsFile;
+  sequence::SequenceReader reader;
+  if (!reader.open(input.sequenceDir, why)) {
+    return false;
+  }
+  if (!reader.hasGroundTruth()) {
+    *why = input.sequenceDir + ": no ground_truth/objects.csv: nothing to evaluate against";
+    return false;
+  }
+  sequence::TrajectoryFile tracks;
+  if (!sequence::readTrajectoryFile(input.tracksFile, &tracks, why)) {
+    return false;
+  }
+  const auto inRange = [&](std::int64_t frameId) {
+    return (!options.firstFrame || frameId >= *options.firstFrame) &&
+           (!options.lastFrame || frameId <= *options.lastFrame);
+  };
+  std::map<std::int64_t, std::size_t> indexOfFrame;
+  std::set<std::int64_t> sequenceFrames;
+  for (const sequence::FrameRecord& frame : reader.frames()) {
+    sequenceFrames.insert(frame.frameId);
+    if (!inRange(frame.frameId)) {
+      continue;
+    }
+    indexOfFrame[frame.frameId] = out->frames.size();
+    TrackingFrame data;
+    data.frameId = frame.frameId;
+    for (const sequence::ObjectTruth& object : reader.objects(frame.frameId)) {
+      evaluation::TruthVehicle truth;
+      truth.id = object.trackId;
+      truth.positionEnu = object.positionEnu.head<2>();
+      truth.headingEnuRad = object.headingEnuRad;
+      truth.speedMps = object.speedMps;
+      truth.type = static_cast<int>(object.type);
+      data.truth.push_back(truth);
+    }
+    out->frames.push_back(std::move(data));
+  }
+  // Rows of frames the sequence does not have are an error (a file of another sequence?).
+  const auto frameOf = [&](std::int64_t frameId, const std::string& file,
+                           int line) -> TrackingFrame* {
+    if (sequenceFrames.count(frameId) == 0) {
+      throw InputError(file + ":" + std::to_string(line) + ": frame_id: no frame " +
+                       std::to_string(frameId) + " in " + input.sequenceDir +
+                       "/frames.csv (a file of another sequence?)");
+    }
+    const auto it = indexOfFrame.find(frameId);
+    return it == indexOfFrame.end() ? nullptr : &out->frames[it->second];
+  };
+  try {
+    for (std::size_t i = 0; i < tracks.rows.size(); ++i) {
+      const sequence::TrajectoryRecord& row = tracks.rows[i];
+      TrackingFrame* frame = frameOf(row.frameId, input.tracksFile, tracks.lines[i]);
+      if (frame == nullptr) {
+        ++out->skippedRows;  // outside --frames
+        continue;
+      }
+      if (row.status != tracking::TrackStatus::Confirmed) {
+        ++(row.status == tracking::TrackStatus::Lost ? out->lostRows : out->tentativeRows);
+        continue;
+      }
+      ++out->confirmedRows;
+      evaluation::TrackObservation track;
+      track.id = row.trackId;
+      track.centreEnu = row.centreEnu;
+      track.headingEnuRad = row.headingEnuRad();
+      track.speedMps = row.speedMps;
+      track.type = static_cast<int>(row.type);
+      frame->tracks.push_back(track);
+    }
+    if (!input.detectionsFile.empty()) {
+      sequence::DetectionsFile detections;
+      std::string problem;
+      if (!sequence::readDetectionsFile(input.detectionsFile, &detections, &problem)) {
+        throw InputError(problem);
+      }
+      if (detections.info.key != sequence::DetectionsKey::FrameId) {
+        throw InputError(input.detectionsFile +
+                         ": header: a sequence needs the 'frame_id' key column (this file has "
+                         "'image')");
+      }
+      for (std::size_t i = 0; i < detections.rows.size(); ++i) {
+        const sequence::DetectionRecord& row = detections.rows[i];
+        TrackingFrame* frame = frameOf(row.frameId, input.detectionsFile, detections.lines[i]);
+        if (frame == nullptr) {
+          continue;
+        }
+        if (row.liftStatus != sequence::LiftStatus::Ok) {
+          ++out->unliftedDetections;
+          continue;
+        }
+        evaluation::DetectionObservation detection;
+        detection.positionEnu = row.positionEnu.head<2>();
+        detection.headingEnuRad = row.headingEnuRad;
+        detection.headingKnown = row.directionKnown;
+        detection.type = static_cast<int>(row.topType());
+        frame->detections.push_back(detection);
+      }
+    }
+  } catch (const InputError& error) {
+    *why = error.what();
+    return false;
   }
   return true;
 }
@@ -488,12 +635,17 @@ int runEvaluate(const EvaluateOptions& options, std::ostream& out, std::ostream&
     return 0;
   }
   const bool yolo = !options.yoloDir.empty();
+  const bool detections =
+      std::any_of(options.sequences.begin(), options.sequences.end(),
+                  [](const SequenceInput& in) { return !in.detectionsFile.empty(); });
+  const bool tracking = std::any_of(options.sequences.begin(), options.sequences.end(),
+                                    [](const SequenceInput& in) { return !in.tracksFile.empty(); });
   shape::ActiveShapeModel asmModel;
   std::string why;
   evaluation::EvaluationOptions evalOptions;
   evalOptions.iouThreshold = options.iouThreshold;
   evalOptions.axisAligned = yolo;
-  if (!yolo && !options.asmPath.empty()) {
+  if (detections && !yolo && !options.asmPath.empty()) {
     if (!asmModel.load(options.asmPath, &why)) {
       err << "vp_evaluate: " << why << "\n";
       return 1;
@@ -503,14 +655,21 @@ int runEvaluate(const EvaluateOptions& options, std::ostream& out, std::ostream&
   ReportContext context;
   context.commandLine = options.commandLine;
   context.mode = yolo ? "yolo" : "sequences";
-  context.asmPath = yolo ? std::string() : options.asmPath;
+  context.asmPath = yolo || !detections ? std::string() : options.asmPath;
   context.iouThreshold = options.iouThreshold;
   context.maxOcclusion = options.maxOcclusion;
   context.maxTruncation = options.maxTruncation;
   context.valList = options.valList;
+  context.hasDetections = detections;
+  context.hasTracking = tracking;
+  context.trackMatchDistance_m = options.trackMatchDistance_m;
+  context.movingSpeed_mps = options.movingSpeed_mps;
   evaluation::Evaluator total(evalOptions);
   std::set<std::string> models;
   for (const SequenceInput& input : options.sequences) {
+    if (input.detectionsFile.empty()) {
+      continue;
+    }
     LoadedInput loaded;
     const bool ok = yolo ? loadYoloImages(options, &loaded, &why)
                          : loadSequenceImages(input, options, &loaded, &why);
@@ -530,6 +689,36 @@ int runEvaluate(const EvaluateOptions& options, std::ostream& out, std::ostream&
         {loaded.label, loaded.detectionsFile, loaded.model, loaded.skippedRows, own.summary()});
   }
   context.total = total.summary();
+  evaluation::TrackingOptions trackingOptions;
+  trackingOptions.matchDistance_m = options.trackMatchDistance_m;
+  trackingOptions.movingSpeed_mps = options.movingSpeed_mps;
+  evaluation::TrackingEvaluator trackingTotal(trackingOptions);
+  for (const SequenceInput& input : options.sequences) {
+    if (input.tracksFile.empty()) {
+      continue;
+    }
+    LoadedTracking loaded;
+    if (!loadSequenceTracking(input, options, &loaded, &why)) {
+      err << "vp_evaluate: " << why << "\n";
+      return 1;
+    }
+    evaluation::TrackingEvaluator own(trackingOptions);
+    own.beginSequence();
+    trackingTotal.beginSequence();
+    for (const TrackingFrame& frame : loaded.frames) {
+      own.addFrame(frame.truth, frame.tracks);
+      trackingTotal.addFrame(frame.truth, frame.tracks);
+      if (!loaded.detectionsFile.empty()) {
+        own.addDetectorFrame(frame.truth, frame.detections);
+        trackingTotal.addDetectorFrame(frame.truth, frame.detections);
+      }
+    }
+    context.trackingInputs.push_back({loaded.label, loaded.tracksFile, loaded.detectionsFile,
+                                      static_cast<int>(loaded.frames.size()), loaded.confirmedRows,
+                                      loaded.tentativeRows, loaded.lostRows, loaded.skippedRows,
+                                      own.summary()});
+  }
+  context.tracking = trackingTotal.summary();
   if (!options.modelId.empty()) {
     context.modelId = options.modelId;
   } else {
@@ -544,10 +733,19 @@ int runEvaluate(const EvaluateOptions& options, std::ostream& out, std::ostream&
     err << "vp_evaluate: " << why << "\n";
     return 1;
   }
-  const evaluation::EvaluationSummary& s = context.total;
-  out << "vp_evaluate: " << s.images << " images, " << s.references << " references, "
-      << s.predictions << " predictions: P " << s.precision << " R " << s.recall << " F1 " << s.f1
-      << "; report in " << options.outDir << "/report.md\n";
+  out << "vp_evaluate:";
+  if (detections) {
+    const evaluation::EvaluationSummary& s = context.total;
+    out << " " << s.images << " images, " << s.references << " references, " << s.predictions
+        << " predictions: P " << s.precision << " R " << s.recall << " F1 " << s.f1 << ";";
+  }
+  if (tracking) {
+    const evaluation::TrackingSummary& t = context.tracking;
+    out << " tracking: " << t.mot.frames << " frames, " << t.mot.truthObjects << " vehicle-frames, "
+        << t.tracks << " confirmed tracks: MOTA " << t.mot.mota << " IDF1 " << t.mot.idf1
+        << " ID switches " << t.mot.idSwitches << ";";
+  }
+  out << " report in " << options.outDir << "/report.md\n";
   return 0;
 }
 

@@ -14,13 +14,14 @@
 
 #include "evaluation/seed_reference.hpp"
 #include "shape/vehicle_model.hpp"
+#include "tracking/mot_metrics.hpp"
 
 namespace vp::evaluate {
 namespace {
 
 namespace fs = std::filesystem;
 
-enum class Unit { Count, Percent, Ratio, Metre, Degree, Pixel };
+enum class Unit { Count, Percent, Ratio, Metre, Degree, Pixel, MetrePerSecond };
 
 // One measure of the report: its section, words, JSON key, value, unit and sample count.
 struct Row {
@@ -63,6 +64,8 @@ std::string display(double value, Unit unit) {
       return fixed(value, 2) + " °";
     case Unit::Pixel:
       return fixed(value, 2) + " px";
+    case Unit::MetrePerSecond:
+      return fixed(value, 3) + " m/s";
   }
   return "n/a";
 }
@@ -201,6 +204,166 @@ std::string seedSource(const std::string& key) {
   return figure ? std::string(figure->source) : std::string();
 }
 
+std::vector<Row> trackingRows(const evaluation::TrackingSummary& t) {
+  const tracking::MotSummary& m = t.mot;
+  const char* mot = "Tracking";
+  const char* versus = "Tracks vs detector";
+  return {
+      {mot, "MOTA = 1 − (misses + false positives + ID switches) / vehicle-frames", "mota", m.mota,
+       Unit::Ratio, m.truthObjects},
+      {mot, "MOTP: mean distance of the matched pairs", "motp_m", m.motp_m, Unit::Metre, m.matches},
+      {mot, "IDF1 = 2 IDTP / (vehicle-frames + track-frames)", "idf1", m.idf1, Unit::Ratio},
+      {mot, "ID precision", "id_precision", m.idPrecision, Unit::Ratio},
+      {mot, "ID recall", "id_recall", m.idRecall, Unit::Ratio},
+      {mot, "ID switches", "id_switches", static_cast<double>(m.idSwitches), Unit::Count},
+      {mot, "fragmentations", "fragmentations", static_cast<double>(m.fragmentations), Unit::Count},
+      {mot, "ground-truth vehicles", "truth_vehicles", static_cast<double>(m.truthTracks),
+       Unit::Count},
+      {mot, "mostly tracked (matched in ≥ 80 % of their frames)", "mostly_tracked",
+       static_cast<double>(m.mostlyTracked), Unit::Count},
+      {mot, "partially tracked", "partially_tracked", static_cast<double>(m.partiallyTracked),
+       Unit::Count},
+      {mot, "mostly lost (matched in ≤ 20 %)", "mostly_lost", static_cast<double>(m.mostlyLost),
+       Unit::Count},
+      {mot, "ground-truth vehicle-frames", "truth_objects", static_cast<double>(m.truthObjects),
+       Unit::Count},
+      {mot, "confirmed track-frames (hypotheses)", "hypotheses", static_cast<double>(m.hypotheses),
+       Unit::Count},
+      {mot, "matches", "matches", static_cast<double>(m.matches), Unit::Count},
+      {mot, "misses", "misses", static_cast<double>(m.misses), Unit::Count},
+      {mot, "false positives", "false_positives", static_cast<double>(m.falsePositives),
+       Unit::Count},
+      {mot, "confirmed tracks", "tracks", static_cast<double>(t.tracks), Unit::Count},
+      {mot, "confirmed tracks never matched", "unmatched_tracks",
+       static_cast<double>(t.unmatchedTracks), Unit::Count},
+      {versus, "speed RMSE of moving vehicles", "speed_rmse_mps", t.speedRmse_mps,
+       Unit::MetrePerSecond, t.speedSamples},
+      {versus, "heading error > 90° on moving vehicles, tracks", "heading_flip_share_tracks",
+       t.trackFlipShare, Unit::Percent, t.trackHeadingSamples},
+      {versus, "heading error > 90° on moving vehicles, detector alone",
+       "heading_flip_share_detector", t.detectorFlipShare, Unit::Percent, t.detectorHeadingSamples},
+      {versus, "matched detections of moving vehicles without front/back",
+       "detector_direction_unknown", static_cast<double>(t.detectorDirectionUnknown), Unit::Count},
+      {versus, "type OA-1 per confirmed track", "type_oa1_per_track", t.trackTypeOa1, Unit::Percent,
+       t.typedTracks},
+      {versus, "type OA-1 per track-frame", "type_oa1_per_track_frame", t.trackFrameTypeOa1,
+       Unit::Percent, t.trackFrameTypeSamples},
+      {versus, "type OA-1 per frame, detector alone", "type_oa1_detector_per_frame",
+       t.detectorTypeOa1, Unit::Percent, t.detectorTypeSamples},
+      {versus, "lifted detections in the evaluated frames", "detections",
+       static_cast<double>(t.detections), Unit::Count},
+      {versus, "lifted detections matched to a vehicle", "detections_matched",
+       static_cast<double>(t.detectionsMatched), Unit::Count},
+  };
+}
+
+std::string samplesCell(int samples) {
+  return samples >= 0 ? std::to_string(samples) : std::string();
+}
+
+std::string trackingMarkdown(const ReportContext& context) {
+  const evaluation::TrackingSummary& t = context.tracking;
+  const bool detector = t.detectorFrames > 0;
+  std::ostringstream md;
+  md << "\n## Tracking\n\n";
+  md << "- hypotheses: the `confirmed` rows of the trajectory files (tentative and lost rows are "
+        "not); truth: every ground-truth vehicle of each evaluated frame\n";
+  md << "- matching: per frame in world ENU, footprint centres at most "
+     << shortest(context.trackMatchDistance_m)
+     << " m apart; last frame's pairs kept while within that distance, the rest by minimum "
+        "total distance (CLEAR MOT); lifted detections matched the same way, without identity\n";
+  md << "- moving: ground-truth speed > " << shortest(context.movingSpeed_mps)
+     << " m/s; speed errors on |speed|; type per track: its last fused type vs the vehicle it "
+        "was matched to in most frames\n";
+  md << "- definitions: docs/evaluation.md (Tracking)\n\n";
+  md << "| input | trajectory file | detections | frames | vehicle-frames | confirmed rows | "
+        "tentative / lost rows | confirmed tracks | MOTA | IDF1 | ID switches | speed RMSE |\n"
+        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+  for (const TrackingInputSummary& input : context.trackingInputs) {
+    const evaluation::TrackingSummary& e = input.summary;
+    md << "| " << input.label << " | " << input.tracksFile << " | " << input.detectionsFile << " | "
+       << input.frames << " | " << e.mot.truthObjects << " | " << input.confirmedRows << " | "
+       << input.tentativeRows << " / " << input.lostRows << " | " << e.tracks << " | "
+       << display(e.mot.mota, Unit::Ratio) << " | " << display(e.mot.idf1, Unit::Ratio) << " | "
+       << e.mot.idSwitches << " | " << display(e.speedRmse_mps, Unit::MetrePerSecond) << " |\n";
+    if (input.skippedRows > 0) {
+      md << "| | " << input.skippedRows
+         << " trajectory rows outside the evaluated frames skipped | | | | | | | | | | |\n";
+    }
+  }
+  const std::vector<Row> rows = trackingRows(t);
+  md << "\n### Multi-object tracking (CLEAR MOT, identity)\n\n| measure | value | n |\n"
+        "| --- | ---: | ---: |\n";
+  for (const Row& row : rows) {
+    if (std::string(row.section) == "Tracking") {
+      md << "| " << row.label << " | " << display(row.value, row.unit) << " | "
+         << samplesCell(row.samples) << " |\n";
+    }
+  }
+  const std::string none = detector ? "" : "n/a (no --detections)";
+  const auto detectorCell = [&](double value, Unit unit) {
+    return detector ? display(value, unit) : none;
+  };
+  md << "\n### Tracks beside the detector alone (moving: ground truth > "
+     << shortest(context.movingSpeed_mps) << " m/s)\n\n"
+     << "| measure | tracks | n | detector alone | n |\n| --- | ---: | ---: | ---: | ---: |\n";
+  md << "| speed RMSE of moving vehicles | " << display(t.speedRmse_mps, Unit::MetrePerSecond)
+     << " | " << t.speedSamples << " | | |\n";
+  md << "| heading error > 90° on moving vehicles (front/back swapped) | "
+     << display(t.trackFlipShare, Unit::Percent) << " | " << t.trackHeadingSamples << " | "
+     << detectorCell(t.detectorFlipShare, Unit::Percent) << " | "
+     << (detector ? std::to_string(t.detectorHeadingSamples) : std::string()) << " |\n";
+  md << "| type OA-1: tracks per confirmed track, detector per frame | "
+     << display(t.trackTypeOa1, Unit::Percent) << " | " << t.typedTracks << " | "
+     << detectorCell(t.detectorTypeOa1, Unit::Percent) << " | "
+     << (detector ? std::to_string(t.detectorTypeSamples) : std::string()) << " |\n";
+  md << "| type OA-1 per track-frame | " << display(t.trackFrameTypeOa1, Unit::Percent) << " | "
+     << t.trackFrameTypeSamples << " | | |\n";
+  if (detector) {
+    md << "\nDetector alone: " << t.detections << " lifted detections in the evaluated frames, "
+       << t.detectionsMatched << " matched to a vehicle; " << t.detectorDirectionUnknown
+       << " matched detections of moving vehicles without a known front/back are left out of "
+          "the flip share.\n";
+  }
+  return md.str();
+}
+
+std::string trackingJson(const ReportContext& context) {
+  const std::vector<Row> rows = trackingRows(context.tracking);
+  std::ostringstream js;
+  js << "{\n    \"match_distance_m\": " << jsonNumber(context.trackMatchDistance_m)
+     << ",\n    \"moving_speed_mps\": " << jsonNumber(context.movingSpeed_mps)
+     << ",\n    \"detector\": " << (context.tracking.detectorFrames > 0 ? "true" : "false")
+     << ",\n    \"measures\": {";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    js << (i == 0 ? "\n" : ",\n") << "      " << jsonString(rows[i].key) << ": "
+       << jsonNumber(rows[i].value);
+  }
+  js << "\n    },\n    \"samples\": {";
+  bool first = true;
+  for (const Row& row : rows) {
+    if (row.samples >= 0) {
+      js << (first ? "\n" : ",\n") << "      " << jsonString(row.key) << ": " << row.samples;
+      first = false;
+    }
+  }
+  js << "\n    },\n    \"inputs\": [";
+  for (std::size_t i = 0; i < context.trackingInputs.size(); ++i) {
+    const TrackingInputSummary& in = context.trackingInputs[i];
+    const evaluation::TrackingSummary& e = in.summary;
+    js << (i == 0 ? "\n" : ",\n") << "      {\"input\": " << jsonString(in.label)
+       << ", \"tracks\": " << jsonString(in.tracksFile)
+       << ", \"detections\": " << jsonString(in.detectionsFile) << ", \"frames\": " << in.frames
+       << ", \"confirmed_rows\": " << in.confirmedRows
+       << ", \"tentative_rows\": " << in.tentativeRows << ", \"lost_rows\": " << in.lostRows
+       << ", \"skipped_rows\": " << in.skippedRows << ", \"mota\": " << jsonNumber(e.mot.mota)
+       << ", \"idf1\": " << jsonNumber(e.mot.idf1) << ", \"id_switches\": " << e.mot.idSwitches
+       << ", \"speed_rmse_mps\": " << jsonNumber(e.speedRmse_mps) << "}";
+  }
+  js << "\n    ]\n  }";
+  return js.str();
+}
+
 }  // namespace
 
 std::string reportMarkdown(const ReportContext& context) {
@@ -209,81 +372,88 @@ std::string reportMarkdown(const ReportContext& context) {
   std::ostringstream md;
   md << "# Evaluation report\n\n";
   md << "- command: `" << context.commandLine << "`\n";
-  md << "- model: " << context.modelId << "\n";
-  md << "- data: " << s.images << (yolo ? " images" : " frames") << ", " << s.references
-     << " reference vehicles (" << s.ignoredReferences << " ignored), " << s.predictions
-     << " predictions (" << s.ignoredPredictions << " on ignored references)\n";
-  if (yolo) {
-    md << "- matching: greedy by score, axis-aligned IoU >= " << shortest(context.iouThreshold)
-       << " between the box enclosing each rotated prediction and the YOLO box; "
-       << (context.valList.empty() ? std::string("all images of the folder (no --val-list: "
-                                                 "not a held-out split)")
-                                   : "validation images of " + context.valList)
-       << "\n";
-  } else {
-    md << "- matching: greedy by score, rotated IoU >= " << shortest(context.iouThreshold)
-       << " (seed 000, sec. 5.1); references with occlusion > " << shortest(context.maxOcclusion)
-       << " or truncation > " << shortest(context.maxTruncation)
-       << " are ignored (a prediction on them is neither TP nor FP)\n";
-    md << "- shape model: " << (context.asmPath.empty() ? "none" : context.asmPath) << "\n";
-  }
-  md << "- definitions: docs/evaluation.md. Seed figures: seed 000, UAV data set (3 cm GSD), "
-        "variant V_L1 — their data, not ours: a yardstick.\n\n";
+  if (context.hasDetections) {
+    md << "- model: " << context.modelId << "\n";
+    md << "- data: " << s.images << (yolo ? " images" : " frames") << ", " << s.references
+       << " reference vehicles (" << s.ignoredReferences << " ignored), " << s.predictions
+       << " predictions (" << s.ignoredPredictions << " on ignored references)\n";
+    if (yolo) {
+      md << "- matching: greedy by score, axis-aligned IoU >= " << shortest(context.iouThreshold)
+         << " between the box enclosing each rotated prediction and the YOLO box; "
+         << (context.valList.empty() ? std::string("all images of the folder (no --val-list: "
+                                                   "not a held-out split)")
+                                     : "validation images of " + context.valList)
+         << "\n";
+    } else {
+      md << "- matching: greedy by score, rotated IoU >= " << shortest(context.iouThreshold)
+         << " (seed 000, sec. 5.1); references with occlusion > " << shortest(context.maxOcclusion)
+         << " or truncation > " << shortest(context.maxTruncation)
+         << " are ignored (a prediction on them is neither TP nor FP)\n";
+      md << "- shape model: " << (context.asmPath.empty() ? "none" : context.asmPath) << "\n";
+    }
+    md << "- definitions: docs/evaluation.md. Seed figures: seed 000, UAV data set (3 cm GSD), "
+          "variant V_L1 — their data, not ours: a yardstick.\n\n";
 
-  md << "## Inputs\n\n| input | detections | model | " << (yolo ? "images" : "frames")
-     << " | references | predictions | TP | FP | FN | precision | recall | F1 |\n"
-        "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
-  for (const InputSummary& input : context.inputs) {
-    const evaluation::EvaluationSummary& e = input.summary;
-    md << "| " << input.label << " | " << input.detectionsFile << " | " << input.model << " | "
-       << e.images << " | " << e.references << " | " << e.predictions << " | " << e.truePositives
-       << " | " << e.falsePositives << " | " << e.falseNegatives << " | "
-       << display(e.precision, Unit::Percent) << " | " << display(e.recall, Unit::Percent) << " | "
-       << display(e.f1, Unit::Percent) << " |\n";
-    if (input.skippedRows > 0) {
-      md << "| | " << input.skippedRows
-         << " detection rows outside the evaluated frames/images skipped | | | | | | | | | | |\n";
+    md << "## Inputs\n\n| input | detections | model | " << (yolo ? "images" : "frames")
+       << " | references | predictions | TP | FP | FN | precision | recall | F1 |\n"
+          "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+    for (const InputSummary& input : context.inputs) {
+      const evaluation::EvaluationSummary& e = input.summary;
+      md << "| " << input.label << " | " << input.detectionsFile << " | " << input.model << " | "
+         << e.images << " | " << e.references << " | " << e.predictions << " | " << e.truePositives
+         << " | " << e.falsePositives << " | " << e.falseNegatives << " | "
+         << display(e.precision, Unit::Percent) << " | " << display(e.recall, Unit::Percent)
+         << " | " << display(e.f1, Unit::Percent) << " |\n";
+      if (input.skippedRows > 0) {
+        md << "| | " << input.skippedRows
+           << " detection rows outside the evaluated frames/images skipped | | | | | | | | | | |\n";
+      }
     }
-  }
-  const char* section = "";
-  for (const Row& row : measureRows(context)) {
-    if (std::string(section) != row.section) {
-      section = row.section;
-      md << "\n## " << section << "\n\n| measure | ours | n | seed 000 | seed source |\n"
-         << "| --- | ---: | ---: | ---: | --- |\n";
+    const char* section = "";
+    for (const Row& row : measureRows(context)) {
+      if (std::string(section) != row.section) {
+        section = row.section;
+        md << "\n## " << section << "\n\n| measure | ours | n | seed 000 | seed source |\n"
+           << "| --- | ---: | ---: | ---: | --- |\n";
+      }
+      md << "| " << row.label << " | " << display(row.value, row.unit) << " | "
+         << (row.samples >= 0 ? std::to_string(row.samples) : std::string()) << " | "
+         << seedCell(row.key, row.unit) << " | " << seedSource(row.key) << " |\n";
     }
-    md << "| " << row.label << " | " << display(row.value, row.unit) << " | "
-       << (row.samples >= 0 ? std::to_string(row.samples) : std::string()) << " | "
-       << seedCell(row.key, row.unit) << " | " << seedSource(row.key) << " |\n";
-  }
-  if (!yolo) {
-    md << "\n## Type confusion (rows: reference, columns: top-1 prediction)\n\n| |";
-    for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-      md << " " << shape::toString(static_cast<shape::VehicleType>(t)) << " |";
-    }
-    md << "\n| --- |";
-    for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-      md << " ---: |";
-    }
-    md << "\n";
-    for (int r = 0; r < shape::kVehicleTypeCount; ++r) {
-      md << "| " << shape::toString(static_cast<shape::VehicleType>(r)) << " |";
-      for (int c = 0; c < shape::kVehicleTypeCount; ++c) {
-        md << " " << s.confusion[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)] << " |";
+    if (!yolo) {
+      md << "\n## Type confusion (rows: reference, columns: top-1 prediction)\n\n| |";
+      for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+        md << " " << shape::toString(static_cast<shape::VehicleType>(t)) << " |";
+      }
+      md << "\n| --- |";
+      for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+        md << " ---: |";
+      }
+      md << "\n";
+      for (int r = 0; r < shape::kVehicleTypeCount; ++r) {
+        md << "| " << shape::toString(static_cast<shape::VehicleType>(r)) << " |";
+        for (int c = 0; c < shape::kVehicleTypeCount; ++c) {
+          md << " " << s.confusion[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)]
+             << " |";
+        }
+        md << "\n";
+      }
+      md << "\n## Cumulative histogram of the absolute orientation errors Δθ (seed 000, Figure "
+            "2)\n\n"
+            "![cumulative histogram of the orientation errors](orientation_cdf.png)\n\n"
+            "| Δθ ≤ | 2° | 5° | 10° | 20° | 45° | 90° | 170° |\n"
+            "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n| share |";
+      for (const int deg : {2, 5, 10, 20, 45, 90, 170}) {
+        const double share = s.orientationCumulative.empty()
+                                 ? std::numeric_limits<double>::quiet_NaN()
+                                 : s.orientationCumulative[static_cast<std::size_t>(deg)];
+        md << " " << display(share, Unit::Percent) << " |";
       }
       md << "\n";
     }
-    md << "\n## Cumulative histogram of the absolute orientation errors Δθ (seed 000, Figure 2)\n\n"
-          "![cumulative histogram of the orientation errors](orientation_cdf.png)\n\n"
-          "| Δθ ≤ | 2° | 5° | 10° | 20° | 45° | 90° | 170° |\n"
-          "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n| share |";
-    for (const int deg : {2, 5, 10, 20, 45, 90, 170}) {
-      const double share = s.orientationCumulative.empty()
-                               ? std::numeric_limits<double>::quiet_NaN()
-                               : s.orientationCumulative[static_cast<std::size_t>(deg)];
-      md << " " << display(share, Unit::Percent) << " |";
-    }
-    md << "\n";
+  }
+  if (context.hasTracking) {
+    md << trackingMarkdown(context);
   }
   return md.str();
 }
@@ -299,63 +469,70 @@ std::string reportJson(const ReportContext& context) {
   js << "  \"val_list\": " << jsonString(context.valList) << ",\n";
   js << "  \"iou_threshold\": " << jsonNumber(context.iouThreshold) << ",\n";
   js << "  \"max_occlusion\": " << jsonNumber(context.maxOcclusion) << ",\n";
-  js << "  \"max_truncation\": " << jsonNumber(context.maxTruncation) << ",\n";
-  js << "  \"counts\": {\"images\": " << s.images << ", \"references\": " << s.references
-     << ", \"ignored_references\": " << s.ignoredReferences
-     << ", \"predictions\": " << s.predictions
-     << ", \"ignored_predictions\": " << s.ignoredPredictions << "},\n";
-  const std::vector<Row> rows = measureRows(context);
-  js << "  \"measures\": {";
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    js << (i == 0 ? "\n" : ",\n") << "    " << jsonString(rows[i].key) << ": "
-       << jsonNumber(rows[i].value);
-  }
-  js << "\n  },\n  \"samples\": {";
-  bool first = true;
-  for (const Row& row : rows) {
-    if (row.samples >= 0) {
-      js << (first ? "\n" : ",\n") << "    " << jsonString(row.key) << ": " << row.samples;
-      first = false;
+  js << "  \"max_truncation\": " << jsonNumber(context.maxTruncation);
+  if (context.hasDetections) {
+    js << ",\n";
+    js << "  \"counts\": {\"images\": " << s.images << ", \"references\": " << s.references
+       << ", \"ignored_references\": " << s.ignoredReferences
+       << ", \"predictions\": " << s.predictions
+       << ", \"ignored_predictions\": " << s.ignoredPredictions << "},\n";
+    const std::vector<Row> rows = measureRows(context);
+    js << "  \"measures\": {";
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      js << (i == 0 ? "\n" : ",\n") << "    " << jsonString(rows[i].key) << ": "
+         << jsonNumber(rows[i].value);
     }
-  }
-  js << "\n  },\n  \"seed\": {";
-  first = true;
-  for (const Row& row : rows) {
-    if (const auto figure = evaluation::seedFigure(row.key)) {
-      js << (first ? "\n" : ",\n") << "    " << jsonString(row.key)
-         << ": {\"value\": " << jsonNumber(figure->value)
-         << ", \"source\": " << jsonString(std::string(figure->source))
-         << ", \"approximate\": " << (figure->approximate ? "true" : "false") << "}";
-      first = false;
+    js << "\n  },\n  \"samples\": {";
+    bool first = true;
+    for (const Row& row : rows) {
+      if (row.samples >= 0) {
+        js << (first ? "\n" : ",\n") << "    " << jsonString(row.key) << ": " << row.samples;
+        first = false;
+      }
     }
-  }
-  js << "\n  },\n  \"type_confusion\": [";
-  for (int r = 0; r < shape::kVehicleTypeCount; ++r) {
-    js << (r == 0 ? "" : ", ") << "[";
-    for (int c = 0; c < shape::kVehicleTypeCount; ++c) {
-      js << (c == 0 ? "" : ", ")
-         << s.confusion[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)];
+    js << "\n  },\n  \"seed\": {";
+    first = true;
+    for (const Row& row : rows) {
+      if (const auto figure = evaluation::seedFigure(row.key)) {
+        js << (first ? "\n" : ",\n") << "    " << jsonString(row.key)
+           << ": {\"value\": " << jsonNumber(figure->value)
+           << ", \"source\": " << jsonString(std::string(figure->source))
+           << ", \"approximate\": " << (figure->approximate ? "true" : "false") << "}";
+        first = false;
+      }
     }
-    js << "]";
+    js << "\n  },\n  \"type_confusion\": [";
+    for (int r = 0; r < shape::kVehicleTypeCount; ++r) {
+      js << (r == 0 ? "" : ", ") << "[";
+      for (int c = 0; c < shape::kVehicleTypeCount; ++c) {
+        js << (c == 0 ? "" : ", ")
+           << s.confusion[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)];
+      }
+      js << "]";
+    }
+    js << "],\n  \"orientation_cumulative\": [";
+    for (std::size_t i = 0; i < s.orientationCumulative.size(); ++i) {
+      js << (i == 0 ? "" : ", ") << jsonNumber(s.orientationCumulative[i]);
+    }
+    js << "],\n  \"inputs\": [";
+    for (std::size_t i = 0; i < context.inputs.size(); ++i) {
+      const InputSummary& in = context.inputs[i];
+      const evaluation::EvaluationSummary& e = in.summary;
+      js << (i == 0 ? "\n" : ",\n") << "    {\"input\": " << jsonString(in.label)
+         << ", \"detections\": " << jsonString(in.detectionsFile)
+         << ", \"model\": " << jsonString(in.model) << ", \"skipped_rows\": " << in.skippedRows
+         << ", \"images\": " << e.images << ", \"references\": " << e.references
+         << ", \"predictions\": " << e.predictions << ", \"tp\": " << e.truePositives
+         << ", \"fp\": " << e.falsePositives << ", \"fn\": " << e.falseNegatives
+         << ", \"precision\": " << jsonNumber(e.precision)
+         << ", \"recall\": " << jsonNumber(e.recall) << ", \"f1\": " << jsonNumber(e.f1) << "}";
+    }
+    js << "\n  ]";
   }
-  js << "],\n  \"orientation_cumulative\": [";
-  for (std::size_t i = 0; i < s.orientationCumulative.size(); ++i) {
-    js << (i == 0 ? "" : ", ") << jsonNumber(s.orientationCumulative[i]);
+  if (context.hasTracking) {
+    js << ",\n  \"tracking\": " << trackingJson(context);
   }
-  js << "],\n  \"inputs\": [";
-  for (std::size_t i = 0; i < context.inputs.size(); ++i) {
-    const InputSummary& in = context.inputs[i];
-    const evaluation::EvaluationSummary& e = in.summary;
-    js << (i == 0 ? "\n" : ",\n") << "    {\"input\": " << jsonString(in.label)
-       << ", \"detections\": " << jsonString(in.detectionsFile)
-       << ", \"model\": " << jsonString(in.model) << ", \"skipped_rows\": " << in.skippedRows
-       << ", \"images\": " << e.images << ", \"references\": " << e.references
-       << ", \"predictions\": " << e.predictions << ", \"tp\": " << e.truePositives
-       << ", \"fp\": " << e.falsePositives << ", \"fn\": " << e.falseNegatives
-       << ", \"precision\": " << jsonNumber(e.precision) << ", \"recall\": " << jsonNumber(e.recall)
-       << ", \"f1\": " << jsonNumber(e.f1) << "}";
-  }
-  js << "\n  ]\n}\n";
+  js << "\n}\n";
   return js.str();
 }
 
@@ -462,7 +639,7 @@ bool writeReport(const ReportContext& context, const std::string& outDir, std::s
       !writeText("report.json", reportJson(context))) {
     return false;
   }
-  if (context.mode != "yolo") {
+  if (context.hasDetections && context.mode != "yolo") {
     return writeOrientationPlot(context.total, (fs::path(outDir) / "orientation_cdf.png").string(),
                                 why);
   }

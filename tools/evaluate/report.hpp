@@ -1,5 +1,7 @@
 // tools/evaluate/report: the evaluation report: Markdown and JSON text of the measures with
-// seed 000's own figures beside them, and the cumulative histogram of |d_theta| as a PNG plot.
+// seed 000's own figures beside them, and the cumulative histogram of |d_theta| as a PNG plot;
+// the tracking measures, when trajectory files were given, in their own section with the
+// detector's own figures beside the tracks'.
 //
 // Contract: reportMarkdown() and reportJson() are pure text builders (NaN -> "n/a" / null);
 // writeOrientationPlot() draws the plot with OpenCV (axes, ticks, labels, our curve, the
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "evaluation/measures.hpp"
+#include "evaluation/tracking_measures.hpp"
 
 namespace vp::evaluate {
 
@@ -21,6 +24,19 @@ struct InputSummary {
   std::string model;
   int skippedRows = 0;
   evaluation::EvaluationSummary summary;
+};
+
+// One sequence and its own tracking figures.
+struct TrackingInputSummary {
+  std::string label;
+  std::string tracksFile;
+  std::string detectionsFile;  // empty: no detector-alone figures
+  int frames = 0;
+  int confirmedRows = 0;
+  int tentativeRows = 0;
+  int lostRows = 0;
+  int skippedRows = 0;  // outside --frames
+  evaluation::TrackingSummary summary;
 };
 
 struct ReportContext {
@@ -34,6 +50,12 @@ struct ReportContext {
   std::string valList;  // yolo mode
   std::vector<InputSummary> inputs;
   evaluation::EvaluationSummary total;
+  bool hasDetections = true;  // detection sections (inputs with --detections)
+  bool hasTracking = false;   // tracking section (inputs with --tracks)
+  double trackMatchDistance_m = evaluation::kDefaultTrackMatchDistance_m;
+  double movingSpeed_mps = evaluation::kDefaultMovingSpeed_mps;
+  std::vector<TrackingInputSummary> trackingInputs;
+  evaluation::TrackingSummary tracking;
 };
 
 std::string reportMarkdown(const ReportContext& context);

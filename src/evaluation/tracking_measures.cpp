@@ -1,0 +1,254 @@
+#include "evaluation/tracking_measures.hpp"
+
+#include <cmath>
+
+#include "geometry/rotated_box.hpp"
+#include "tracking/hungarian.hpp"
+
+namespace vp::evaluation {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kFlipAngleRad = 0.5 * geometry::kPi;  // heading error above: front/back swapped
+
+double share(int count, int samples) {
+  return samples > 0 ? static_cast<double>(count) / samples : kNaN;
+}
+
+bool isFlip(double truthHeadingRad, double headingRad) {
+  return geometry::absAngleDifference(truthHeadingRad, headingRad) > kFlipAngleRad;
+}
+
+}  // namespace
+
+std::vector<int> matchByDistance(std::span<const Eigen::Vector2d> truth,
+                                 std::span<const Eigen::Vector2d> hypotheses,
+                                 std::span<const int> previous, double matchDistance_m) {
+  const std::size_t nt = truth.size();
+  const std::size_t nh = hypotheses.size();
+  const auto dist = [&](std::size_t g, std::size_t h) { return (truth[g] - hypotheses[h]).norm(); };
+  std::vector<int> gToH(nt, -1);
+  std::vector<int> hToG(nh, -1);
+  // 1. Keep last frame's pairs that are still within the distance.
+  for (std::size_t g = 0; g < nt && g < previous.size(); ++g) {
+    const int h = previous[g];
+    if (h >= 0 && static_cast<std::size_t>(h) < nh && hToG[static_cast<std::size_t>(h)] < 0 &&
+        dist(g, static_cast<std::size_t>(h)) <= matchDistance_m) {
+      gToH[g] = h;
+      hToG[static_cast<std::size_t>(h)] = static_cast<int>(g);
+    }
+  }
+  // 2. Pair the rest by minimum total distance (float costs, as tracking::MotAccumulator).
+  std::vector<std::size_t> rows;
+  std::vector<std::size_t> cols;
+  for (std::size_t g = 0; g < nt; ++g) {
+    if (gToH[g] < 0) {
+      rows.push_back(g);
+    }
+  }
+  for (std::size_t h = 0; h < nh; ++h) {
+    if (hToG[h] < 0) {
+      cols.push_back(h);
+    }
+  }
+  if (rows.empty() || cols.empty()) {
+    return gToH;
+  }
+  std::vector<float> costs(rows.size() * cols.size(), tracking::kInfeasibleCost);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      const double d = dist(rows[r], cols[c]);
+      if (d <= matchDistance_m) {
+        costs[r * cols.size() + c] = static_cast<float>(d);
+      }
+    }
+  }
+  tracking::HungarianSolver solver;
+  solver.init(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
+  std::vector<int> assign(rows.size(), -1);
+  solver.solve(costs, static_cast<int>(rows.size()), static_cast<int>(cols.size()), assign);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    if (assign[r] >= 0) {
+      gToH[rows[r]] = static_cast<int>(cols[static_cast<std::size_t>(assign[r])]);
+    }
+  }
+  return gToH;
+}
+
+TrackingEvaluator::TrackingEvaluator(const TrackingOptions& options)
+    : options_(options),
+      mot_(tracking::MotParams{options.matchDistance_m, options.mostlyTrackedShare,
+                               options.mostlyLostShare}) {}
+
+void TrackingEvaluator::beginSequence() {
+  ++sequence_;
+  previousMatch_.clear();
+}
+
+int TrackingEvaluator::truthKey(std::int64_t id) {
+  const auto [it, added] =
+      truthKeys_.emplace(std::make_pair(sequence_, id), static_cast<int>(truthKeys_.size()));
+  return it->second;
+}
+
+int TrackingEvaluator::trackKey(std::int64_t id) {
+  const auto [it, added] =
+      trackKeys_.emplace(std::make_pair(sequence_, id), static_cast<int>(trackKeys_.size()));
+  return it->second;
+}
+
+void TrackingEvaluator::addFrame(std::span<const TruthVehicle> truth,
+                                 std::span<const TrackObservation> tracks) {
+  if (sequence_ < 0) {
+    beginSequence();
+  }
+  std::vector<int> truthKeys(truth.size());
+  std::vector<int> trackKeys(tracks.size());
+  std::vector<Eigen::Vector2d> truthPositions(truth.size());
+  std::vector<Eigen::Vector2d> trackPositions(tracks.size());
+  std::vector<tracking::MotObject> truthObjects(truth.size());
+  std::vector<tracking::MotObject> trackObjects(tracks.size());
+  for (std::size_t g = 0; g < truth.size(); ++g) {
+    truthKeys[g] = truthKey(truth[g].id);
+    truthType_.emplace(truthKeys[g], truth[g].type);
+    truthPositions[g] = truth[g].positionEnu;
+    truthObjects[g].id = truthKeys[g];
+    truthObjects[g].position = truth[g].positionEnu;
+  }
+  for (std::size_t h = 0; h < tracks.size(); ++h) {
+    trackKeys[h] = trackKey(tracks[h].id);
+    TrackRecord& record = tracks_[trackKeys[h]];
+    record.lastType = tracks[h].type;
+    trackPositions[h] = tracks[h].centreEnu;
+    trackObjects[h].id = trackKeys[h];
+    trackObjects[h].position = tracks[h].centreEnu;
+  }
+  mot_.addFrame(truthObjects, trackObjects);
+
+  std::vector<int> previous(truth.size(), -1);
+  for (std::size_t g = 0; g < truth.size(); ++g) {
+    const auto it = previousMatch_.find(truthKeys[g]);
+    if (it == previousMatch_.end()) {
+      continue;
+    }
+    for (std::size_t h = 0; h < tracks.size(); ++h) {
+      if (trackKeys[h] == it->second) {
+        previous[g] = static_cast<int>(h);
+        break;
+      }
+    }
+  }
+  const std::vector<int> pairs =
+      matchByDistance(truthPositions, trackPositions, previous, options_.matchDistance_m);
+  std::map<int, int> current;
+  for (std::size_t g = 0; g < truth.size(); ++g) {
+    const TruthVehicle& t = truth[g];
+    const bool moving = std::abs(t.speedMps) > options_.movingSpeed_mps;
+    truthMoving_ += moving ? 1 : 0;
+    if (pairs[g] < 0) {
+      continue;
+    }
+    const auto h = static_cast<std::size_t>(pairs[g]);
+    const TrackObservation& track = tracks[h];
+    current[truthKeys[g]] = trackKeys[h];
+    auto [entry, added] =
+        tracks_[trackKeys[h]].truthFrames.emplace(truthKeys[g], std::make_pair(0, matchOrder_));
+    ++entry->second.first;
+    ++matchOrder_;
+    if (moving) {
+      const double e = std::abs(track.speedMps) - std::abs(t.speedMps);
+      speedSquaredSum_ += e * e;
+      ++speedSamples_;
+      ++trackHeadingSamples_;
+      trackHeadingFlips_ += isFlip(t.headingEnuRad, track.headingEnuRad) ? 1 : 0;
+    }
+    if (t.type >= 0 && track.type >= 0) {
+      ++trackFrameTypeSamples_;
+      trackFrameTypeCorrect_ += t.type == track.type ? 1 : 0;
+    }
+  }
+  previousMatch_ = std::move(current);
+}
+
+void TrackingEvaluator::addDetectorFrame(std::span<const TruthVehicle> truth,
+                                         std::span<const DetectionObservation> detections) {
+  ++detectorFrames_;
+  detections_ += static_cast<int>(detections.size());
+  std::vector<Eigen::Vector2d> truthPositions(truth.size());
+  std::vector<Eigen::Vector2d> positions(detections.size());
+  for (std::size_t g = 0; g < truth.size(); ++g) {
+    truthPositions[g] = truth[g].positionEnu;
+  }
+  for (std::size_t d = 0; d < detections.size(); ++d) {
+    positions[d] = detections[d].positionEnu;
+  }
+  const std::vector<int> pairs =
+      matchByDistance(truthPositions, positions, {}, options_.matchDistance_m);
+  for (std::size_t g = 0; g < truth.size(); ++g) {
+    if (pairs[g] < 0) {
+      continue;
+    }
+    const TruthVehicle& t = truth[g];
+    const DetectionObservation& detection = detections[static_cast<std::size_t>(pairs[g])];
+    ++detectionsMatched_;
+    if (std::abs(t.speedMps) > options_.movingSpeed_mps) {
+      if (detection.headingKnown) {
+        ++detectorHeadingSamples_;
+        detectorHeadingFlips_ += isFlip(t.headingEnuRad, detection.headingEnuRad) ? 1 : 0;
+      } else {
+        ++detectorDirectionUnknown_;
+      }
+    }
+    if (t.type >= 0 && detection.type >= 0) {
+      ++detectorTypeSamples_;
+      detectorTypeCorrect_ += t.type == detection.type ? 1 : 0;
+    }
+  }
+}
+
+TrackingSummary TrackingEvaluator::summary() const {
+  TrackingSummary s;
+  s.mot = mot_.summary();
+  s.sequences = sequence_ + 1;
+  s.tracks = static_cast<int>(tracks_.size());
+  s.truthMoving = truthMoving_;
+  s.speedSamples = speedSamples_;
+  s.speedRmse_mps = speedSamples_ > 0 ? std::sqrt(speedSquaredSum_ / speedSamples_) : kNaN;
+  s.trackHeadingSamples = trackHeadingSamples_;
+  s.trackHeadingFlips = trackHeadingFlips_;
+  s.trackFlipShare = share(trackHeadingFlips_, trackHeadingSamples_);
+  s.detectorHeadingSamples = detectorHeadingSamples_;
+  s.detectorHeadingFlips = detectorHeadingFlips_;
+  s.detectorFlipShare = share(detectorHeadingFlips_, detectorHeadingSamples_);
+  s.detectorDirectionUnknown = detectorDirectionUnknown_;
+  for (const auto& [key, record] : tracks_) {
+    if (record.truthFrames.empty()) {
+      ++s.unmatchedTracks;
+      continue;
+    }
+    // The vehicle matched in most frames; ties: the one matched first.
+    auto best = record.truthFrames.begin();
+    for (auto it = record.truthFrames.begin(); it != record.truthFrames.end(); ++it) {
+      if (it->second.first > best->second.first ||
+          (it->second.first == best->second.first && it->second.second < best->second.second)) {
+        best = it;
+      }
+    }
+    const int truthType = truthType_.at(best->first);
+    if (truthType >= 0 && record.lastType >= 0) {
+      ++s.typedTracks;
+      s.typeCorrectTracks += truthType == record.lastType ? 1 : 0;
+    }
+  }
+  s.trackTypeOa1 = share(s.typeCorrectTracks, s.typedTracks);
+  s.trackFrameTypeSamples = trackFrameTypeSamples_;
+  s.trackFrameTypeOa1 = share(trackFrameTypeCorrect_, trackFrameTypeSamples_);
+  s.detectorTypeSamples = detectorTypeSamples_;
+  s.detectorTypeOa1 = share(detectorTypeCorrect_, detectorTypeSamples_);
+  s.detectorFrames = detectorFrames_;
+  s.detections = detections_;
+  s.detectionsMatched = detectionsMatched_;
+  return s;
+}
+
+}  // namespace vp::evaluation

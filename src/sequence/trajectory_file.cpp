@@ -1,0 +1,581 @@
+#include "sequence/trajectory_file.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include "geometry/rotated_box.hpp"
+
+namespace vp::sequence {
+namespace {
+
+constexpr double kProbabilitySumTolerance = 1e-3;  // |sum p - 1| allowed (4-decimal rounding)
+// class_id must name the most probable type; written probabilities are rounded to 1e-4, so a
+// close runner-up may print up to 1e-4 above it.
+constexpr float kTypeTieTolerance = 1.5e-4F;
+constexpr std::size_t kIoBufferBytes = 64 * 1024;  // stdio buffer: a few hundred rows
+constexpr double kDegPerRad = 180.0 / geometry::kPi;
+
+// Column indices (trajectory_csv's order).
+enum Column : int {
+  kFrameId = 0,
+  kClassId,
+  kTrackId,
+  kVelocity,
+  kRearX,
+  kRearY,
+  kCentreX,
+  kCentreY,
+  kTime,
+  kStatus,
+  kLatitude,
+  kLongitude,
+  kHeight,
+  kHeading,
+  kSpeedSigma,
+  kAcceleration,
+  kAccelerationSigma,
+  kYawRate,
+  kLength,
+  kWidth,
+  kWheelbase,
+  kProbabilities,
+  kGamma = kProbabilities + shape::kVehicleTypeCount,
+};
+static_assert(kGamma == kTrajectoryFixedColumns);
+
+// A problem found in a record, without allocating: the column and a static description.
+struct Problem {
+  int column = -1;
+  const char* what = "";
+};
+
+std::optional<tracking::TrackStatus> statusFromString(std::string_view word) {
+  for (const tracking::TrackStatus s :
+       {tracking::TrackStatus::Tentative, tracking::TrackStatus::Confirmed,
+        tracking::TrackStatus::Lost}) {
+    if (word == tracking::toString(s)) {
+      return s;
+    }
+  }
+  return std::nullopt;
+}
+
+// The row the writer would produce for this track, before rounding (no allocation).
+TrajectoryRecord recordOf(std::int64_t frameId, const tracking::TrackState& t,
+                          const tracking::Wgs84Position* wgs84) {
+  TrajectoryRecord r;
+  r.frameId = frameId;
+  r.type = t.type;
+  r.trackId = t.id;
+  r.speedMps = t.speedMps;
+  r.rearAxleEnu = t.rearAxleEnu;
+  r.centreEnu = t.centreEnu;
+  r.timeS = static_cast<double>(t.timestampNs) * 1e-9;
+  r.status = t.status;
+  if (wgs84 != nullptr) {
+    r.centreWgs84 = *wgs84;
+  }
+  r.headingEnuDeg = t.headingEnuRad * kDegPerRad;
+  r.speedSigmaMps = t.speedSigmaMps;
+  r.accelerationMps2 = t.accelerationMps2;
+  r.accelerationSigmaMps2 = t.accelerationSigmaMps2;
+  r.yawRateDps = t.yawRateRadps * kDegPerRad;
+  r.lengthM = t.lengthM;
+  r.widthM = t.widthM;
+  r.wheelbaseM = t.wheelbaseM;
+  r.typeProbabilities = t.typeProbabilities;
+  r.gamma = t.shape;
+  return r;
+}
+
+// Semantic checks shared by the writer (before formatting) and the reader (after parsing).
+std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) {
+  if (r.frameId < 0) {
+    return Problem{kFrameId, "must be >= 0"};
+  }
+  const int type = static_cast<int>(r.type);
+  if (type < 0 || type >= shape::kVehicleTypeCount) {
+    return Problem{kClassId, "must be in [0, 6] (shape::VehicleType)"};
+  }
+  const std::array<std::pair<int, double>, 6> finiteColumns{{{kVelocity, r.speedMps},
+                                                             {kRearX, r.rearAxleEnu.x()},
+                                                             {kRearY, r.rearAxleEnu.y()},
+                                                             {kCentreX, r.centreEnu.x()},
+                                                             {kCentreY, r.centreEnu.y()},
+                                                             {kTime, r.timeS}}};
+  for (const auto& [column, value] : finiteColumns) {
+    if (!std::isfinite(value)) {
+      return Problem{column, "not finite"};
+    }
+  }
+  if (statusFromString(tracking::toString(r.status)) != r.status) {
+    return Problem{kStatus, "unknown track status"};
+  }
+  if (r.centreWgs84) {
+    const tracking::Wgs84Position& p = *r.centreWgs84;
+    if (!(std::abs(p.latitudeDeg) <= 90.0)) {
+      return Problem{kLatitude, "must be in [-90, 90]"};
+    }
+    if (!(std::abs(p.longitudeDeg) <= 180.0)) {
+      return Problem{kLongitude, "must be in [-180, 180]"};
+    }
+    if (!std::isfinite(p.heightM)) {
+      return Problem{kHeight, "not finite"};
+    }
+  }
+  // 360 is allowed: a heading just below 2 pi prints as 360.00.
+  if (!(r.headingEnuDeg >= 0.0 && r.headingEnuDeg <= 360.0)) {
+    return Problem{kHeading, "must be in [0, 360]"};
+  }
+  const std::array<std::pair<int, double>, 2> finiteMotion{
+      {{kAcceleration, r.accelerationMps2}, {kYawRate, r.yawRateDps}}};
+  for (const auto& [column, value] : finiteMotion) {
+    if (!std::isfinite(value)) {
+      return Problem{column, "not finite"};
+    }
+  }
+  const std::array<std::pair<int, double>, 5> nonNegative{
+      {{kSpeedSigma, r.speedSigmaMps},
+       {kAccelerationSigma, r.accelerationSigmaMps2},
+       {kLength, r.lengthM},
+       {kWidth, r.widthM},
+       {kWheelbase, r.wheelbaseM}}};
+  for (const auto& [column, value] : nonNegative) {
+    if (!(value >= 0.0 && std::isfinite(value))) {
+      return Problem{column, "must be >= 0 and finite"};
+    }
+  }
+  double sum = 0.0;
+  float top = 0.0F;
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    const float p = r.typeProbabilities[static_cast<std::size_t>(t)];
+    if (!(p >= 0.0F && p <= 1.0F)) {
+      return Problem{kProbabilities + t, "must be in [0, 1]"};
+    }
+    sum += static_cast<double>(p);
+    top = std::max(top, p);
+  }
+  if (std::abs(sum - 1.0) > kProbabilitySumTolerance) {
+    return Problem{kProbabilities, "probabilities p_estate..p_large do not sum to 1"};
+  }
+  if (r.typeProbabilities[static_cast<std::size_t>(type)] < top - kTypeTieTolerance) {
+    return Problem{kClassId, "is not the most probable type of p_estate..p_large"};
+  }
+  if (r.gamma.count < 0 || r.gamma.count > gammaColumns) {
+    return Problem{kGamma, "more gamma values than gamma columns"};
+  }
+  for (int s = 0; s < r.gamma.count; ++s) {
+    if (!std::isfinite(r.gamma.gamma[static_cast<std::size_t>(s)])) {
+      return Problem{kGamma + s, "not finite"};
+    }
+  }
+  return std::nullopt;
+}
+
+// ---- parsing -------------------------------------------------------------------------------
+
+// A complete message; thrown inside readTrajectoryFile() only (start-up code) and returned.
+struct ReadError {
+  std::string message;
+};
+
+std::string quote(std::string_view text) {
+  return "'" + std::string(text) + "'";
+}
+
+class RowParser {
+ public:
+  RowParser(const std::string& file, int line, std::string_view text,
+            const std::vector<std::string>& names)
+      : file_(file), line_(line), text_(text), names_(names) {
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t comma = text_.find(',', start);
+      starts_.push_back(start);
+      if (comma == std::string_view::npos) {
+        fields_.push_back(text_.substr(start));
+        break;
+      }
+      fields_.push_back(text_.substr(start, comma - start));
+      start = comma + 1;
+    }
+    for (std::size_t i = 0; i < fields_.size(); ++i) {
+      if (fields_[i].find('"') != std::string_view::npos) {
+        fail(static_cast<int>(i), "quoted fields are not supported (fields never contain commas)");
+      }
+    }
+    if (fields_.size() != names_.size()) {
+      throw ReadError{file_ + ":" + std::to_string(line_) + ": expected " +
+                      std::to_string(names_.size()) + " fields, got " +
+                      std::to_string(fields_.size())};
+    }
+  }
+
+  std::string_view field(int i) const { return fields_[static_cast<std::size_t>(i)]; }
+
+  [[noreturn]] void fail(int column, const std::string& problem) const {
+    const auto c = static_cast<std::size_t>(column);
+    const std::string name = c < names_.size() ? names_[c] : "field " + std::to_string(c + 1);
+    const std::size_t at = c < starts_.size() ? starts_[c] + 1 : 1;
+    throw ReadError{file_ + ":" + std::to_string(line_) + ":" + std::to_string(at) + ": " + name +
+                    ": " + problem};
+  }
+
+  std::int64_t integer(int i, std::int64_t low, std::int64_t high) const {
+    const std::string_view t = field(i);
+    std::int64_t value = 0;
+    const auto [ptr, error] = std::from_chars(t.data(), t.data() + t.size(), value);
+    if (t.empty() || error != std::errc() || ptr != t.data() + t.size()) {
+      fail(i, "not an integer " + quote(t));
+    }
+    if (value < low || value > high) {
+      fail(i, "must be in [" + std::to_string(low) + ", " + std::to_string(high) + "], got " +
+                  std::string(t));
+    }
+    return value;
+  }
+
+  template <typename T>
+  T real(int i) const {
+    const std::string_view t = field(i);
+    T value = 0;
+    if (t.empty()) {
+      fail(i, "empty (a value is required here)");
+    }
+    const auto [ptr, error] = std::from_chars(t.data(), t.data() + t.size(), value);
+    if (error != std::errc() || ptr != t.data() + t.size()) {
+      fail(i, "not a number " + quote(t));
+    }
+    if (!std::isfinite(value)) {
+      fail(i, "not finite " + quote(t));
+    }
+    return value;
+  }
+
+ private:
+  const std::string& file_;
+  int line_;
+  std::string_view text_;
+  const std::vector<std::string>& names_;
+  std::vector<std::string_view> fields_;
+  std::vector<std::size_t> starts_;
+};
+
+TrajectoryRecord parseRow(const RowParser& p, int gammaColumns) {
+  TrajectoryRecord r;
+  r.frameId = p.integer(kFrameId, 0, std::numeric_limits<std::int64_t>::max());
+  r.type = static_cast<shape::VehicleType>(p.integer(kClassId, 0, shape::kVehicleTypeCount - 1));
+  r.trackId =
+      static_cast<std::uint32_t>(p.integer(kTrackId, 0, std::numeric_limits<std::uint32_t>::max()));
+  r.speedMps = p.real<double>(kVelocity);
+  r.rearAxleEnu = {p.real<double>(kRearX), p.real<double>(kRearY)};
+  r.centreEnu = {p.real<double>(kCentreX), p.real<double>(kCentreY)};
+  r.timeS = p.real<double>(kTime);
+  const std::string_view status = p.field(kStatus);
+  const std::optional<tracking::TrackStatus> parsed = statusFromString(status);
+  if (!parsed) {
+    p.fail(kStatus, "unknown track status " + quote(status) + " (tentative, confirmed, lost)");
+  }
+  r.status = *parsed;
+  const int given = (p.field(kLatitude).empty() ? 0 : 1) + (p.field(kLongitude).empty() ? 0 : 1) +
+                    (p.field(kHeight).empty() ? 0 : 1);
+  if (given == 3) {
+    r.centreWgs84 = tracking::Wgs84Position{p.real<double>(kLatitude), p.real<double>(kLongitude),
+                                            p.real<double>(kHeight)};
+  } else if (given != 0) {
+    const int column = p.field(kLatitude).empty()
+                           ? kLatitude
+                           : (p.field(kLongitude).empty() ? kLongitude : kHeight);
+    p.fail(column, "latitude_deg, longitude_deg, height_m must be all set or all empty");
+  }
+  r.headingEnuDeg = p.real<double>(kHeading);
+  r.speedSigmaMps = p.real<double>(kSpeedSigma);
+  r.accelerationMps2 = p.real<double>(kAcceleration);
+  r.accelerationSigmaMps2 = p.real<double>(kAccelerationSigma);
+  r.yawRateDps = p.real<double>(kYawRate);
+  r.lengthM = p.real<double>(kLength);
+  r.widthM = p.real<double>(kWidth);
+  r.wheelbaseM = p.real<double>(kWheelbase);
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    r.typeProbabilities[static_cast<std::size_t>(t)] = p.real<float>(kProbabilities + t);
+  }
+  bool gap = false;
+  for (int s = 0; s < gammaColumns; ++s) {
+    if (p.field(kGamma + s).empty()) {
+      gap = true;
+      continue;
+    }
+    if (gap) {
+      p.fail(kGamma + s, "value after an empty gamma field");
+    }
+    r.gamma.gamma[static_cast<std::size_t>(s)] = p.real<float>(kGamma + s);
+    r.gamma.count = s + 1;
+  }
+  if (const std::optional<Problem> problem = checkRecord(r, gammaColumns)) {
+    p.fail(problem->column,
+           std::string(problem->what) + ", got " + quote(p.field(problem->column)));
+  }
+  return r;
+}
+
+std::string joinColumns(const std::vector<std::string>& names) {
+  std::string line;
+  for (const std::string& name : names) {
+    line += (line.empty() ? "" : ",") + name;
+  }
+  return line;
+}
+
+// Reads the header: the gamma count follows from the column count.
+std::vector<std::string> parseHeader(const std::string& file, int line, std::string_view text,
+                                     TrajectoryFileInfo* info) {
+  const std::string where = file + ":" + std::to_string(line) + ": header: ";
+  const auto fields = static_cast<int>(std::count(text.begin(), text.end(), ',')) + 1;
+  const int gamma = fields - kTrajectoryFixedColumns;
+  if (gamma < 0 || gamma > shape::kMaxShapeComponents) {
+    throw ReadError{where + "expected " + std::to_string(kTrajectoryFixedColumns) + " to " +
+                    std::to_string(kTrajectoryFixedColumns + shape::kMaxShapeComponents) +
+                    " columns (0 to 8 gamma columns), got " + std::to_string(fields) +
+                    (text.empty() ? std::string(" (an empty line)") : std::string())};
+  }
+  info->gammaColumns = gamma;
+  std::vector<std::string> names = trajectoryColumns(gamma);
+  const std::string expected = joinColumns(names);
+  if (text != expected) {
+    throw ReadError{where + "expected " + quote(expected) + ", got " + quote(text)};
+  }
+  return names;
+}
+
+}  // namespace
+
+double TrajectoryRecord::headingEnuRad() const {
+  return headingEnuDeg / kDegPerRad;
+}
+
+tracking::TrackState toTrackState(const TrajectoryRecord& r) {
+  tracking::TrackState t;
+  t.id = r.trackId;
+  t.status = r.status;
+  t.timestampNs = std::llround(r.timeS * 1e9);
+  t.centreEnu = r.centreEnu;
+  t.rearAxleEnu = r.rearAxleEnu;
+  t.headingEnuRad = r.headingEnuRad();
+  t.speedMps = r.speedMps;
+  t.speedSigmaMps = r.speedSigmaMps;
+  t.accelerationMps2 = r.accelerationMps2;
+  t.accelerationSigmaMps2 = r.accelerationSigmaMps2;
+  t.yawRateRadps = r.yawRateDps / kDegPerRad;
+  t.lengthM = r.lengthM;
+  t.widthM = r.widthM;
+  t.wheelbaseM = r.wheelbaseM;
+  t.typeProbabilities = r.typeProbabilities;
+  t.type = r.type;
+  t.shape = r.gamma;
+  return t;
+}
+
+std::vector<std::string> trajectoryColumns(int gammaColumns) {
+  std::array<char, tracking::kTrajectoryCsvMaxLine> header{};
+  const int n = tracking::trajectoryCsvHeader(header, gammaColumns);
+  std::vector<std::string> names;
+  std::string_view text(header.data(), n > 0 ? static_cast<std::size_t>(n) : 0);
+  if (!text.empty() && text.back() == '\n') {
+    text.remove_suffix(1);
+  }
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    names.emplace_back(text.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return names;
+}
+
+// ---- writer --------------------------------------------------------------------------------
+
+TrajectoryFileWriter::TrajectoryFileWriter() = default;
+
+TrajectoryFileWriter::~TrajectoryFileWriter() {
+  if (file_ != nullptr) {
+    std::fclose(file_);
+  }
+}
+
+bool TrajectoryFileWriter::open(const std::string& path, const TrajectoryFileInfo& info,
+                                std::string* why) {
+  const auto failWith = [&](const std::string& message) {
+    if (why != nullptr) {
+      *why = message;
+    }
+    return false;
+  };
+  if (file_ != nullptr) {
+    return failWith(path + ": writer already open on " + path_);
+  }
+  if (info.gammaColumns < 0 || info.gammaColumns > shape::kMaxShapeComponents) {
+    return failWith(path + ": gammaColumns must be in [0, " +
+                    std::to_string(shape::kMaxShapeComponents) + "], got " +
+                    std::to_string(info.gammaColumns));
+  }
+  ioBuffer_ = std::make_unique<char[]>(kIoBufferBytes);
+  row_ = std::make_unique<char[]>(tracking::kTrajectoryCsvMaxLine);
+  file_ = std::fopen(path.c_str(), "wb");
+  if (file_ == nullptr) {
+    return failWith(path + ": cannot create file: " + std::strerror(errno));
+  }
+  // Our buffer, set before any I/O: stdio then never allocates one on the first write.
+  std::setvbuf(file_, ioBuffer_.get(), _IOFBF, kIoBufferBytes);
+  info_ = info;
+  path_ = path;
+  rowsWritten_ = 0;
+  failed_ = false;
+  const int n = tracking::trajectoryCsvHeader(
+      std::span<char>(row_.get(), tracking::kTrajectoryCsvMaxLine), info.gammaColumns);
+  if (n <= 0 || std::fwrite(row_.get(), 1, static_cast<std::size_t>(n), file_) !=
+                    static_cast<std::size_t>(n)) {
+    failed_ = true;
+    return failWith(path + ": write failed: " + std::strerror(errno));
+  }
+  return true;
+}
+
+bool TrajectoryFileWriter::writeRow(std::int64_t frameId, const tracking::TrackState& track,
+                                    const tracking::Wgs84Position* centreWgs84, std::string* why) {
+  // Messages are built only on failure (they allocate; the success path does not).
+  const auto failWith = [&](int column, const char* problem) {
+    if (why != nullptr) {
+      const std::vector<std::string> names = trajectoryColumns(info_.gammaColumns);
+      const std::string name = column >= 0 && static_cast<std::size_t>(column) < names.size()
+                                   ? names[static_cast<std::size_t>(column)]
+                                   : std::string("-");
+      *why = path_ + ": row " + std::to_string(rowsWritten_ + 1) + " (track " +
+             std::to_string(track.id) + ", frame " + std::to_string(frameId) + "): " + name + ": " +
+             problem;
+    }
+    return false;
+  };
+  if (file_ == nullptr) {
+    return failWith(-1, "writer is not open");
+  }
+  if (const std::optional<Problem> problem =
+          checkRecord(recordOf(frameId, track, centreWgs84), info_.gammaColumns)) {
+    return failWith(problem->column, problem->what);
+  }
+  const int n =
+      tracking::trajectoryCsvRow(std::span<char>(row_.get(), tracking::kTrajectoryCsvMaxLine),
+                                 frameId, track, centreWgs84, info_.gammaColumns);
+  if (n <= 0) {
+    return failWith(-1, "row longer than the row buffer");
+  }
+  const auto size = static_cast<std::size_t>(n);
+  if (std::fwrite(row_.get(), 1, size, file_) != size) {
+    failed_ = true;
+    return failWith(-1, "write failed (disk full or file closed?)");
+  }
+  ++rowsWritten_;
+  return true;
+}
+
+bool TrajectoryFileWriter::flush(std::string* why) {
+  if (file_ == nullptr || std::fflush(file_) != 0 || failed_) {
+    if (why != nullptr) {
+      *why = path_ + ": flush failed" + (file_ == nullptr ? " (writer is not open)" : "");
+    }
+    return false;
+  }
+  return true;
+}
+
+bool TrajectoryFileWriter::close(std::string* why) {
+  if (file_ == nullptr) {
+    if (why != nullptr) {
+      *why = "trajectory writer: close() without open()";
+    }
+    return false;
+  }
+  const bool flushed = std::fflush(file_) == 0 && std::ferror(file_) == 0;
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (!flushed || !closed || failed_) {
+    if (why != nullptr) {
+      *why = path_ + ": write failed (disk full?)";
+    }
+    return false;
+  }
+  return true;
+}
+
+// ---- reader --------------------------------------------------------------------------------
+
+bool readTrajectoryFile(const std::string& path, TrajectoryFile* out, std::string* why) {
+  *out = TrajectoryFile{};
+  out->path = path;
+  try {
+    std::ifstream stream(path, std::ios::binary);
+    if (!stream) {
+      throw ReadError{path + ": cannot open (missing or unreadable)"};
+    }
+    std::ostringstream buffer;
+    buffer << stream.rdbuf();
+    const std::string text = buffer.str();
+    std::vector<std::string> names;
+    std::set<std::pair<std::int64_t, std::uint32_t>> keys;  // (frame_id, track_id)
+    std::optional<std::int64_t> lastFrame;
+    bool haveHeader = false;
+    std::size_t position = 0;
+    int line = 0;
+    while (position < text.size()) {
+      const std::size_t end = std::min(text.find('\n', position), text.size());
+      std::string_view row = std::string_view(text).substr(position, end - position);
+      position = end + 1;
+      ++line;
+      if (!row.empty() && row.back() == '\r') {
+        row.remove_suffix(1);
+      }
+      if (!haveHeader) {
+        names = parseHeader(path, line, row, &out->info);
+        haveHeader = true;
+        continue;
+      }
+      if (row.empty()) {
+        throw ReadError{path + ":" + std::to_string(line) + ": empty line"};
+      }
+      const RowParser parser(path, line, row, names);
+      const TrajectoryRecord record = parseRow(parser, out->info.gammaColumns);
+      if (lastFrame && record.frameId < *lastFrame) {
+        parser.fail(kFrameId, "not in non-decreasing order (" + std::to_string(record.frameId) +
+                                  " after " + std::to_string(*lastFrame) + ")");
+      }
+      lastFrame = record.frameId;
+      if (!keys.emplace(record.frameId, record.trackId).second) {
+        parser.fail(kTrackId, "track " + std::to_string(record.trackId) +
+                                  " appears twice in frame " + std::to_string(record.frameId));
+      }
+      out->rows.push_back(record);
+      out->lines.push_back(line);
+    }
+    if (!haveHeader) {
+      throw ReadError{path + ":1: header: missing (empty file)"};
+    }
+  } catch (const ReadError& error) {
+    const std::string file = out->path;
+    *out = TrajectoryFile{};
+    out->path = file;
+    if (why != nullptr) {
+      *why = error.message;
+    }
+    return false;
+  }
+  return true;
+}
+
+}  // namespace vp::sequence
