@@ -202,16 +202,48 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
     }
     stats_.cropFailures += static_cast<int>(kept - crops);
   }
+  // The second stage moves and resizes boxes (refinement): two first-stage peaks of one
+  // vehicle (e.g. its copies from two overlapping tiles, one of them offset) can land on the
+  // same car. A last suppression on the refined boxes keeps the better one. Cars do not
+  // overlap each other on the ground, so the "contained in" test is safe within a tile too.
+  const std::size_t refinedKept = secondStage ? suppressRefinedDuplicates(out.first(kept)) : kept;
+  stats_.refinedDuplicates = static_cast<int>(kept - refinedKept);
   stats_.crops_ms = millisecondsBetween(nmsEnd, Clock::now());
   stats_.detector_ms = detectorMs;
   stats_.decode_ms = decodeMs;
   stats_.tiles = static_cast<int>(frame.tiles.size());
   stats_.candidates = static_cast<int>(decoder_.candidateCount());
   stats_.cutCandidates = static_cast<int>(decoder_.cutCandidateCount());
-  stats_.detections = static_cast<int>(kept);
+  stats_.detections = static_cast<int>(refinedKept);
   stats_.droppedForCapacity = static_cast<int>(decoder_.droppedForCapacity());
-  *count = kept;
+  *count = refinedKept;
   return DetectionStatus::Ok;
+}
+
+std::size_t DetectionStage::suppressRefinedDuplicates(std::span<Detection> detections) const {
+  // Order as the decoder left it (whole before cut, then score): the earlier one wins.
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    const geometry::RotatedBox& a = detections[i].box;
+    const double areaA = a.length * a.width;
+    const double radiusA = 0.5 * std::hypot(a.length, a.width);
+    bool duplicate = false;
+    for (std::size_t k = 0; k < kept && !duplicate; ++k) {
+      const geometry::RotatedBox& b = detections[k].box;
+      if (std::hypot(a.cx - b.cx, a.cy - b.cy) >= radiusA + 0.5 * std::hypot(b.length, b.width)) {
+        continue;
+      }
+      const double areaB = b.length * b.width;
+      const double intersection = geometry::intersectionArea(a, b);
+      const double unionArea = areaA + areaB - intersection;
+      duplicate = (unionArea > 0.0 && intersection / unionArea > options_.decoder.nmsIou) ||
+                  intersection / std::min(areaA, areaB) > options_.decoder.duplicateOverlap;
+    }
+    if (!duplicate) {
+      detections[kept++] = detections[i];
+    }
+  }
+  return kept;
 }
 
 }  // namespace vp::detection

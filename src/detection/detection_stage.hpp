@@ -62,6 +62,7 @@ struct DetectionStats {
   int detections = 0;          // written to the output
   int droppedForCapacity = 0;  // kept by NMS but beyond the output's size
   int crops = 0;               // second-stage runs that succeeded
+  int refinedDuplicates = 0;   // detections that became duplicates after refinement, removed
   int cropFailures = 0;        // second stage skipped or failed (no GSD, engine error, ...)
   double frameGsd_m = 0.0;     // the frame-level GSD estimate used (0: provider or none)
   double detector_ms = 0.0;    // detector engine, all tiles
@@ -89,6 +90,9 @@ class DetectionStage {
   int stridePx() const { return stridePx_; }
 
  private:
+  // Removes detections that overlap a better one after the second stage; returns the count kept.
+  std::size_t suppressRefinedDuplicates(std::span<Detection> detections) const;
+
   bool initialised_ = false;
   DetectionStageOptions options_{};
   inference::Engine detector_;
