@@ -1,27 +1,32 @@
 #include "sequence/detections_file.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <set>
-#include <sstream>
 #include <utility>
 
 namespace vp::sequence {
 namespace {
 
+using csv::Problem;
+using csv::quote;
+using csv::ReadError;
+using csv::RowParser;
+
 constexpr double kProbabilitySumTolerance = 1e-3;  // |sum p - 1| allowed (float rounding)
 constexpr std::size_t kRowBufferBytes = 4096;      // > the longest row (~42 fields * 26 + stem)
-constexpr std::size_t kIoBufferBytes = 64 * 1024;  // stdio buffer: a few hundred rows
 
 constexpr std::array<const char*, kLiftStatusCount> kLiftStatusWords{
     "ok",           "not_lifted",    "no_pose",     "stale_pose", "invalid_pose",   "invalid_box",
     "outside_lens", "behind_camera", "outside_dtm", "no_data",    "no_intersection"};
 
+// The columns after the key (frame_id or image) and before the probabilities.
+constexpr std::array<const char*, 9> kHeadColumns{
+    "det_id",       "score",         "box_cx_px",       "box_cy_px", "box_length_px",
+    "box_width_px", "box_angle_rad", "direction_known", "type"};
 constexpr std::array<const char*, shape::kVehicleTypeCount> kProbabilityColumns{
     "p_estate", "p_compact", "p_sports", "p_sedan", "p_suv", "p_van", "p_large"};
 constexpr std::array<const char*, 10> kWorldColumns{
@@ -43,12 +48,7 @@ struct Layout {
   int world() const { return liftStatus() + 1; }
   int count() const { return world() + static_cast<int>(kWorldColumns.size()); }
 };
-
-// A problem found in a record, without allocating: the column and a static description.
-struct Problem {
-  int column = -1;
-  const char* what = "";
-};
+static_assert(kHeadColumns.size() == Layout::kProbabilities - Layout::kDetId);
 
 bool finite(double value) {
   return std::isfinite(value);
@@ -224,106 +224,7 @@ void formatRow(const DetectionRecord& r, const DetectionsFileInfo& info, RowForm
   out.character('\n');
 }
 
-std::string joinColumns(const std::vector<std::string>& names) {
-  std::string line;
-  for (const std::string& name : names) {
-    line += (line.empty() ? "" : ",") + name;
-  }
-  return line;
-}
-
 // ---- parsing -------------------------------------------------------------------------------
-
-// A complete message; thrown inside readDetectionsFile() only (start-up code) and returned.
-struct ReadError {
-  std::string message;
-};
-
-std::string quote(std::string_view text) {
-  return "'" + std::string(text) + "'";
-}
-
-class RowParser {
- public:
-  RowParser(const std::string& file, int line, std::string_view text,
-            const std::vector<std::string>& names)
-      : file_(file), line_(line), text_(text), names_(names) {}
-
-  void split() {
-    fields_.clear();
-    starts_.clear();
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t comma = text_.find(',', start);
-      starts_.push_back(start);
-      if (comma == std::string_view::npos) {
-        fields_.push_back(text_.substr(start));
-        break;
-      }
-      fields_.push_back(text_.substr(start, comma - start));
-      start = comma + 1;
-    }
-    for (std::size_t i = 0; i < fields_.size(); ++i) {
-      if (fields_[i].find('"') != std::string_view::npos) {
-        fail(static_cast<int>(i), "quoted fields are not supported (fields never contain commas)");
-      }
-    }
-    if (fields_.size() != names_.size()) {
-      throw ReadError{file_ + ":" + std::to_string(line_) + ": expected " +
-                      std::to_string(names_.size()) + " fields, got " +
-                      std::to_string(fields_.size())};
-    }
-  }
-
-  std::string_view field(int i) const { return fields_[static_cast<std::size_t>(i)]; }
-
-  [[noreturn]] void fail(int column, const std::string& problem) const {
-    const std::size_t c = static_cast<std::size_t>(column);
-    const std::string name = c < names_.size() ? names_[c] : "field " + std::to_string(c + 1);
-    const std::size_t at = c < starts_.size() ? starts_[c] + 1 : 1;
-    throw ReadError{file_ + ":" + std::to_string(line_) + ":" + std::to_string(at) + ": " + name +
-                    ": " + problem};
-  }
-
-  std::int64_t integer(int i, std::int64_t low, std::int64_t high) const {
-    const std::string_view t = field(i);
-    std::int64_t value = 0;
-    const auto [ptr, error] = std::from_chars(t.data(), t.data() + t.size(), value);
-    if (t.empty() || error != std::errc() || ptr != t.data() + t.size()) {
-      fail(i, "not an integer " + quote(t));
-    }
-    if (value < low || value > high) {
-      fail(i, "must be in [" + std::to_string(low) + ", " + std::to_string(high) + "], got " +
-                  std::string(t));
-    }
-    return value;
-  }
-
-  template <typename T>
-  T real(int i) const {
-    const std::string_view t = field(i);
-    T value = 0;
-    const auto [ptr, error] = std::from_chars(t.data(), t.data() + t.size(), value);
-    if (t.empty()) {
-      fail(i, "empty (a value is required here)");
-    }
-    if (error != std::errc() || ptr != t.data() + t.size()) {
-      fail(i, "not a number " + quote(t));
-    }
-    if (!std::isfinite(value)) {
-      fail(i, "not finite " + quote(t));
-    }
-    return value;
-  }
-
- private:
-  const std::string& file_;
-  int line_;
-  std::string_view text_;
-  const std::vector<std::string>& names_;
-  std::vector<std::string_view> fields_;
-  std::vector<std::size_t> starts_;
-};
 
 DetectionRecord parseRow(const RowParser& p, const DetectionsFileInfo& info) {
   const Layout layout{info.gammaColumns};
@@ -416,7 +317,7 @@ void parseMetadata(const std::string& file, int line, std::string_view text, Det
     body.remove_prefix(1);
   }
   const std::size_t colon = body.find(':');
-  const std::string where = file + ":" + std::to_string(line) + ": ";
+  const std::string where = csv::location(file, line) + ": ";
   if (colon == std::string_view::npos) {
     throw ReadError{where + "metadata line must be '# key: value', got " + quote(text)};
   }
@@ -454,7 +355,7 @@ void parseMetadata(const std::string& file, int line, std::string_view text, Det
 void parseHeader(const std::string& file, int line, std::string_view text, DetectionsFile* out,
                  std::vector<std::string>* names) {
   DetectionsFileInfo& info = out->info;
-  const std::string where = file + ":" + std::to_string(line) + ": header: ";
+  const std::string where = csv::location(file, line) + ": header: ";
   if (text.starts_with("frame_id,")) {
     info.key = DetectionsKey::FrameId;
   } else if (text.starts_with("image,")) {
@@ -475,7 +376,7 @@ void parseHeader(const std::string& file, int line, std::string_view text, Detec
   }
   info.gammaColumns = gamma;
   *names = detectionsColumns(info.key, gamma);
-  const std::string expected = joinColumns(*names);
+  const std::string expected = csv::joinColumns(*names);
   if (text != expected) {
     throw ReadError{where + "expected " + quote(expected) + ", got " + quote(text)};
   }
@@ -521,16 +422,8 @@ shape::VehicleType DetectionRecord::topType() const {
 }
 
 std::vector<std::string> detectionsColumns(DetectionsKey key, int gammaColumns) {
-  std::vector<std::string> names{key == DetectionsKey::FrameId ? "frame_id" : "image",
-                                 "det_id",
-                                 "score",
-                                 "box_cx_px",
-                                 "box_cy_px",
-                                 "box_length_px",
-                                 "box_width_px",
-                                 "box_angle_rad",
-                                 "direction_known",
-                                 "type"};
+  std::vector<std::string> names{key == DetectionsKey::FrameId ? "frame_id" : "image"};
+  names.insert(names.end(), kHeadColumns.begin(), kHeadColumns.end());
   names.insert(names.end(), kProbabilityColumns.begin(), kProbabilityColumns.end());
   for (int s = 0; s < gammaColumns; ++s) {
     names.push_back("gamma_" + std::to_string(s));
@@ -544,45 +437,22 @@ std::vector<std::string> detectionsColumns(DetectionsKey key, int gammaColumns) 
 
 DetectionsFileWriter::DetectionsFileWriter() = default;
 
-DetectionsFileWriter::~DetectionsFileWriter() {
-  if (file_ != nullptr) {
-    std::fclose(file_);
-  }
-}
+DetectionsFileWriter::~DetectionsFileWriter() = default;
 
 bool DetectionsFileWriter::open(const std::string& path, const DetectionsFileInfo& info,
                                 std::string* why) {
-  const auto failWith = [&](const std::string& message) {
-    if (why != nullptr) {
-      *why = message;
-    }
+  if (!writer_.checkOpen(path, info.gammaColumns, why)) {
     return false;
-  };
-  if (file_ != nullptr) {
-    return failWith(path + ": writer already open on " + path_);
-  }
-  if (info.gammaColumns < 0 || info.gammaColumns > shape::kMaxShapeComponents) {
-    return failWith(path + ": gammaColumns must be in [0, " +
-                    std::to_string(shape::kMaxShapeComponents) + "], got " +
-                    std::to_string(info.gammaColumns));
   }
   for (const std::string* text : {&info.model, &info.source}) {
     if (text->find_first_of("\n\r") != std::string::npos) {
-      return failWith(path + ": model/source metadata must be one line");
+      return csv::failWith(why, path + ": model/source metadata must be one line");
     }
   }
-  ioBuffer_ = std::make_unique<char[]>(kIoBufferBytes);
-  row_ = std::make_unique<char[]>(kRowBufferBytes);
-  file_ = std::fopen(path.c_str(), "wb");
-  if (file_ == nullptr) {
-    return failWith(path + ": cannot create file: " + std::strerror(errno));
+  if (!writer_.open(path, kRowBufferBytes, why)) {
+    return false;
   }
-  // Our buffer, set before any I/O: stdio then never allocates one on the first write.
-  std::setvbuf(file_, ioBuffer_.get(), _IOFBF, kIoBufferBytes);
   info_ = info;
-  path_ = path;
-  rowsWritten_ = 0;
-  failed_ = false;
   std::string head = "# format_version: " + std::to_string(kDetectionsFormatVersion) + "\n";
   if (!info.model.empty()) {
     head += "# model: " + info.model + "\n";
@@ -590,23 +460,18 @@ bool DetectionsFileWriter::open(const std::string& path, const DetectionsFileInf
   if (!info.source.empty()) {
     head += "# source: " + info.source + "\n";
   }
-  head += joinColumns(detectionsColumns(info.key, info.gammaColumns)) + "\n";
-  if (std::fwrite(head.data(), 1, head.size(), file_) != head.size()) {
-    failed_ = true;
-    return failWith(path + ": write failed: " + std::strerror(errno));
-  }
-  return true;
+  head += csv::joinColumns(detectionsColumns(info.key, info.gammaColumns)) + "\n";
+  return writer_.writeHeader(head, why);
 }
 
 bool DetectionsFileWriter::writeRow(const DetectionRecord& record, std::string* why) {
   // Messages are built only on failure (they allocate; the success path does not).
   const auto failWith = [&](const char* column, const char* problem) {
-    if (why != nullptr) {
-      *why = path_ + ": row " + std::to_string(rowsWritten_ + 1) + ": " + column + ": " + problem;
-    }
-    return false;
+    return csv::failWith(why, writer_.path() + ": row " +
+                                  std::to_string(writer_.rowsWritten() + 1) + ": " + column + ": " +
+                                  problem);
   };
-  if (file_ == nullptr) {
+  if (!writer_.isOpen()) {
     return failWith("-", "writer is not open");
   }
   if (const std::optional<Problem> problem = checkRecord(record, info_.key, info_.gammaColumns)) {
@@ -616,17 +481,7 @@ bool DetectionsFileWriter::writeRow(const DetectionRecord& record, std::string* 
     if (c == Layout::kKey) {
       name = info_.key == DetectionsKey::FrameId ? "frame_id" : "image";
     } else if (c < Layout::kProbabilities) {
-      static constexpr std::array<const char*, 10> kHead{"",
-                                                         "det_id",
-                                                         "score",
-                                                         "box_cx_px",
-                                                         "box_cy_px",
-                                                         "box_length_px",
-                                                         "box_width_px",
-                                                         "box_angle_rad",
-                                                         "direction_known",
-                                                         "type"};
-      name = kHead[static_cast<std::size_t>(c)];
+      name = kHeadColumns[static_cast<std::size_t>(c - Layout::kDetId)];
     } else if (c < Layout::kGamma) {
       name = kProbabilityColumns[static_cast<std::size_t>(c - Layout::kProbabilities)];
     } else if (c < layout.liftStatus()) {
@@ -638,92 +493,48 @@ bool DetectionsFileWriter::writeRow(const DetectionRecord& record, std::string* 
     }
     return failWith(name, problem->what);
   }
-  RowFormatter out(row_.get(), kRowBufferBytes);
+  const std::span<char> row = writer_.rowBuffer();
+  RowFormatter out(row.data(), row.size());
   formatRow(record, info_, out);
   if (!out.ok()) {
     return failWith("-", "row longer than the row buffer");
   }
-  const auto size = static_cast<std::size_t>(out.position() - row_.get());
-  if (std::fwrite(row_.get(), 1, size, file_) != size) {
-    failed_ = true;
+  if (!writer_.writeRow(static_cast<std::size_t>(out.position() - row.data()))) {
     return failWith("-", "write failed (disk full or file closed?)");
   }
-  ++rowsWritten_;
   return true;
 }
 
 bool DetectionsFileWriter::flush(std::string* why) {
-  if (file_ == nullptr || std::fflush(file_) != 0 || failed_) {
-    if (why != nullptr) {
-      *why = path_ + ": flush failed" + (file_ == nullptr ? " (writer is not open)" : "");
-    }
-    return false;
-  }
-  return true;
+  return writer_.flush(why);
 }
 
 bool DetectionsFileWriter::close(std::string* why) {
-  if (file_ == nullptr) {
-    if (why != nullptr) {
-      *why = "detections writer: close() without open()";
-    }
-    return false;
-  }
-  const bool flushed = std::fflush(file_) == 0 && std::ferror(file_) == 0;
-  const bool closed = std::fclose(file_) == 0;
-  file_ = nullptr;
-  if (!flushed || !closed || failed_) {
-    if (why != nullptr) {
-      *why = path_ + ": write failed (disk full?)";
-    }
-    return false;
-  }
-  return true;
+  return writer_.close("detections writer", why);
 }
 
 // ---- reader --------------------------------------------------------------------------------
 
 bool readDetectionsFile(const std::string& path, DetectionsFile* out, std::string* why) {
-  *out = DetectionsFile{};
-  out->path = path;
-  try {
-    std::ifstream stream(path, std::ios::binary);
-    if (!stream) {
-      throw ReadError{path + ": cannot open (missing or unreadable)"};
-    }
-    std::ostringstream buffer;
-    buffer << stream.rdbuf();
-    const std::string text = buffer.str();
+  return csv::readChecked(path, out, why, [&] {
+    const std::string text = csv::readWholeFile(path);
     std::vector<std::string> names;
     std::set<std::string> metadataKeys;
     std::set<std::pair<std::string, int>> keys;  // (frame or image, det_id)
     std::optional<std::int64_t> lastFrame;
     bool haveHeader = false;
-    std::size_t position = 0;
-    int line = 0;
-    while (position < text.size()) {
-      const std::size_t end = std::min(text.find('\n', position), text.size());
-      std::string_view row = std::string_view(text).substr(position, end - position);
-      position = end + 1;
-      ++line;
-      if (!row.empty() && row.back() == '\r') {
-        row.remove_suffix(1);
-      }
+    const int lines = csv::forEachLine(text, [&](int line, std::string_view row) {
       if (!haveHeader) {
         if (row.starts_with("#")) {
           parseMetadata(path, line, row, out, metadataKeys);
-          continue;
+          return;
         }
         parseHeader(path, line, row, out, &names);
         haveHeader = true;
-        continue;
+        return;
       }
-      if (row.empty()) {
-        throw ReadError{path + ":" + std::to_string(line) + ": empty line"};
-      }
-      RowParser parser(path, line, row, names);
-      parser.split();
-      DetectionRecord record = parseRow(parser, out->info);
+      const RowParser parser(path, line, row, names);
+      const DetectionRecord record = parseRow(parser, out->info);
       std::string key;
       if (out->info.key == DetectionsKey::FrameId) {
         if (lastFrame && record.frameId < *lastFrame) {
@@ -741,21 +552,12 @@ bool readDetectionsFile(const std::string& path, DetectionsFile* out, std::strin
       }
       out->rows.push_back(record);
       out->lines.push_back(line);
-    }
+    });
     if (!haveHeader) {
-      throw ReadError{path + ":" + std::to_string(line + 1) +
+      throw ReadError{csv::location(path, lines + 1) +
                       ": header: missing (empty file or only metadata lines)"};
     }
-  } catch (const ReadError& error) {
-    const std::string file = out->path;
-    *out = DetectionsFile{};
-    out->path = file;
-    if (why != nullptr) {
-      *why = error.message;
-    }
-    return false;
-  }
-  return true;
+  });
 }
 
 }  // namespace vp::sequence

@@ -28,6 +28,7 @@
 #include <Eigen/Core>
 
 #include "geometry/rotated_box.hpp"
+#include "sequence/csv_io.hpp"
 #include "shape/vehicle_model.hpp"
 
 namespace vp::sequence {
@@ -105,17 +106,12 @@ class DetectionsFileWriter {
   bool writeRow(const DetectionRecord& record, std::string* why);
   bool flush(std::string* why);
   bool close(std::string* why);
-  bool isOpen() const { return file_ != nullptr; }
-  std::int64_t rowsWritten() const { return rowsWritten_; }
+  bool isOpen() const { return writer_.isOpen(); }
+  std::int64_t rowsWritten() const { return writer_.rowsWritten(); }
 
  private:
-  std::FILE* file_ = nullptr;
-  std::unique_ptr<char[]> ioBuffer_;  // stdio's buffer, given at open so fwrite never allocates
-  std::unique_ptr<char[]> row_;       // one formatted row
+  csv::CsvFileWriter writer_;  // the file, its buffers and I/O state
   DetectionsFileInfo info_{};
-  std::string path_;
-  std::int64_t rowsWritten_ = 0;
-  bool failed_ = false;
 };
 
 struct DetectionsFile {

@@ -1,14 +1,9 @@
 #include "sequence/trajectory_file.hpp"
 
 #include <algorithm>
-#include <cerrno>
-#include <charconv>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <limits>
 #include <set>
-#include <sstream>
 #include <utility>
 
 #include "geometry/rotated_box.hpp"
@@ -16,11 +11,15 @@
 namespace vp::sequence {
 namespace {
 
+using csv::Problem;
+using csv::quote;
+using csv::ReadError;
+using csv::RowParser;
+
 constexpr double kProbabilitySumTolerance = 1e-3;  // |sum p - 1| allowed (4-decimal rounding)
 // class_id must name the most probable type; written probabilities are rounded to 1e-4, so a
 // close runner-up may print up to 1e-4 above it.
 constexpr float kTypeTieTolerance = 1.5e-4F;
-constexpr std::size_t kIoBufferBytes = 64 * 1024;  // stdio buffer: a few hundred rows
 constexpr double kDegPerRad = 180.0 / geometry::kPi;
 
 // Column indices (trajectory_csv's order).
@@ -50,12 +49,6 @@ enum Column : int {
   kGamma = kProbabilities + shape::kVehicleTypeCount,
 };
 static_assert(kGamma == kTrajectoryFixedColumns);
-
-// A problem found in a record, without allocating: the column and a static description.
-struct Problem {
-  int column = -1;
-  const char* what = "";
-};
 
 std::optional<tracking::TrackStatus> statusFromString(std::string_view word) {
   for (const tracking::TrackStatus s :
@@ -182,93 +175,6 @@ std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) 
 
 // ---- parsing -------------------------------------------------------------------------------
 
-// A complete message; thrown inside readTrajectoryFile() only (start-up code) and returned.
-struct ReadError {
-  std::string message;
-};
-
-std::string quote(std::string_view text) {
-  return "'" + std::string(text) + "'";
-}
-
-class RowParser {
- public:
-  RowParser(const std::string& file, int line, std::string_view text,
-            const std::vector<std::string>& names)
-      : file_(file), line_(line), text_(text), names_(names) {
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t comma = text_.find(',', start);
-      starts_.push_back(start);
-      if (comma == std::string_view::npos) {
-        fields_.push_back(text_.substr(start));
-        break;
-      }
-      fields_.push_back(text_.substr(start, comma - start));
-      start = comma + 1;
-    }
-    for (std::size_t i = 0; i < fields_.size(); ++i) {
-      if (fields_[i].find('"') != std::string_view::npos) {
-        fail(static_cast<int>(i), "quoted fields are not supported (fields never contain commas)");
-      }
-    }
-    if (fields_.size() != names_.size()) {
-      throw ReadError{file_ + ":" + std::to_string(line_) + ": expected " +
-                      std::to_string(names_.size()) + " fields, got " +
-                      std::to_string(fields_.size())};
-    }
-  }
-
-  std::string_view field(int i) const { return fields_[static_cast<std::size_t>(i)]; }
-
-  [[noreturn]] void fail(int column, const std::string& problem) const {
-    const auto c = static_cast<std::size_t>(column);
-    const std::string name = c < names_.size() ? names_[c] : "field " + std::to_string(c + 1);
-    const std::size_t at = c < starts_.size() ? starts_[c] + 1 : 1;
-    throw ReadError{file_ + ":" + std::to_string(line_) + ":" + std::to_string(at) + ": " + name +
-                    ": " + problem};
-  }
-
-  std::int64_t integer(int i, std::int64_t low, std::int64_t high) const {
-    const std::string_view t = field(i);
-    std::int64_t value = 0;
-    const auto [ptr, error] = std::from_chars(t.data(), t.data() + t.size(), value);
-    if (t.empty() || error != std::errc() || ptr != t.data() + t.size()) {
-      fail(i, "not an integer " + quote(t));
-    }
-    if (value < low || value > high) {
-      fail(i, "must be in [" + std::to_string(low) + ", " + std::to_string(high) + "], got " +
-                  std::string(t));
-    }
-    return value;
-  }
-
-  template <typename T>
-  T real(int i) const {
-    const std::string_view t = field(i);
-    T value = 0;
-    if (t.empty()) {
-      fail(i, "empty (a value is required here)");
-    }
-    const auto [ptr, error] = std::from_chars(t.data(), t.data() + t.size(), value);
-    if (error != std::errc() || ptr != t.data() + t.size()) {
-      fail(i, "not a number " + quote(t));
-    }
-    if (!std::isfinite(value)) {
-      fail(i, "not finite " + quote(t));
-    }
-    return value;
-  }
-
- private:
-  const std::string& file_;
-  int line_;
-  std::string_view text_;
-  const std::vector<std::string>& names_;
-  std::vector<std::string_view> fields_;
-  std::vector<std::size_t> starts_;
-};
-
 TrajectoryRecord parseRow(const RowParser& p, int gammaColumns) {
   TrajectoryRecord r;
   r.frameId = p.integer(kFrameId, 0, std::numeric_limits<std::int64_t>::max());
@@ -326,18 +232,10 @@ TrajectoryRecord parseRow(const RowParser& p, int gammaColumns) {
   return r;
 }
 
-std::string joinColumns(const std::vector<std::string>& names) {
-  std::string line;
-  for (const std::string& name : names) {
-    line += (line.empty() ? "" : ",") + name;
-  }
-  return line;
-}
-
 // Reads the header: the gamma count follows from the column count.
 std::vector<std::string> parseHeader(const std::string& file, int line, std::string_view text,
                                      TrajectoryFileInfo* info) {
-  const std::string where = file + ":" + std::to_string(line) + ": header: ";
+  const std::string where = csv::location(file, line) + ": header: ";
   const auto fields = static_cast<int>(std::count(text.begin(), text.end(), ',')) + 1;
   const int gamma = fields - kTrajectoryFixedColumns;
   if (gamma < 0 || gamma > shape::kMaxShapeComponents) {
@@ -348,7 +246,7 @@ std::vector<std::string> parseHeader(const std::string& file, int line, std::str
   }
   info->gammaColumns = gamma;
   std::vector<std::string> names = trajectoryColumns(gamma);
-  const std::string expected = joinColumns(names);
+  const std::string expected = csv::joinColumns(names);
   if (text != expected) {
     throw ReadError{where + "expected " + quote(expected) + ", got " + quote(text)};
   }
@@ -404,48 +302,19 @@ std::vector<std::string> trajectoryColumns(int gammaColumns) {
 
 TrajectoryFileWriter::TrajectoryFileWriter() = default;
 
-TrajectoryFileWriter::~TrajectoryFileWriter() {
-  if (file_ != nullptr) {
-    std::fclose(file_);
-  }
-}
+TrajectoryFileWriter::~TrajectoryFileWriter() = default;
 
 bool TrajectoryFileWriter::open(const std::string& path, const TrajectoryFileInfo& info,
                                 std::string* why) {
-  const auto failWith = [&](const std::string& message) {
-    if (why != nullptr) {
-      *why = message;
-    }
+  if (!writer_.checkOpen(path, info.gammaColumns, why) ||
+      !writer_.open(path, tracking::kTrajectoryCsvMaxLine, why)) {
     return false;
-  };
-  if (file_ != nullptr) {
-    return failWith(path + ": writer already open on " + path_);
   }
-  if (info.gammaColumns < 0 || info.gammaColumns > shape::kMaxShapeComponents) {
-    return failWith(path + ": gammaColumns must be in [0, " +
-                    std::to_string(shape::kMaxShapeComponents) + "], got " +
-                    std::to_string(info.gammaColumns));
-  }
-  ioBuffer_ = std::make_unique<char[]>(kIoBufferBytes);
-  row_ = std::make_unique<char[]>(tracking::kTrajectoryCsvMaxLine);
-  file_ = std::fopen(path.c_str(), "wb");
-  if (file_ == nullptr) {
-    return failWith(path + ": cannot create file: " + std::strerror(errno));
-  }
-  // Our buffer, set before any I/O: stdio then never allocates one on the first write.
-  std::setvbuf(file_, ioBuffer_.get(), _IOFBF, kIoBufferBytes);
   info_ = info;
-  path_ = path;
-  rowsWritten_ = 0;
-  failed_ = false;
-  const int n = tracking::trajectoryCsvHeader(
-      std::span<char>(row_.get(), tracking::kTrajectoryCsvMaxLine), info.gammaColumns);
-  if (n <= 0 || std::fwrite(row_.get(), 1, static_cast<std::size_t>(n), file_) !=
-                    static_cast<std::size_t>(n)) {
-    failed_ = true;
-    return failWith(path + ": write failed: " + std::strerror(errno));
-  }
-  return true;
+  const std::span<char> row = writer_.rowBuffer();
+  const int n = tracking::trajectoryCsvHeader(row, info.gammaColumns);
+  return writer_.writeHeader(std::string_view(row.data(), n > 0 ? static_cast<std::size_t>(n) : 0),
+                             why);
 }
 
 bool TrajectoryFileWriter::writeRow(std::int64_t frameId, const tracking::TrackState& track,
@@ -457,97 +326,52 @@ bool TrajectoryFileWriter::writeRow(std::int64_t frameId, const tracking::TrackS
       const std::string name = column >= 0 && static_cast<std::size_t>(column) < names.size()
                                    ? names[static_cast<std::size_t>(column)]
                                    : std::string("-");
-      *why = path_ + ": row " + std::to_string(rowsWritten_ + 1) + " (track " +
+      *why = writer_.path() + ": row " + std::to_string(writer_.rowsWritten() + 1) + " (track " +
              std::to_string(track.id) + ", frame " + std::to_string(frameId) + "): " + name + ": " +
              problem;
     }
     return false;
   };
-  if (file_ == nullptr) {
+  if (!writer_.isOpen()) {
     return failWith(-1, "writer is not open");
   }
   if (const std::optional<Problem> problem =
           checkRecord(recordOf(frameId, track, centreWgs84), info_.gammaColumns)) {
     return failWith(problem->column, problem->what);
   }
-  const int n =
-      tracking::trajectoryCsvRow(std::span<char>(row_.get(), tracking::kTrajectoryCsvMaxLine),
-                                 frameId, track, centreWgs84, info_.gammaColumns);
+  const int n = tracking::trajectoryCsvRow(writer_.rowBuffer(), frameId, track, centreWgs84,
+                                           info_.gammaColumns);
   if (n <= 0) {
     return failWith(-1, "row longer than the row buffer");
   }
-  const auto size = static_cast<std::size_t>(n);
-  if (std::fwrite(row_.get(), 1, size, file_) != size) {
-    failed_ = true;
+  if (!writer_.writeRow(static_cast<std::size_t>(n))) {
     return failWith(-1, "write failed (disk full or file closed?)");
   }
-  ++rowsWritten_;
   return true;
 }
 
 bool TrajectoryFileWriter::flush(std::string* why) {
-  if (file_ == nullptr || std::fflush(file_) != 0 || failed_) {
-    if (why != nullptr) {
-      *why = path_ + ": flush failed" + (file_ == nullptr ? " (writer is not open)" : "");
-    }
-    return false;
-  }
-  return true;
+  return writer_.flush(why);
 }
 
 bool TrajectoryFileWriter::close(std::string* why) {
-  if (file_ == nullptr) {
-    if (why != nullptr) {
-      *why = "trajectory writer: close() without open()";
-    }
-    return false;
-  }
-  const bool flushed = std::fflush(file_) == 0 && std::ferror(file_) == 0;
-  const bool closed = std::fclose(file_) == 0;
-  file_ = nullptr;
-  if (!flushed || !closed || failed_) {
-    if (why != nullptr) {
-      *why = path_ + ": write failed (disk full?)";
-    }
-    return false;
-  }
-  return true;
+  return writer_.close("trajectory writer", why);
 }
 
 // ---- reader --------------------------------------------------------------------------------
 
 bool readTrajectoryFile(const std::string& path, TrajectoryFile* out, std::string* why) {
-  *out = TrajectoryFile{};
-  out->path = path;
-  try {
-    std::ifstream stream(path, std::ios::binary);
-    if (!stream) {
-      throw ReadError{path + ": cannot open (missing or unreadable)"};
-    }
-    std::ostringstream buffer;
-    buffer << stream.rdbuf();
-    const std::string text = buffer.str();
+  return csv::readChecked(path, out, why, [&] {
+    const std::string text = csv::readWholeFile(path);
     std::vector<std::string> names;
     std::set<std::pair<std::int64_t, std::uint32_t>> keys;  // (frame_id, track_id)
     std::optional<std::int64_t> lastFrame;
     bool haveHeader = false;
-    std::size_t position = 0;
-    int line = 0;
-    while (position < text.size()) {
-      const std::size_t end = std::min(text.find('\n', position), text.size());
-      std::string_view row = std::string_view(text).substr(position, end - position);
-      position = end + 1;
-      ++line;
-      if (!row.empty() && row.back() == '\r') {
-        row.remove_suffix(1);
-      }
+    csv::forEachLine(text, [&](int line, std::string_view row) {
       if (!haveHeader) {
         names = parseHeader(path, line, row, &out->info);
         haveHeader = true;
-        continue;
-      }
-      if (row.empty()) {
-        throw ReadError{path + ":" + std::to_string(line) + ": empty line"};
+        return;
       }
       const RowParser parser(path, line, row, names);
       const TrajectoryRecord record = parseRow(parser, out->info.gammaColumns);
@@ -562,20 +386,11 @@ bool readTrajectoryFile(const std::string& path, TrajectoryFile* out, std::strin
       }
       out->rows.push_back(record);
       out->lines.push_back(line);
-    }
+    });
     if (!haveHeader) {
       throw ReadError{path + ":1: header: missing (empty file)"};
     }
-  } catch (const ReadError& error) {
-    const std::string file = out->path;
-    *out = TrajectoryFile{};
-    out->path = file;
-    if (why != nullptr) {
-      *why = error.message;
-    }
-    return false;
-  }
-  return true;
+  });
 }
 
 }  // namespace vp::sequence

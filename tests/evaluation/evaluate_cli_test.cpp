@@ -2,10 +2,8 @@
 // tests/fixtures/sequence_min (perfect, then with known perturbations), a tiny YOLO folder,
 // and the command's errors.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -15,6 +13,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cli_test_support.hpp"
 #include "evaluate_app.hpp"
 #include "sequence/detections_file.hpp"
 #include "sequence/recorded_sequence.hpp"
@@ -25,47 +24,11 @@ namespace {
 namespace fs = std::filesystem;
 using geometry::kPi;
 
-const std::string kSequence = std::string(VP_FIXTURE_DIR) + "/sequence_min";
 constexpr double kDegPerRad = 180.0 / kPi;
 
-struct CommandResult {
-  int exitCode = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string readText(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  std::ostringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
-
-class EvaluateCli : public ::testing::Test {
+class EvaluateCli : public EvaluateCliTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("vp_evaluate_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    std::string why;
-    ASSERT_TRUE(reader_.open(kSequence, &why)) << why;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  CommandResult run(const std::string& arguments) const {
-    const fs::path out = dir_ / "stdout.txt";
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string command = std::string(VP_EVALUATE_EXE) + " " + arguments + " > " +
-                                out.string() + " 2> " + err.string();
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    result.out = readText(out);
-    result.err = readText(err);
-    return result;
-  }
+  EvaluateCli() : EvaluateCliTest("vp_evaluate_cli_") {}
 
   // One perfect detection per ground-truth object; `perturb` edits it (object index, record).
   template <typename Perturb>
@@ -81,22 +44,8 @@ class EvaluateCli : public ::testing::Test {
     for (const sequence::FrameRecord& frame : reader_.frames()) {
       int detId = 0;
       for (const sequence::ObjectTruth& object : reader_.objects(frame.frameId)) {
-        sequence::DetectionRecord r;
-        r.frameId = frame.frameId;
-        r.detId = detId++;
+        sequence::DetectionRecord r = perfectDetection(frame.frameId, detId++, object);
         r.score = 0.9F - 0.1F * static_cast<float>(index);
-        r.box = object.imageBox;
-        r.directionKnown = true;
-        r.typeProbabilities.fill(0.0F);
-        r.typeProbabilities[static_cast<std::size_t>(object.type)] = 1.0F;
-        r.gamma = object.shape;
-        r.liftStatus = sequence::LiftStatus::Ok;
-        r.positionEnu = object.positionEnu;
-        r.latitudeDeg = 43.0731;
-        r.longitudeDeg = -89.4012;
-        r.heightM = object.positionEnu.z();
-        r.headingEnuRad = object.headingEnuRad;
-        r.dimensionsM = object.dimensionsM;
         perturb(index++, r);
         EXPECT_TRUE(writer.writeRow(r, &why)) << why;
       }
@@ -118,9 +67,6 @@ class EvaluateCli : public ::testing::Test {
     const YAML::Node report = YAML::LoadFile(outDir + "/report.json");
     return report["measures"];
   }
-
-  fs::path dir_;
-  sequence::SequenceReader reader_;
 };
 
 TEST_F(EvaluateCli, PerfectDetectionsGivePerfectMeasures) {

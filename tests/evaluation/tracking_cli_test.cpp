@@ -2,10 +2,8 @@
 // the ground truth (perfect), one with a known id swap, tracks beside a detections file with a
 // reversed detection, several sequence/tracks pairs in one report, and the command's errors.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -14,6 +12,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "cli_test_support.hpp"
 #include "evaluate_app.hpp"
 #include "geometry/rotated_box.hpp"
 #include "sequence/detections_file.hpp"
@@ -26,48 +25,11 @@ namespace {
 namespace fs = std::filesystem;
 using geometry::kPi;
 
-const std::string kSequence = std::string(VP_FIXTURE_DIR) + "/sequence_min";
-
-struct CommandResult {
-  int exitCode = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string readText(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  std::ostringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
-
 // The ground truth of sequence_min, frame by frame: frame 0 holds the moving sedan (track 1),
 // frame 1 the sedan and the parked large vehicle (track 2).
-class TrackingCli : public ::testing::Test {
+class TrackingCli : public EvaluateCliTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("vp_tracking_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    std::string why;
-    ASSERT_TRUE(reader_.open(kSequence, &why)) << why;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  CommandResult run(const std::string& arguments) const {
-    const fs::path out = dir_ / "stdout.txt";
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string command = std::string(VP_EVALUATE_EXE) + " " + arguments + " > " +
-                                out.string() + " 2> " + err.string();
-    const int status = std::system(command.c_str());
-    CommandResult result;
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    result.out = readText(out);
-    result.err = readText(err);
-    return result;
-  }
+  TrackingCli() : EvaluateCliTest("vp_tracking_cli_") {}
 
   // One confirmed track row per ground-truth vehicle and frame, exactly on it; trackId(frame,
   // truth id) names its track. Two extra rows that are not hypotheses: a tentative and a lost
@@ -121,24 +83,15 @@ class TrackingCli : public ::testing::Test {
     for (const sequence::FrameRecord& frame : reader_.frames()) {
       int detId = 0;
       for (const sequence::ObjectTruth& object : reader_.objects(frame.frameId)) {
-        sequence::DetectionRecord r;
-        r.frameId = frame.frameId;
-        r.detId = detId++;
-        r.score = 0.9F;
-        r.box = object.imageBox;
-        r.directionKnown = true;
-        r.typeProbabilities.fill(0.0F);
+        sequence::DetectionRecord r = perfectDetection(frame.frameId, detId++, object);
+        r.gamma = shape::ShapeParams{};  // no shape
         const bool large = object.type == shape::VehicleType::Large;
-        r.typeProbabilities[static_cast<std::size_t>(large ? shape::VehicleType::Van
-                                                           : object.type)] = 1.0F;
-        r.liftStatus = sequence::LiftStatus::Ok;
-        r.positionEnu = object.positionEnu;
-        r.latitudeDeg = 43.0731;
-        r.longitudeDeg = -89.4012;
-        r.heightM = object.positionEnu.z();
+        if (large) {
+          r.typeProbabilities.fill(0.0F);
+          r.typeProbabilities[static_cast<std::size_t>(shape::VehicleType::Van)] = 1.0F;
+        }
         r.headingEnuRad =
             geometry::wrapTwoPi(object.headingEnuRad + (frame.frameId == 1 && !large ? kPi : 0.0));
-        r.dimensionsM = object.dimensionsM;
         EXPECT_TRUE(writer.writeRow(r, &why)) << why;
       }
     }
@@ -149,9 +102,6 @@ class TrackingCli : public ::testing::Test {
   static YAML::Node tracking(const std::string& outDir) {
     return YAML::LoadFile(outDir + "/report.json")["tracking"];
   }
-
-  fs::path dir_;
-  sequence::SequenceReader reader_;
 };
 
 std::uint32_t sameAsTruth(std::int64_t, int truthId) {

@@ -82,6 +82,25 @@ evaluation::PredictedObject toPrediction(const sequence::DetectionRecord& r) {
   return p;
 }
 
+// Opens a recorded sequence for evaluation: it must hold ground truth to compare with.
+bool openWithGroundTruth(const std::string& sequenceDir, sequence::SequenceReader* reader,
+                         std::string* why) {
+  if (!reader->open(sequenceDir, why)) {
+    return false;
+  }
+  if (!reader->hasGroundTruth()) {
+    *why = sequenceDir + ": no ground_truth/objects.csv: nothing to evaluate against";
+    return false;
+  }
+  return true;
+}
+
+// Whether --frames first:last keeps this frame.
+bool inFrameRange(const EvaluateOptions& options, std::int64_t frameId) {
+  return (!options.firstFrame || frameId >= *options.firstFrame) &&
+         (!options.lastFrame || frameId <= *options.lastFrame);
+}
+
 }  // namespace
 
 std::string usage() {
@@ -255,11 +274,7 @@ bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& optio
   out->label = input.sequenceDir;
   out->detectionsFile = input.detectionsFile;
   sequence::SequenceReader reader;
-  if (!reader.open(input.sequenceDir, why)) {
-    return false;
-  }
-  if (!reader.hasGroundTruth()) {
-    *why = input.sequenceDir + ": no ground_truth/objects.csv: nothing to evaluate against";
+  if (!openWithGroundTruth(input.sequenceDir, &reader, why)) {
     return false;
   }
   sequence::DetectionsFile detections;
@@ -272,13 +287,9 @@ bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& optio
     return false;
   }
   out->model = detections.info.model;
-  const auto inRange = [&](std::int64_t frameId) {
-    return (!options.firstFrame || frameId >= *options.firstFrame) &&
-           (!options.lastFrame || frameId <= *options.lastFrame);
-  };
   std::map<std::int64_t, std::size_t> imageOfFrame;
   for (const sequence::FrameRecord& frame : reader.frames()) {
-    if (!inRange(frame.frameId)) {
+    if (!inFrameRange(options, frame.frameId)) {
       continue;
     }
     imageOfFrame[frame.frameId] = out->images.size();
@@ -351,26 +362,18 @@ bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& opt
   out->tracksFile = input.tracksFile;
   out->detectionsFile = input.detectionsFile;
   sequence::SequenceReader reader;
-  if (!reader.open(input.sequenceDir, why)) {
-    return false;
-  }
-  if (!reader.hasGroundTruth()) {
-    *why = input.sequenceDir + ": no ground_truth/objects.csv: nothing to evaluate against";
+  if (!openWithGroundTruth(input.sequenceDir, &reader, why)) {
     return false;
   }
   sequence::TrajectoryFile tracks;
   if (!sequence::readTrajectoryFile(input.tracksFile, &tracks, why)) {
     return false;
   }
-  const auto inRange = [&](std::int64_t frameId) {
-    return (!options.firstFrame || frameId >= *options.firstFrame) &&
-           (!options.lastFrame || frameId <= *options.lastFrame);
-  };
   std::map<std::int64_t, std::size_t> indexOfFrame;
   std::set<std::int64_t> sequenceFrames;
   for (const sequence::FrameRecord& frame : reader.frames()) {
     sequenceFrames.insert(frame.frameId);
-    if (!inRange(frame.frameId)) {
+    if (!inFrameRange(options, frame.frameId)) {
       continue;
     }
     indexOfFrame[frame.frameId] = out->frames.size();

@@ -328,26 +328,36 @@ std::string trackingMarkdown(const ReportContext& context) {
   return md.str();
 }
 
+// The "measures" object (every row) and the "samples" object (the rows that count samples) of
+// a JSON object whose members stand at `indent`: one member a line, nested one level deeper.
+void writeMeasuresAndSamples(std::ostream& js, const std::vector<Row>& rows,
+                             const std::string& indent) {
+  const std::string inner = indent + "  ";
+  js << "\"measures\": {";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    js << (i == 0 ? "\n" : ",\n") << inner << jsonString(rows[i].key) << ": "
+       << jsonNumber(rows[i].value);
+  }
+  js << "\n" << indent << "},\n" << indent << "\"samples\": {";
+  bool first = true;
+  for (const Row& row : rows) {
+    if (row.samples >= 0) {
+      js << (first ? "\n" : ",\n") << inner << jsonString(row.key) << ": " << row.samples;
+      first = false;
+    }
+  }
+  js << "\n" << indent << "}";
+}
+
 std::string trackingJson(const ReportContext& context) {
   const std::vector<Row> rows = trackingRows(context.tracking);
   std::ostringstream js;
   js << "{\n    \"match_distance_m\": " << jsonNumber(context.trackMatchDistance_m)
      << ",\n    \"moving_speed_mps\": " << jsonNumber(context.movingSpeed_mps)
      << ",\n    \"detector\": " << (context.tracking.detectorFrames > 0 ? "true" : "false")
-     << ",\n    \"measures\": {";
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    js << (i == 0 ? "\n" : ",\n") << "      " << jsonString(rows[i].key) << ": "
-       << jsonNumber(rows[i].value);
-  }
-  js << "\n    },\n    \"samples\": {";
-  bool first = true;
-  for (const Row& row : rows) {
-    if (row.samples >= 0) {
-      js << (first ? "\n" : ",\n") << "      " << jsonString(row.key) << ": " << row.samples;
-      first = false;
-    }
-  }
-  js << "\n    },\n    \"inputs\": [";
+     << ",\n    ";
+  writeMeasuresAndSamples(js, rows, "    ");
+  js << ",\n    \"inputs\": [";
   for (std::size_t i = 0; i < context.trackingInputs.size(); ++i) {
     const TrackingInputSummary& in = context.trackingInputs[i];
     const evaluation::TrackingSummary& e = in.summary;
@@ -477,21 +487,10 @@ std::string reportJson(const ReportContext& context) {
        << ", \"predictions\": " << s.predictions
        << ", \"ignored_predictions\": " << s.ignoredPredictions << "},\n";
     const std::vector<Row> rows = measureRows(context);
-    js << "  \"measures\": {";
-    for (std::size_t i = 0; i < rows.size(); ++i) {
-      js << (i == 0 ? "\n" : ",\n") << "    " << jsonString(rows[i].key) << ": "
-         << jsonNumber(rows[i].value);
-    }
-    js << "\n  },\n  \"samples\": {";
+    js << "  ";
+    writeMeasuresAndSamples(js, rows, "  ");
+    js << ",\n  \"seed\": {";
     bool first = true;
-    for (const Row& row : rows) {
-      if (row.samples >= 0) {
-        js << (first ? "\n" : ",\n") << "    " << jsonString(row.key) << ": " << row.samples;
-        first = false;
-      }
-    }
-    js << "\n  },\n  \"seed\": {";
-    first = true;
     for (const Row& row : rows) {
       if (const auto figure = evaluation::seedFigure(row.key)) {
         js << (first ? "\n" : ",\n") << "    " << jsonString(row.key)

@@ -1,0 +1,154 @@
+// sequence/csv_io: the mechanics that the detections file and the trajectory file share
+// (internal to vp_sequence; the formats themselves live in detections_file / trajectory_file).
+//
+// Contract: CsvFileWriter is a small RAII writer for the real-time loop: open() allocates once
+// (the stdio buffer and a row buffer of the size asked for) and creates the file; the owner
+// formats a row into rowBuffer() and writeRow() hands it to stdio without allocating; every
+// failure is returned as a value (never thrown), and the destructor closes an open file,
+// dropping errors. The reader helpers are for offline (start-up) readers: they throw ReadError
+// with a complete message, "<file>:<line>:<column>: <field>: <problem>" for a field (column =
+// 1-based character position of the field in the line), which readChecked() catches and
+// returns. Fields are plain comma-separated text: quoted fields are rejected.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vp::sequence::csv {
+
+// ---- writing -------------------------------------------------------------------------------
+
+// Stores message in *why (when given) and returns false, for `return failWith(why, ...)`.
+bool failWith(std::string* why, const std::string& message);
+
+class CsvFileWriter {
+ public:
+  CsvFileWriter() = default;
+  ~CsvFileWriter();  // closes an open file, dropping errors
+  CsvFileWriter(const CsvFileWriter&) = delete;
+  CsvFileWriter& operator=(const CsvFileWriter&) = delete;
+
+  // Both file formats' writers take a gamma column count in [0, shape::kMaxShapeComponents]
+  // and refuse a second open(): the checks they make before anything else.
+  bool checkOpen(const std::string& path, int gammaColumns, std::string* why) const;
+  // Allocates the buffers and creates (truncates) path. Start-up.
+  bool open(const std::string& path, std::size_t rowBytes, std::string* why);
+  // Writes the lines before the rows; an empty text (a formatter that failed) fails too.
+  bool writeHeader(std::string_view text, std::string* why);
+  // The preallocated buffer a row is formatted into.
+  std::span<char> rowBuffer() { return {row_.get(), rowBytes_}; }
+  // Hands the first `size` bytes of rowBuffer() to stdio. False on a short write (the file
+  // is then marked failed, so flush() and close() report it too). No allocation.
+  bool writeRow(std::size_t size);
+  bool flush(std::string* why);
+  // `writerName` names the writer in the message of a close() without open().
+  bool close(const char* writerName, std::string* why);
+
+  bool isOpen() const { return file_ != nullptr; }
+  const std::string& path() const { return path_; }
+  std::int64_t rowsWritten() const { return rowsWritten_; }
+
+ private:
+  std::FILE* file_ = nullptr;
+  std::unique_ptr<char[]> ioBuffer_;  // stdio's buffer, given at open so fwrite never allocates
+  std::unique_ptr<char[]> row_;       // one formatted row
+  std::size_t rowBytes_ = 0;
+  std::string path_;
+  std::int64_t rowsWritten_ = 0;
+  bool failed_ = false;
+};
+
+// The header line of these column names (without the line break).
+std::string joinColumns(const std::vector<std::string>& names);
+
+// ---- reading -------------------------------------------------------------------------------
+
+// A complete message; thrown inside the readers only (start-up code) and returned.
+struct ReadError {
+  std::string message;
+};
+
+// A problem found in a record, without allocating: the column and a static description. The
+// semantic checks return it so that the writer and the reader share them.
+struct Problem {
+  int column = -1;
+  const char* what = "";
+};
+
+std::string quote(std::string_view text);
+// "<file>:<line>", the start of every message about a line.
+std::string location(const std::string& file, int line);
+
+// The whole file; throws ReadError "<file>: cannot open (missing or unreadable)".
+std::string readWholeFile(const std::string& path);
+
+// Calls onLine(line, text) for each line of text (line counted from 1, the '\n' and a '\r'
+// before it removed); returns the number of lines.
+template <typename OnLine>
+int forEachLine(std::string_view text, OnLine&& onLine) {
+  std::size_t position = 0;
+  int line = 0;
+  while (position < text.size()) {
+    const std::size_t end = std::min(text.find('\n', position), text.size());
+    std::string_view row = text.substr(position, end - position);
+    position = end + 1;
+    ++line;
+    if (!row.empty() && row.back() == '\r') {
+      row.remove_suffix(1);
+    }
+    onLine(line, row);
+  }
+  return line;
+}
+
+// Runs read() (which fills *out and throws ReadError on a problem) on a fresh File whose path
+// is set; on a problem leaves *out empty but for its path and puts the message in *why.
+template <typename File, typename Read>
+bool readChecked(const std::string& path, File* out, std::string* why, Read&& read) {
+  *out = File{};
+  out->path = path;
+  try {
+    read();
+  } catch (const ReadError& error) {
+    *out = File{};
+    out->path = path;
+    return failWith(why, error.message);
+  }
+  return true;
+}
+
+// One data row split into its fields and checked against the column names on construction
+// (an empty line is an error: "<file>:<line>: empty line").
+// The accessors throw ReadError naming file:line:column and the field's column name.
+class RowParser {
+ public:
+  RowParser(const std::string& file, int line, std::string_view text,
+            const std::vector<std::string>& names);
+
+  std::string_view field(int i) const { return fields_[static_cast<std::size_t>(i)]; }
+  [[noreturn]] void fail(int column, const std::string& problem) const;
+  // An integer in [low, high].
+  std::int64_t integer(int i, std::int64_t low, std::int64_t high) const;
+  // A finite number (a value is required).
+  template <typename T>
+  T real(int i) const;
+
+ private:
+  const std::string& file_;
+  int line_;
+  const std::vector<std::string>& names_;
+  std::vector<std::string_view> fields_;
+  std::vector<std::size_t> starts_;
+};
+
+extern template float RowParser::real<float>(int i) const;
+extern template double RowParser::real<double>(int i) const;
+
+}  // namespace vp::sequence::csv
