@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -21,6 +22,7 @@
 #include <string_view>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 namespace vp::config {
 namespace {
@@ -267,6 +269,45 @@ class MapReader {
       vector[i] = readNumber((*node)[i], path + "[" + std::to_string(i) + "]", range, diag_);
     }
     return vector;
+  }
+  // A sequence of integers, each in range: exactly `count` of them, or any number (also
+  // none) when count < 0. The key must be present (callers test has() first).
+  std::vector<int> integers(std::string_view key, const Range& range, int count) {
+    const YAML::Node* node = take(key, true);
+    const std::string path = childPath(key);
+    if (!node->IsSequence() || (count >= 0 && node->size() != static_cast<std::size_t>(count))) {
+      const std::string what = count >= 0 ? "a sequence of " + std::to_string(count) + " integers"
+                                          : std::string("a sequence of integers");
+      diag_.fail(path, "expected " + what + ", got " + describe(*node));
+    }
+    std::vector<int> values;
+    for (std::size_t i = 0; i < node->size(); ++i) {
+      values.push_back(static_cast<int>(
+          readInteger((*node)[i], path + "[" + std::to_string(i) + "]", range, diag_)));
+    }
+    return values;
+  }
+  // A non-empty sequence of strings, each mapped through parse (see choice()).
+  template <class T, class Parse>
+  std::vector<T> choices(std::string_view key, Parse parse, std::string_view expected) {
+    const YAML::Node* node = take(key, true);
+    const std::string path = childPath(key);
+    if (!node->IsSequence() || node->size() == 0) {
+      diag_.fail(path, "expected a non-empty sequence of " + std::string(expected) + ", got " +
+                           describe(*node));
+    }
+    std::vector<T> values;
+    for (std::size_t i = 0; i < node->size(); ++i) {
+      const std::string itemPath = path + "[" + std::to_string(i) + "]";
+      const std::string value = readText((*node)[i], itemPath, diag_);
+      std::optional<T> parsed = parse(value);
+      if (!parsed) {
+        diag_.fail(itemPath,
+                   "unknown value '" + value + "' (expected " + std::string(expected) + ")");
+      }
+      values.push_back(*std::move(parsed));
+    }
+    return values;
   }
   // A nested section; an optional one that is absent reads as empty (all defaults).
   MapReader section(std::string_view key) { return sectionOf(key, take(key, false)); }
@@ -626,6 +667,251 @@ DdsConfig readDds(MapReader section, const std::string& baseDir) {
   return dds;
 }
 
+// --- the loop's sections: perception, pose, tracking, source, telemetry, app ----------------
+
+const Range kThreadsRange = Range::closed(1.0, 16.0);
+const Range kShareRange = Range{0.0, 1.0, true};  // (0, 1]
+const Range kProbabilityRange = Range::closed(0.0, 1.0);
+const Range kWorkingScaleRange = Range{0.0, 1.0, true};
+const Range kTileOverlapRangePx = Range::closed(0.0, 1024.0);
+const Range kTopKRange = Range::closed(1.0, 512.0);
+const Range kMaxCropsRange = Range::closed(0.0, 512.0);
+const Range kCutMarginRangePx = Range::closed(0.0, 64.0);
+const Range kFixedGsdRangeM = Range::closed(0.0, 1.0);
+const Range kCarLengthRangeM = Range{0.0, 30.0, true};
+const Range kWhiteBalanceGridRange = Range::closed(1.0, 8.0);  // rows x cols <= 64 regions
+const Range kSampleStrideRangePx = Range::closed(1.0, 64.0);
+const Range kMaxGainRange = Range::closed(1.0, 16.0);
+// A pose further than 10 s from the frame is useless for a moving drone.
+const Range kPoseMaxAgeRangeS = Range{0.0, 10.0, true};
+const Range kPoseCapacityRange = Range::closed(2.0, 100000.0);
+// The publisher's table of published tracks holds 1024 (VehicleStatePublisher::kMaxTracks).
+const Range kMaxTracksRange = Range::closed(1.0, 1024.0);
+const Range kConfirmHitsRange = Range::closed(1.0, 100.0);
+const Range kTrackTimeRangeS = Range::closed(0.0, 60.0);
+const Range kSpeedRangeMps = Range::closed(0.0, 50.0);
+const Range kFlipVotesRange = Range::closed(1.0, 100.0);
+const Range kEvidenceWeightRange = Range{0.0, 1.0, true};
+const Range kShapeWeightRange = Range{0.0, 1e6, true};
+const Range kGateDistanceRangeM = Range{0.0, 100.0, true};
+const Range kCameraBuffersRange = Range::closed(2.0, 16.0);
+const Range kDequeueTimeoutRangeMs = Range::closed(1.0, 60000.0);
+const Range kPortRange = Range::closed(0.0, 65535.0);
+const Range kSystemIdRange = Range::closed(0.0, 255.0);
+const Range kLinkLatencyRangeS = Range::closed(0.0, 1.0);
+const Range kLookaheadRangeS = Range::closed(0.0, 10.0);
+const Range kQueueDepthRange = Range::closed(1.0, 8.0);
+const Range kPoolSizeRange = Range::closed(0.0, 64.0);  // FramePool::kMaxFrames
+const Range kPriorityRange = Range::closed(0.0, 99.0);
+const Range kCpuRange = Range::closed(0.0, 1023.0);
+const Range kStatsPeriodRangeS = Range::closed(0.1, 3600.0);
+const Range kVideoFpsRange = Range{0.0, 1000.0, true};
+
+constexpr std::string_view kBackendNames = "int8, fp32, opencv";
+constexpr std::string_view kSourceKindNames = "replay, v4l2";
+constexpr std::string_view kPixelFormatNames = "yuyv, nv12, mjpeg";
+constexpr std::string_view kTelemetryKindNames =
+    "recording, mavlink_udp, mavlink_serial, dds, none";
+constexpr std::string_view kBaudNames =
+    "9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000, 921600, 1000000, 1500000, "
+    "2000000, 3000000";
+
+// Looks a spelling up among the values of an enumeration by their toString().
+template <class E, std::size_t N>
+std::optional<E> enumFromString(const std::string& text, const std::array<E, N>& values) {
+  for (const E value : values) {
+    if (text == toString(value)) {
+      return value;
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<InferenceBackend> backendFromString(const std::string& text) {
+  return enumFromString(
+      text, std::array{InferenceBackend::Int8, InferenceBackend::Fp32, InferenceBackend::OpenCv});
+}
+std::optional<FrameSourceKind> sourceKindFromString(const std::string& text) {
+  return enumFromString(text, std::array{FrameSourceKind::Replay, FrameSourceKind::V4l2});
+}
+std::optional<CameraPixelFormat> pixelFormatFromString(const std::string& text) {
+  return enumFromString(
+      text, std::array{CameraPixelFormat::Yuyv, CameraPixelFormat::Nv12, CameraPixelFormat::Mjpeg});
+}
+std::optional<TelemetrySourceKind> telemetryKindFromString(const std::string& text) {
+  return enumFromString(text,
+                        std::array{TelemetrySourceKind::Recording, TelemetrySourceKind::MavlinkUdp,
+                                   TelemetrySourceKind::MavlinkSerial, TelemetrySourceKind::Dds,
+                                   TelemetrySourceKind::None});
+}
+std::optional<int> baudFromString(const std::string& text) {
+  for (const int baud : {9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000, 921600, 1000000,
+                         1500000, 2000000, 3000000}) {
+    if (text == std::to_string(baud)) {
+      return baud;
+    }
+  }
+  return std::nullopt;
+}
+
+// An optional output or input path; `none` (or absence) means "not used".
+std::string readOptionalPath(MapReader& section, std::string_view key, const std::string& baseDir,
+                             const std::string& fallback) {
+  if (!section.has(key)) {
+    return fallback.empty() ? "" : resolvePath(fallback, baseDir);
+  }
+  const std::string text = section.text(key, kRequired);
+  return text == "none" ? "" : resolvePath(text, baseDir);
+}
+
+PerceptionConfig readPerception(MapReader section, const std::string& baseDir) {
+  const PerceptionConfig d;
+  PerceptionConfig p;
+  p.detectorModel = resolvePath(
+      section.text("detector_model", std::string(PerceptionConfig::kDefaultDetectorModel)),
+      baseDir);
+  p.cropModel =
+      readOptionalPath(section, "crop_model", baseDir, PerceptionConfig::kDefaultCropModel);
+  p.asmPath = resolvePath(section.text("asm", std::string(PerceptionConfig::kDefaultAsm)), baseDir);
+  p.backend =
+      section.choice<InferenceBackend>("backend", backendFromString, kBackendNames, d.backend);
+  p.threads = section.integer("threads", kThreadsRange, d.threads);
+  p.cropThreads = section.integer("crop_threads", kThreadsRange, d.cropThreads);
+  p.undistort = section.boolean("undistort", d.undistort);
+  p.whiteBalance = section.boolean("white_balance", d.whiteBalance);
+  if (section.has("white_balance_regions")) {
+    const std::vector<int> regions =
+        section.integers("white_balance_regions", kWhiteBalanceGridRange, 2);
+    p.whiteBalanceRegionRows = regions[0];
+    p.whiteBalanceRegionCols = regions[1];
+  }
+  p.whiteBalanceSampleStridePx = section.integer(
+      "white_balance_sample_stride_px", kSampleStrideRangePx, d.whiteBalanceSampleStridePx);
+  p.whiteBalanceWhiteShare =
+      section.number("white_balance_white_share", kShareRange, d.whiteBalanceWhiteShare);
+  p.whiteBalanceMaxGain =
+      section.number("white_balance_max_gain", kMaxGainRange, d.whiteBalanceMaxGain);
+  p.workingScale = section.number("working_scale", kWorkingScaleRange, d.workingScale);
+  p.tileOverlapPx = section.integer("tile_overlap_px", kTileOverlapRangePx, d.tileOverlapPx);
+  p.scoreThreshold = section.number("score_threshold", kProbabilityRange, d.scoreThreshold);
+  p.topKPerTile = section.integer("top_k_per_tile", kTopKRange, d.topKPerTile);
+  p.nmsIou = section.number("nms_iou", kShareRange, d.nmsIou);
+  p.duplicateOverlap = section.number("duplicate_overlap", kShareRange, d.duplicateOverlap);
+  p.cutEdgeMarginPx = section.number("cut_edge_margin_px", kCutMarginRangePx, d.cutEdgeMarginPx);
+  p.maxCrops = section.integer("max_crops", kMaxCropsRange, d.maxCrops);
+  p.applyFlip = section.boolean("apply_flip", d.applyFlip);
+  p.applyRefine = section.boolean("apply_refine", d.applyRefine);
+  p.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRangeM, d.fixedGsd_m);
+  p.nominalCarLength_m =
+      section.number("nominal_car_length_m", kCarLengthRangeM, d.nominalCarLength_m);
+  section.warnUnknownKeys();
+  return p;
+}
+
+PoseConfig readPose(MapReader section) {
+  const PoseConfig d;
+  PoseConfig p;
+  p.maxAge_s = section.number("max_age_s", kPoseMaxAgeRangeS, d.maxAge_s);
+  p.bufferCapacity = section.integer("buffer_capacity", kPoseCapacityRange, d.bufferCapacity);
+  section.warnUnknownKeys();
+  return p;
+}
+
+TrackingConfig readTracking(MapReader section) {
+  const TrackingConfig d;
+  TrackingConfig t;
+  t.maxTracks = section.integer("max_tracks", kMaxTracksRange, d.maxTracks);
+  t.confirmHits = section.integer("confirm_hits", kConfirmHitsRange, d.confirmHits);
+  t.maxTentativeGap_s =
+      section.number("max_tentative_gap_s", kTrackTimeRangeS, d.maxTentativeGap_s);
+  t.maxLost_s = section.number("max_lost_s", kTrackTimeRangeS, d.maxLost_s);
+  t.movingSpeed_mps = section.number("moving_speed_mps", kSpeedRangeMps, d.movingSpeed_mps);
+  t.flipVotes = section.integer("flip_votes", kFlipVotesRange, d.flipVotes);
+  t.typeEvidenceWeight =
+      section.number("type_evidence_weight", kEvidenceWeightRange, d.typeEvidenceWeight);
+  t.shapeMaxWeight = section.number("shape_max_weight", kShapeWeightRange, d.shapeMaxWeight);
+  t.maxDistance_m = section.number("max_distance_m", kGateDistanceRangeM, d.maxDistance_m);
+  t.highScore = section.number("high_score", kProbabilityRange, d.highScore);
+  t.lowScore = section.number("low_score", Range::closed(0.0, t.highScore), d.lowScore);
+  section.warnUnknownKeys();
+  return t;
+}
+
+V4l2SourceConfig readV4l2(MapReader section) {
+  const V4l2SourceConfig d;
+  V4l2SourceConfig v;
+  v.device = section.text("device", d.device);
+  v.busInfo = section.text("bus_info", d.busInfo);
+  v.widthPx = section.integer("width_px", kImageSizeRangePx, d.widthPx);
+  v.heightPx = section.integer("height_px", kImageSizeRangePx, d.heightPx);
+  if (section.has("formats")) {
+    v.formats =
+        section.choices<CameraPixelFormat>("formats", pixelFormatFromString, kPixelFormatNames);
+  }
+  v.buffers = section.integer("buffers", kCameraBuffersRange, d.buffers);
+  v.dequeueTimeoutMs =
+      section.integer("dequeue_timeout_ms", kDequeueTimeoutRangeMs, d.dequeueTimeoutMs);
+  section.warnUnknownKeys();
+  return v;
+}
+
+SourceConfig readSource(MapReader section, const std::string& baseDir) {
+  const SourceConfig d;
+  SourceConfig s;
+  s.kind = section.choice<FrameSourceKind>("kind", sourceKindFromString, kSourceKindNames, d.kind);
+  s.sequenceDir = readOptionalPath(section, "sequence_dir", baseDir, "");
+  s.paced = section.boolean("paced", d.paced);
+  s.loop = section.boolean("loop", d.loop);
+  s.v4l2 = readV4l2(section.section("v4l2"));
+  section.warnUnknownKeys();
+  return s;
+}
+
+TelemetryLinkConfig readTelemetryLink(MapReader section) {
+  const TelemetryLinkConfig d;
+  TelemetryLinkConfig t;
+  t.source = section.choice<TelemetrySourceKind>("source", telemetryKindFromString,
+                                                 kTelemetryKindNames, d.source);
+  t.udpBindAddress = section.text("udp_bind_address", d.udpBindAddress);
+  t.udpPort = section.integer("udp_port", kPortRange, d.udpPort);
+  t.serialDevice = section.text("serial_device", d.serialDevice);
+  t.serialBaud = section.choice<int>("serial_baud", baudFromString, kBaudNames, d.serialBaud);
+  t.systemId = section.integer("system_id", kSystemIdRange, d.systemId);
+  t.geoidSeparation_m =
+      section.number("geoid_separation_m", kAltitudeOffsetRangeM, d.geoidSeparation_m);
+  t.linkLatency_s = section.number("link_latency_s", kLinkLatencyRangeS, d.linkLatency_s);
+  t.replayLookahead_s = section.number("replay_lookahead_s", kLookaheadRangeS, d.replayLookahead_s);
+  section.warnUnknownKeys();
+  return t;
+}
+
+LoopConfig readLoop(MapReader section, const std::string& baseDir) {
+  const LoopConfig d;
+  LoopConfig a;
+  a.queueDepth = section.integer("queue_depth", kQueueDepthRange, d.queueDepth);
+  a.framePoolSize = section.integer("frame_pool_size", kPoolSizeRange, d.framePoolSize);
+  if (a.framePoolSize != 0 && a.framePoolSize < a.queueDepth + 2) {
+    section.fail("frame_pool_size", "must be 0 (automatic) or >= queue_depth + 2 = " +
+                                        std::to_string(a.queueDepth + 2) + ", got " +
+                                        std::to_string(a.framePoolSize));
+  }
+  a.lockMemory = section.boolean("lock_memory", d.lockMemory);
+  a.realtimePriority = section.integer("realtime_priority", kPriorityRange, d.realtimePriority);
+  if (section.has("capture_cpus")) {
+    a.captureCpus = section.integers("capture_cpus", kCpuRange, -1);
+  }
+  if (section.has("processing_cpus")) {
+    a.processingCpus = section.integers("processing_cpus", kCpuRange, -1);
+  }
+  a.statsPeriod_s = section.number("stats_period_s", kStatsPeriodRangeS, d.statsPeriod_s);
+  a.trajectoryCsv = readOptionalPath(section, "trajectory_csv", baseDir, "");
+  a.detectionsCsv = readOptionalPath(section, "detections_csv", baseDir, "");
+  a.annotatedVideo = readOptionalPath(section, "annotated_video", baseDir, "");
+  a.annotatedVideoFps = section.number("annotated_video_fps", kVideoFpsRange, d.annotatedVideoFps);
+  section.warnUnknownKeys();
+  return a;
+}
+
 YAML::Node loadDocument(const std::string& text, const Diagnostics& diag) {
   try {
     return YAML::Load(text);
@@ -659,6 +945,16 @@ AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName
   config.mount = readMount(root.section("mount"));
   config.terrain = readTerrain(root.requiredSection("terrain"), baseDir);
   config.dds = readDds(root.section("dds"), baseDir);
+  config.perception = readPerception(root.section("perception"), baseDir);
+  config.pose = readPose(root.section("pose"));
+  config.tracking = readTracking(root.section("tracking"));
+  config.source = readSource(root.section("source"), baseDir);
+  config.telemetry = readTelemetryLink(root.section("telemetry"));
+  config.app = readLoop(root.section("app"), baseDir);
+  if (config.telemetry.source == TelemetrySourceKind::Dds &&
+      config.dds.telemetry.source == TelemetrySource::None) {
+    diag.fail("telemetry.source", "dds needs dds.telemetry.source ardupilot or px4 (it is none)");
+  }
   root.warnUnknownKeys();
   return config;
 }
@@ -709,6 +1005,66 @@ AppConfig loadConfig(const std::string& path) {
 DdsSection loadDdsSection(const std::string& path) {
   const auto [text, baseDir] = readConfigFile(path);
   return parseDdsSection(text, path, baseDir);
+}
+
+const char* toString(InferenceBackend backend) {
+  switch (backend) {
+    case InferenceBackend::Int8:
+      return "int8";
+    case InferenceBackend::Fp32:
+      return "fp32";
+    case InferenceBackend::OpenCv:
+      return "opencv";
+  }
+  return "unknown";
+}
+
+const char* toString(FrameSourceKind kind) {
+  switch (kind) {
+    case FrameSourceKind::Replay:
+      return "replay";
+    case FrameSourceKind::V4l2:
+      return "v4l2";
+  }
+  return "unknown";
+}
+
+const char* toString(CameraPixelFormat format) {
+  switch (format) {
+    case CameraPixelFormat::Yuyv:
+      return "yuyv";
+    case CameraPixelFormat::Nv12:
+      return "nv12";
+    case CameraPixelFormat::Mjpeg:
+      return "mjpeg";
+  }
+  return "unknown";
+}
+
+std::vector<CameraPixelFormat> defaultCameraFormats() {
+  // Built element by element: g++ 12 warns (wrongly) on an initializer list of 1-byte enums.
+  std::vector<CameraPixelFormat> formats;
+  for (const CameraPixelFormat format :
+       {CameraPixelFormat::Yuyv, CameraPixelFormat::Nv12, CameraPixelFormat::Mjpeg}) {
+    formats.push_back(format);
+  }
+  return formats;
+}
+
+const char* toString(TelemetrySourceKind kind) {
+  switch (kind) {
+    case TelemetrySourceKind::Recording:
+      return "recording";
+    case TelemetrySourceKind::MavlinkUdp:
+      return "mavlink_udp";
+    case TelemetrySourceKind::MavlinkSerial:
+      return "mavlink_serial";
+    case TelemetrySourceKind::Dds:
+      return "dds";
+    case TelemetrySourceKind::None:
+      return "none";
+  }
+  return "unknown";
 }
 
 }  // namespace vp::config

@@ -3,6 +3,8 @@
 // Contract: loadConfig() reads the file, checks every key (type, unit, range) and returns
 // the typed struct; any missing or malformed key throws ConfigError whose message names
 // the file and the full key path (e.g. "site.yaml: camera.fx_px: must be > 0, got -3").
+// Besides the rig (origin, camera, mount, terrain) it holds the loop's optional sections
+// (config/runtime_config.hpp: perception, pose, tracking, source, telemetry, app) and `dds:`.
 // Keys the schema does not know are not fatal: they are listed in AppConfig::warnings
 // ("site.yaml: unknown key 'camera.fxx'"). Relative paths in the file are resolved
 // against the file's directory. The schema, with units, ranges and defaults, is
@@ -18,6 +20,7 @@
 
 #include "camera/camera_model.hpp"
 #include "config/dds_config.hpp"
+#include "config/runtime_config.hpp"
 #include "geodesy/attitude.hpp"
 #include "geodesy/geodesy.hpp"
 #include "terrain/terrain_model.hpp"
@@ -50,7 +53,13 @@ struct AppConfig {
   CameraConfig camera{};
   MountConfig mount{};
   TerrainConfig terrain{};
-  DdsConfig dds{};                    // optional section: absent = the documented defaults
+  DdsConfig dds{};                // optional section: absent = the documented defaults
+  PerceptionConfig perception{};  // optional sections of the loop, likewise
+  PoseConfig pose{};
+  TrackingConfig tracking{};
+  SourceConfig source{};
+  TelemetryLinkConfig telemetry{};
+  LoopConfig app{};
   std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
 };
 

@@ -104,6 +104,81 @@ dds:
     px4_global_position_topic: rt/px4_1/fmu/out/vehicle_global_position
     ardupilot_altitude_offset_m: -33.5
     history_depth: 5
+perception:
+  detector_model: models/det.onnx
+  crop_model: models/crop.onnx
+  asm: models/asm.yaml
+  backend: fp32
+  threads: 2
+  crop_threads: 3
+  undistort: false
+  white_balance: true
+  white_balance_regions: [2, 5]
+  white_balance_sample_stride_px: 8
+  white_balance_white_share: 0.2
+  white_balance_max_gain: 3.0
+  working_scale: 0.5
+  tile_overlap_px: 64
+  score_threshold: 0.35
+  top_k_per_tile: 100
+  nms_iou: 0.45
+  duplicate_overlap: 0.6
+  cut_edge_margin_px: 5.0
+  max_crops: 64
+  apply_flip: false
+  apply_refine: false
+  fixed_gsd_m: 0.03
+  nominal_car_length_m: 4.4
+pose:
+  max_age_s: 0.3
+  buffer_capacity: 128
+tracking:
+  max_tracks: 300
+  confirm_hits: 4
+  max_tentative_gap_s: 0.3
+  max_lost_s: 2.5
+  moving_speed_mps: 1.2
+  flip_votes: 5
+  type_evidence_weight: 0.4
+  shape_max_weight: 20.0
+  max_distance_m: 5.0
+  high_score: 0.6
+  low_score: 0.15
+source:
+  kind: v4l2
+  sequence_dir: seq/run1
+  paced: false
+  loop: true
+  v4l2:
+    device: /dev/video2
+    bus_info: usb-0000:00:14.0-2
+    width_px: 1920
+    height_px: 1080
+    formats: [nv12, yuyv]
+    buffers: 6
+    dequeue_timeout_ms: 500
+telemetry:
+  source: mavlink_udp
+  udp_bind_address: 127.0.0.1
+  udp_port: 14551
+  serial_device: /dev/ttyUSB0
+  serial_baud: 57600
+  system_id: 1
+  geoid_separation_m: -33.5
+  link_latency_s: 0.002
+  replay_lookahead_s: 0.3
+app:
+  queue_depth: 2
+  frame_pool_size: 6
+  lock_memory: true
+  realtime_priority: 50
+  capture_cpus: [0]
+  processing_cpus: [1, 2]
+  stats_period_s: 10.0
+  trajectory_csv: out/tracks.csv
+  detections_csv: out/detections.csv
+  annotated_video: out/annotated.avi
+  annotated_video_fps: 5.0
 )";
 
 // Only the required keys.
@@ -224,6 +299,23 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
   EXPECT_EQ(dds.telemetry.px4GlobalPositionTopic, defaults.telemetry.px4GlobalPositionTopic);
   EXPECT_EQ(dds.telemetry.ardupilotAltitudeOffset_m, defaults.telemetry.ardupilotAltitudeOffset_m);
   EXPECT_EQ(dds.telemetry.historyDepth, defaults.telemetry.historyDepth);
+
+  // The loop's sections: the shipped models of the repository, replay with recorded telemetry.
+  const fs::path models = fs::path(VP_SOURCE_DIR) / "models";
+  EXPECT_EQ(config.perception.detectorModel,
+            (models / "detector/detector_int8.onnx").lexically_normal().string());
+  EXPECT_EQ(config.perception.cropModel,
+            (models / "detector/crop_int8.onnx").lexically_normal().string());
+  EXPECT_EQ(config.perception.asmPath,
+            (models / "asm/default_asm.yaml").lexically_normal().string());
+  EXPECT_TRUE(fs::is_regular_file(config.perception.asmPath));
+  EXPECT_EQ(config.perception.backend, InferenceBackend::Int8);
+  EXPECT_EQ(config.perception.whiteBalanceRegionRows, 3);
+  EXPECT_EQ(config.perception.whiteBalanceRegionCols, 4);
+  EXPECT_EQ(config.source.kind, FrameSourceKind::Replay);
+  EXPECT_EQ(config.telemetry.source, TelemetrySourceKind::Recording);
+  EXPECT_EQ(config.app.queueDepth, 1);
+  EXPECT_TRUE(config.app.trajectoryCsv.empty());
 }
 
 TEST(ConfigDefaults, RequiredKeysOnlyGetTheDocumentedDefaults) {
@@ -516,6 +608,147 @@ const MalformedCase kMalformedCases[] = {
      "dds.telemetry.ardupilot_altitude_offset_m", "must be in [-200, 200], got 500"},
     {"history_depth: 5", "history_depth: 0", "dds.telemetry.history_depth",
      "must be in [1, 1000], got 0"},
+    // perception
+    {"perception:\n  detector_model", "perception: 1\nx:\n  detector_model", "perception",
+     "expected a map, got '1'"},
+    {"detector_model: models/det.onnx", "detector_model: ''", "perception.detector_model",
+     "must not be empty"},
+    {"crop_model: models/crop.onnx", "crop_model: [a]", "perception.crop_model",
+     "expected a string, got a sequence of 1 element(s)"},
+    {"asm: models/asm.yaml", "asm: {a: 1}", "perception.asm", "expected a string, got a map"},
+    {"backend: fp32", "backend: int4", "perception.backend",
+     "unknown value 'int4' (expected int8, fp32, opencv)"},
+    {"  threads: 2", "  threads: 0", "perception.threads", "must be in [1, 16], got 0"},
+    {"crop_threads: 3", "crop_threads: 17", "perception.crop_threads",
+     "must be in [1, 16], got 17"},
+    {"undistort: false", "undistort: maybe", "perception.undistort",
+     "expected true or false, got 'maybe'"},
+    {"white_balance: true", "white_balance: 1", "perception.white_balance",
+     "expected true or false, got '1'"},
+    {"white_balance_regions: [2, 5]", "white_balance_regions: [2]",
+     "perception.white_balance_regions",
+     "expected a sequence of 2 integers, got a sequence of 1 element(s)"},
+    {"white_balance_regions: [2, 5]", "white_balance_regions: [2, 9]",
+     "perception.white_balance_regions[1]", "must be in [1, 8], got 9"},
+    {"white_balance_sample_stride_px: 8", "white_balance_sample_stride_px: 0",
+     "perception.white_balance_sample_stride_px", "must be in [1, 64], got 0"},
+    {"white_balance_white_share: 0.2", "white_balance_white_share: 0",
+     "perception.white_balance_white_share", "must be in (0, 1], got 0"},
+    {"white_balance_max_gain: 3.0", "white_balance_max_gain: 0.5",
+     "perception.white_balance_max_gain", "must be in [1, 16], got 0.5"},
+    {"working_scale: 0.5", "working_scale: 1.5", "perception.working_scale",
+     "must be in (0, 1], got 1.5"},
+    {"tile_overlap_px: 64", "tile_overlap_px: -1", "perception.tile_overlap_px",
+     "must be in [0, 1024], got -1"},
+    {"score_threshold: 0.35", "score_threshold: 2", "perception.score_threshold",
+     "must be in [0, 1], got 2"},
+    {"top_k_per_tile: 100", "top_k_per_tile: 0", "perception.top_k_per_tile",
+     "must be in [1, 512], got 0"},
+    {"nms_iou: 0.45", "nms_iou: 0", "perception.nms_iou", "must be in (0, 1], got 0"},
+    {"duplicate_overlap: 0.6", "duplicate_overlap: x", "perception.duplicate_overlap",
+     "expected a number, got 'x'"},
+    {"cut_edge_margin_px: 5.0", "cut_edge_margin_px: .nan", "perception.cut_edge_margin_px",
+     "must be finite, got .nan"},
+    {"max_crops: 64", "max_crops: 513", "perception.max_crops", "must be in [0, 512], got 513"},
+    {"apply_flip: false", "apply_flip: no", "perception.apply_flip",
+     "expected true or false, got 'no'"},
+    {"apply_refine: false", "apply_refine: []", "perception.apply_refine",
+     "expected true or false, got a sequence of 0 element(s)"},
+    {"fixed_gsd_m: 0.03", "fixed_gsd_m: -0.1", "perception.fixed_gsd_m",
+     "must be in [0, 1], got -0.1"},
+    {"nominal_car_length_m: 4.4", "nominal_car_length_m: 0", "perception.nominal_car_length_m",
+     "must be in (0, 30], got 0"},
+    // pose
+    {"pose:\n  max_age_s", "pose: 1\nx:\n  max_age_s", "pose", "expected a map, got '1'"},
+    {"max_age_s: 0.3", "max_age_s: 0", "pose.max_age_s", "must be in (0, 10], got 0"},
+    {"buffer_capacity: 128", "buffer_capacity: 1", "pose.buffer_capacity",
+     "must be in [2, 100000], got 1"},
+    // tracking
+    {"tracking:\n  max_tracks", "tracking: [1]\nx:\n  max_tracks", "tracking",
+     "expected a map, got a sequence of 1 element(s)"},
+    {"max_tracks: 300", "max_tracks: 1025", "tracking.max_tracks",
+     "must be in [1, 1024], got 1025"},
+    {"confirm_hits: 4", "confirm_hits: 0", "tracking.confirm_hits", "must be in [1, 100], got 0"},
+    {"max_tentative_gap_s: 0.3", "max_tentative_gap_s: -1", "tracking.max_tentative_gap_s",
+     "must be in [0, 60], got -1"},
+    {"max_lost_s: 2.5", "max_lost_s: 61", "tracking.max_lost_s", "must be in [0, 60], got 61"},
+    {"moving_speed_mps: 1.2", "moving_speed_mps: x", "tracking.moving_speed_mps",
+     "expected a number, got 'x'"},
+    {"flip_votes: 5", "flip_votes: 0", "tracking.flip_votes", "must be in [1, 100], got 0"},
+    {"type_evidence_weight: 0.4", "type_evidence_weight: 0", "tracking.type_evidence_weight",
+     "must be in (0, 1], got 0"},
+    {"shape_max_weight: 20.0", "shape_max_weight: 0", "tracking.shape_max_weight",
+     "must be in (0, 1000000], got 0"},
+    {"max_distance_m: 5.0", "max_distance_m: 0", "tracking.max_distance_m",
+     "must be in (0, 100], got 0"},
+    {"high_score: 0.6", "high_score: 1.5", "tracking.high_score", "must be in [0, 1], got 1.5"},
+    {"low_score: 0.15", "low_score: 0.7", "tracking.low_score", "must be in [0, 0.6], got 0.7"},
+    // source
+    {"source:\n  kind", "source: camera\nx:\n  kind", "source", "expected a map, got 'camera'"},
+    {"kind: v4l2", "kind: file", "source.kind", "unknown value 'file' (expected replay, v4l2)"},
+    {"sequence_dir: seq/run1", "sequence_dir: ''", "source.sequence_dir", "must not be empty"},
+    {"paced: false", "paced: fast", "source.paced", "expected true or false, got 'fast'"},
+    {"loop: true", "loop: 2", "source.loop", "expected true or false, got '2'"},
+    {"  v4l2:\n", "  v4l2: cam\n  x:\n", "source.v4l2", "expected a map, got 'cam'"},
+    {"device: /dev/video2", "device: ''", "source.v4l2.device", "must not be empty"},
+    {"bus_info: usb-0000:00:14.0-2", "bus_info: [a]", "source.v4l2.bus_info",
+     "expected a string, got a sequence of 1 element(s)"},
+    {"width_px: 1920", "width_px: 15", "source.v4l2.width_px", "must be in [16, 16384], got 15"},
+    {"height_px: 1080", "height_px: x", "source.v4l2.height_px", "expected an integer, got 'x'"},
+    {"formats: [nv12, yuyv]", "formats: []", "source.v4l2.formats",
+     "expected a non-empty sequence of yuyv, nv12, mjpeg, got a sequence of 0 element(s)"},
+    {"formats: [nv12, yuyv]", "formats: [nv12, rgb]", "source.v4l2.formats[1]",
+     "unknown value 'rgb' (expected yuyv, nv12, mjpeg)"},
+    {"buffers: 6", "buffers: 1", "source.v4l2.buffers", "must be in [2, 16], got 1"},
+    {"dequeue_timeout_ms: 500", "dequeue_timeout_ms: 0", "source.v4l2.dequeue_timeout_ms",
+     "must be in [1, 60000], got 0"},
+    // telemetry
+    {"telemetry:\n  source: mavlink_udp", "telemetry: udp\nx:\n  source: mavlink_udp", "telemetry",
+     "expected a map, got 'udp'"},
+    {"source: mavlink_udp", "source: mavlink", "telemetry.source",
+     "unknown value 'mavlink' (expected recording, mavlink_udp, mavlink_serial, dds, none)"},
+    {"udp_bind_address: 127.0.0.1", "udp_bind_address: ''", "telemetry.udp_bind_address",
+     "must not be empty"},
+    {"udp_port: 14551", "udp_port: 70000", "telemetry.udp_port",
+     "must be in [0, 65535], got 70000"},
+    {"serial_device: /dev/ttyUSB0", "serial_device: [a]", "telemetry.serial_device",
+     "expected a string, got a sequence of 1 element(s)"},
+    {"serial_baud: 57600", "serial_baud: 12345", "telemetry.serial_baud",
+     "unknown value '12345' (expected 9600, 19200"},
+    {"system_id: 1", "system_id: 256", "telemetry.system_id", "must be in [0, 255], got 256"},
+    {"geoid_separation_m: -33.5", "geoid_separation_m: 300", "telemetry.geoid_separation_m",
+     "must be in [-200, 200], got 300"},
+    {"link_latency_s: 0.002", "link_latency_s: 2", "telemetry.link_latency_s",
+     "must be in [0, 1], got 2"},
+    {"replay_lookahead_s: 0.3", "replay_lookahead_s: -1", "telemetry.replay_lookahead_s",
+     "must be in [0, 10], got -1"},
+    // app
+    {"app:\n  queue_depth", "app: 1\nx:\n  queue_depth", "app", "expected a map, got '1'"},
+    {"queue_depth: 2", "queue_depth: 9", "app.queue_depth", "must be in [1, 8], got 9"},
+    {"frame_pool_size: 6", "frame_pool_size: 3", "app.frame_pool_size",
+     "must be 0 (automatic) or >= queue_depth + 2 = 4, got 3"},
+    {"frame_pool_size: 6", "frame_pool_size: 65", "app.frame_pool_size",
+     "must be in [0, 64], got 65"},
+    {"lock_memory: true", "lock_memory: yes", "app.lock_memory",
+     "expected true or false, got 'yes'"},
+    {"realtime_priority: 50", "realtime_priority: 100", "app.realtime_priority",
+     "must be in [0, 99], got 100"},
+    {"capture_cpus: [0]", "capture_cpus: 0", "app.capture_cpus",
+     "expected a sequence of integers, got '0'"},
+    {"processing_cpus: [1, 2]", "processing_cpus: {a: 1}", "app.processing_cpus",
+     "expected a sequence of integers, got a map"},
+    {"processing_cpus: [1, 2]", "processing_cpus: [1, -1]", "app.processing_cpus[1]",
+     "must be in [0, 1023], got -1"},
+    {"stats_period_s: 10.0", "stats_period_s: 0", "app.stats_period_s",
+     "must be in [0.1, 3600], got 0"},
+    {"trajectory_csv: out/tracks.csv", "trajectory_csv: ''", "app.trajectory_csv",
+     "must not be empty"},
+    {"detections_csv: out/detections.csv", "detections_csv: [a]", "app.detections_csv",
+     "expected a string, got a sequence of 1 element(s)"},
+    {"annotated_video: out/annotated.avi", "annotated_video: {a: b}", "app.annotated_video",
+     "expected a string, got a map"},
+    {"annotated_video_fps: 5.0", "annotated_video_fps: 0", "app.annotated_video_fps",
+     "must be in (0, 1000], got 0"},
 };
 
 TEST(ConfigMalformed, EachBrokenKeyIsReportedWithSourceAndFullPath) {
@@ -591,7 +824,82 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "dds.telemetry.px4_attitude_topic",
                                                "dds.telemetry.px4_global_position_topic",
                                                "dds.telemetry.ardupilot_altitude_offset_m",
-                                               "dds.telemetry.history_depth"};
+                                               "dds.telemetry.history_depth",
+                                               "perception",
+                                               "perception.detector_model",
+                                               "perception.crop_model",
+                                               "perception.asm",
+                                               "perception.backend",
+                                               "perception.threads",
+                                               "perception.crop_threads",
+                                               "perception.undistort",
+                                               "perception.white_balance",
+                                               "perception.white_balance_regions",
+                                               "perception.white_balance_sample_stride_px",
+                                               "perception.white_balance_white_share",
+                                               "perception.white_balance_max_gain",
+                                               "perception.working_scale",
+                                               "perception.tile_overlap_px",
+                                               "perception.score_threshold",
+                                               "perception.top_k_per_tile",
+                                               "perception.nms_iou",
+                                               "perception.duplicate_overlap",
+                                               "perception.cut_edge_margin_px",
+                                               "perception.max_crops",
+                                               "perception.apply_flip",
+                                               "perception.apply_refine",
+                                               "perception.fixed_gsd_m",
+                                               "perception.nominal_car_length_m",
+                                               "pose",
+                                               "pose.max_age_s",
+                                               "pose.buffer_capacity",
+                                               "tracking",
+                                               "tracking.max_tracks",
+                                               "tracking.confirm_hits",
+                                               "tracking.max_tentative_gap_s",
+                                               "tracking.max_lost_s",
+                                               "tracking.moving_speed_mps",
+                                               "tracking.flip_votes",
+                                               "tracking.type_evidence_weight",
+                                               "tracking.shape_max_weight",
+                                               "tracking.max_distance_m",
+                                               "tracking.high_score",
+                                               "tracking.low_score",
+                                               "source",
+                                               "source.kind",
+                                               "source.sequence_dir",
+                                               "source.paced",
+                                               "source.loop",
+                                               "source.v4l2",
+                                               "source.v4l2.device",
+                                               "source.v4l2.bus_info",
+                                               "source.v4l2.width_px",
+                                               "source.v4l2.height_px",
+                                               "source.v4l2.formats",
+                                               "source.v4l2.buffers",
+                                               "source.v4l2.dequeue_timeout_ms",
+                                               "telemetry",
+                                               "telemetry.source",
+                                               "telemetry.udp_bind_address",
+                                               "telemetry.udp_port",
+                                               "telemetry.serial_device",
+                                               "telemetry.serial_baud",
+                                               "telemetry.system_id",
+                                               "telemetry.geoid_separation_m",
+                                               "telemetry.link_latency_s",
+                                               "telemetry.replay_lookahead_s",
+                                               "app",
+                                               "app.queue_depth",
+                                               "app.frame_pool_size",
+                                               "app.lock_memory",
+                                               "app.realtime_priority",
+                                               "app.capture_cpus",
+                                               "app.processing_cpus",
+                                               "app.stats_period_s",
+                                               "app.trajectory_csv",
+                                               "app.detections_csv",
+                                               "app.annotated_video",
+                                               "app.annotated_video_fps"};
   // Every key of the three QoS profiles.
   std::vector<std::string> keys = schemaKeys;
   for (const char* topic : {"vehicle_state", "drone_status", "occupancy"}) {
@@ -859,6 +1167,140 @@ TEST(ConfigDds, SectionAloneIgnoresTheOtherSections) {
     EXPECT_EQ(std::string(error.what()),
               "rsu.yaml: dds.qos.occupancy.history_depth: must be in [1, 1000], got 0");
   }
+}
+
+TEST(ConfigLoop, FullSectionsReadEveryKey) {
+  const AppConfig config = parse(kFullConfig);
+  EXPECT_TRUE(config.warnings.empty());
+  const PerceptionConfig& p = config.perception;
+  EXPECT_EQ(p.detectorModel, "/data/site/models/det.onnx");
+  EXPECT_EQ(p.cropModel, "/data/site/models/crop.onnx");
+  EXPECT_EQ(p.asmPath, "/data/site/models/asm.yaml");
+  EXPECT_EQ(p.backend, InferenceBackend::Fp32);
+  EXPECT_EQ(p.threads, 2);
+  EXPECT_EQ(p.cropThreads, 3);
+  EXPECT_FALSE(p.undistort);
+  EXPECT_TRUE(p.whiteBalance);
+  EXPECT_EQ(p.whiteBalanceRegionRows, 2);
+  EXPECT_EQ(p.whiteBalanceRegionCols, 5);
+  EXPECT_EQ(p.whiteBalanceSampleStridePx, 8);
+  EXPECT_DOUBLE_EQ(p.whiteBalanceWhiteShare, 0.2);
+  EXPECT_DOUBLE_EQ(p.whiteBalanceMaxGain, 3.0);
+  EXPECT_DOUBLE_EQ(p.workingScale, 0.5);
+  EXPECT_EQ(p.tileOverlapPx, 64);
+  EXPECT_DOUBLE_EQ(p.scoreThreshold, 0.35);
+  EXPECT_EQ(p.topKPerTile, 100);
+  EXPECT_DOUBLE_EQ(p.nmsIou, 0.45);
+  EXPECT_DOUBLE_EQ(p.duplicateOverlap, 0.6);
+  EXPECT_DOUBLE_EQ(p.cutEdgeMarginPx, 5.0);
+  EXPECT_EQ(p.maxCrops, 64);
+  EXPECT_FALSE(p.applyFlip);
+  EXPECT_FALSE(p.applyRefine);
+  EXPECT_DOUBLE_EQ(p.fixedGsd_m, 0.03);
+  EXPECT_DOUBLE_EQ(p.nominalCarLength_m, 4.4);
+  EXPECT_DOUBLE_EQ(config.pose.maxAge_s, 0.3);
+  EXPECT_EQ(config.pose.bufferCapacity, 128);
+  const TrackingConfig& t = config.tracking;
+  EXPECT_EQ(t.maxTracks, 300);
+  EXPECT_EQ(t.confirmHits, 4);
+  EXPECT_DOUBLE_EQ(t.maxTentativeGap_s, 0.3);
+  EXPECT_DOUBLE_EQ(t.maxLost_s, 2.5);
+  EXPECT_DOUBLE_EQ(t.movingSpeed_mps, 1.2);
+  EXPECT_EQ(t.flipVotes, 5);
+  EXPECT_DOUBLE_EQ(t.typeEvidenceWeight, 0.4);
+  EXPECT_DOUBLE_EQ(t.shapeMaxWeight, 20.0);
+  EXPECT_DOUBLE_EQ(t.maxDistance_m, 5.0);
+  EXPECT_DOUBLE_EQ(t.highScore, 0.6);
+  EXPECT_DOUBLE_EQ(t.lowScore, 0.15);
+  const SourceConfig& src = config.source;
+  EXPECT_EQ(src.kind, FrameSourceKind::V4l2);
+  EXPECT_EQ(src.sequenceDir, "/data/site/seq/run1");
+  EXPECT_FALSE(src.paced);
+  EXPECT_TRUE(src.loop);
+  EXPECT_EQ(src.v4l2.device, "/dev/video2");
+  EXPECT_EQ(src.v4l2.busInfo, "usb-0000:00:14.0-2");
+  EXPECT_EQ(src.v4l2.widthPx, 1920);
+  EXPECT_EQ(src.v4l2.heightPx, 1080);
+  EXPECT_EQ(src.v4l2.formats,
+            (std::vector<CameraPixelFormat>{CameraPixelFormat::Nv12, CameraPixelFormat::Yuyv}));
+  EXPECT_EQ(src.v4l2.buffers, 6);
+  EXPECT_EQ(src.v4l2.dequeueTimeoutMs, 500);
+  const TelemetryLinkConfig& link = config.telemetry;
+  EXPECT_EQ(link.source, TelemetrySourceKind::MavlinkUdp);
+  EXPECT_EQ(link.udpBindAddress, "127.0.0.1");
+  EXPECT_EQ(link.udpPort, 14551);
+  EXPECT_EQ(link.serialDevice, "/dev/ttyUSB0");
+  EXPECT_EQ(link.serialBaud, 57600);
+  EXPECT_EQ(link.systemId, 1);
+  EXPECT_DOUBLE_EQ(link.geoidSeparation_m, -33.5);
+  EXPECT_DOUBLE_EQ(link.linkLatency_s, 0.002);
+  EXPECT_DOUBLE_EQ(link.replayLookahead_s, 0.3);
+  const LoopConfig& app = config.app;
+  EXPECT_EQ(app.queueDepth, 2);
+  EXPECT_EQ(app.framePoolSize, 6);
+  EXPECT_TRUE(app.lockMemory);
+  EXPECT_EQ(app.realtimePriority, 50);
+  EXPECT_EQ(app.captureCpus, std::vector<int>{0});
+  EXPECT_EQ(app.processingCpus, (std::vector<int>{1, 2}));
+  EXPECT_DOUBLE_EQ(app.statsPeriod_s, 10.0);
+  EXPECT_EQ(app.trajectoryCsv, "/data/site/out/tracks.csv");
+  EXPECT_EQ(app.detectionsCsv, "/data/site/out/detections.csv");
+  EXPECT_EQ(app.annotatedVideo, "/data/site/out/annotated.avi");
+  EXPECT_DOUBLE_EQ(app.annotatedVideoFps, 5.0);
+}
+
+TEST(ConfigLoop, AbsentSectionsGiveTheDocumentedDefaults) {
+  const AppConfig config = parse(kMinimalConfig);
+  const PerceptionConfig p = config.perception;
+  // Model paths default to the repository's models/, beside the configuration's folder.
+  EXPECT_EQ(p.detectorModel, "/data/models/detector/detector_int8.onnx");
+  EXPECT_EQ(p.cropModel, "/data/models/detector/crop_int8.onnx");
+  EXPECT_EQ(p.asmPath, "/data/models/asm/default_asm.yaml");
+  EXPECT_EQ(p.backend, InferenceBackend::Int8);
+  EXPECT_EQ(p.threads, 1);
+  EXPECT_FALSE(p.undistort);
+  EXPECT_FALSE(p.whiteBalance);
+  EXPECT_DOUBLE_EQ(p.workingScale, 0.25);
+  EXPECT_EQ(p.tileOverlapPx, 96);
+  EXPECT_DOUBLE_EQ(p.scoreThreshold, 0.4);
+  EXPECT_EQ(p.maxCrops, 512);
+  EXPECT_DOUBLE_EQ(config.pose.maxAge_s, 0.2);
+  EXPECT_EQ(config.pose.bufferCapacity, 256);
+  EXPECT_EQ(config.tracking.maxTracks, 256);
+  EXPECT_EQ(config.tracking.confirmHits, 3);
+  EXPECT_EQ(config.source.kind, FrameSourceKind::Replay);
+  EXPECT_TRUE(config.source.sequenceDir.empty());
+  EXPECT_TRUE(config.source.paced);
+  EXPECT_FALSE(config.source.loop);
+  EXPECT_EQ(config.source.v4l2.device, "/dev/video0");
+  EXPECT_EQ(config.source.v4l2.formats.size(), 3U);
+  EXPECT_EQ(config.telemetry.source, TelemetrySourceKind::Recording);
+  EXPECT_EQ(config.telemetry.udpPort, 14550);
+  EXPECT_EQ(config.telemetry.serialBaud, 921600);
+  EXPECT_EQ(config.app.queueDepth, 1);
+  EXPECT_EQ(config.app.framePoolSize, 0);
+  EXPECT_FALSE(config.app.lockMemory);
+  EXPECT_EQ(config.app.realtimePriority, 0);
+  EXPECT_TRUE(config.app.captureCpus.empty());
+  EXPECT_DOUBLE_EQ(config.app.statsPeriod_s, 5.0);
+  EXPECT_TRUE(config.app.trajectoryCsv.empty());
+  EXPECT_TRUE(config.app.detectionsCsv.empty());
+  EXPECT_TRUE(config.app.annotatedVideo.empty());
+}
+
+TEST(ConfigLoop, NoneSwitchesAnOptionalFileOffAndDdsTelemetryNeedsAFlightStack) {
+  const AppConfig config = parse(edited("crop_model: models/crop.onnx", "crop_model: none"));
+  EXPECT_TRUE(config.perception.cropModel.empty());
+  EXPECT_TRUE(parse(edited("trajectory_csv: out/tracks.csv", "trajectory_csv: none"))
+                  .app.trajectoryCsv.empty());
+  // kFullConfig reads PX4 telemetry over DDS: dds is a valid pose source there.
+  EXPECT_EQ(parse(edited("source: mavlink_udp", "source: dds")).telemetry.source,
+            TelemetrySourceKind::Dds);
+  std::string text = edited("source: mavlink_udp", "source: dds");
+  text.replace(text.find("source: px4"), 11, "source: none");
+  EXPECT_EQ(errorOf(text),
+            "site.yaml: telemetry.source: dds needs dds.telemetry.source ardupilot or px4 (it is "
+            "none)");
 }
 
 }  // namespace

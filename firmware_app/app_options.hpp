@@ -1,0 +1,57 @@
+// firmware_app/app_options: the command line of vp_firmware_app and how it overrides the
+// configuration file.
+//
+// Contract: parseCommandLine() reads argv into a CommandLine without touching the file system;
+// a usage error (unknown option, missing or malformed value, conflicting options) returns
+// UsageError with a message naming the option. applyCommandLine() then overrides the loaded
+// configuration: a command-line value always wins over the file's; relative paths given on
+// the command line are relative to the working directory (those in the file stay relative to
+// the file). helpText() is the complete --help (every option, the exit codes, the files).
+// Start-up only (allocates, may throw nothing).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "app.hpp"
+#include "config/config.hpp"
+
+namespace vp::app {
+
+// Exit codes of vp_firmware_app.
+constexpr int kExitOk = 0;
+constexpr int kExitRuntimeError = 1;  // start-up (models, DTM, device, DDS) or loop failure
+constexpr int kExitUsageError = 2;    // command line or configuration error
+
+struct CommandLine {
+  std::string configPath;
+  std::optional<std::string> sequenceDir;
+  std::optional<std::string> cameraDevice;
+  std::optional<std::string> cameraBus;
+  bool fast = false;
+  bool loop = false;
+  bool everyFrame = false;
+  bool noDds = false;
+  bool quiet = false;
+  std::int64_t maxFrames = 0;
+  std::optional<std::string> trajectoryCsv;
+  std::optional<std::string> detectionsCsv;
+  std::optional<std::string> annotatedVideo;
+  std::optional<int> threads;
+};
+
+enum class ParseOutcome { Run, Help, UsageError };
+
+ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* out,
+                              std::string* why);
+const char* helpText();
+
+// Overrides config with the command line's values (see the contract).
+void applyCommandLine(const CommandLine& line, config::AppConfig& config);
+RunSettings runSettings(const CommandLine& line);
+// The configuration after the overrides, checked as a whole: "key: problem" for the first
+// inconsistency (no sequence to replay, recorded telemetry without a recording), else "".
+std::string checkConsistency(const config::AppConfig& config);
+
+}  // namespace vp::app

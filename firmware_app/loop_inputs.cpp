@@ -1,0 +1,156 @@
+#include "loop_inputs.hpp"
+
+#include <cstdio>
+
+namespace vp::app {
+
+// --- frames ----------------------------------------------------------------------------------
+
+bool ReplayFrameSource::open(const std::string& directory, bool paced, bool loop,
+                             std::string* why) {
+  platform::replay::ReplayOptions options;
+  options.paced = paced;
+  options.loop = loop;
+  if (!replay_.open(directory, options, why)) {
+    return false;
+  }
+  message_.reserve(512);
+  return true;
+}
+
+SourceStatus ReplayFrameSource::next(Frame& out) {
+  using platform::replay::ReplayStatus;
+  switch (replay_.next(out, &message_)) {
+    case ReplayStatus::Frame:
+      return SourceStatus::Frame;
+    case ReplayStatus::BadFrame:
+      return SourceStatus::BadFrame;
+    case ReplayStatus::End:
+      return SourceStatus::End;
+    case ReplayStatus::Error:
+      break;  // a pool frame of the wrong size: a wiring bug, reported and ended
+  }
+  return SourceStatus::End;
+}
+
+bool CameraFrameSource::open(const config::V4l2SourceConfig& config, std::string* why) {
+  platform::v4l2::V4l2CameraConfig camera;
+  camera.devicePath = config.busInfo.empty() ? config.device : "";
+  camera.busInfo = config.busInfo;
+  camera.widthPx = config.widthPx;
+  camera.heightPx = config.heightPx;
+  camera.preferredFormats.clear();
+  for (const config::CameraPixelFormat format : config.formats) {
+    switch (format) {
+      case config::CameraPixelFormat::Yuyv:
+        camera.preferredFormats.push_back(platform::v4l2::PixelFormat::Yuyv);
+        break;
+      case config::CameraPixelFormat::Nv12:
+        camera.preferredFormats.push_back(platform::v4l2::PixelFormat::Nv12);
+        break;
+      case config::CameraPixelFormat::Mjpeg:
+        camera.preferredFormats.push_back(platform::v4l2::PixelFormat::Mjpeg);
+        break;
+    }
+  }
+  camera.bufferCount = static_cast<unsigned>(config.buffers);
+  camera.dequeueTimeoutMs = config.dequeueTimeoutMs;
+  return camera_.open(camera, why);
+}
+
+SourceStatus CameraFrameSource::next(Frame& out) {
+  using platform::v4l2::CaptureStatus;
+  const CaptureStatus status = camera_.capture(out);
+  switch (status) {
+    case CaptureStatus::Frame:
+      if (out.status == FrameStatus::Damaged) {
+        std::snprintf(message_.data(), message_.size(),
+                      "%s: frame %lld flagged damaged by the driver (V4L2_BUF_FLAG_ERROR)",
+                      camera_.format().path.c_str(), static_cast<long long>(out.frameId));
+        return SourceStatus::BadFrame;
+      }
+      return SourceStatus::Frame;
+    case CaptureStatus::Error:
+      std::snprintf(message_.data(), message_.size(), "%s", camera_.lastError());
+      return SourceStatus::BadFrame;
+    case CaptureStatus::Timeout:
+    case CaptureStatus::DeviceLost:
+    case CaptureStatus::Reopened:
+      std::snprintf(message_.data(), message_.size(), "camera %s: %s",
+                    camera_.format().path.c_str(), platform::v4l2::toString(status));
+      return SourceStatus::Retry;
+  }
+  return SourceStatus::Retry;
+}
+
+SourceEvents CameraFrameSource::events() const {
+  const platform::v4l2::CameraCounters& c = camera_.counters();
+  return SourceEvents{c.timeouts, c.deviceLosses, c.reopens};
+}
+
+// --- pose ------------------------------------------------------------------------------------
+
+void PoseInput::push(const telemetry::PoseSample& sample, telemetry::PoseBuffer& buffer) {
+  ++counters_.received;
+  if (buffer.push(sample) != telemetry::PushResult::Accepted) {
+    ++counters_.bufferRejected;
+  }
+}
+
+void RecordingPoseInput::open(const platform::replay::SequenceReplay& replay, bool loop,
+                              double lookahead_s) {
+  telemetry_.open(replay.reader().telemetry(), loop, replay.loopPeriodNs());
+  lookaheadNs_ = static_cast<std::int64_t>(lookahead_s * 1e9);
+}
+
+void RecordingPoseInput::poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) {
+  // Interpolating to the frame time needs the sample after it: the recording is pushed ahead.
+  while (const sequence::TelemetryRecord* record = telemetry_.nextDue(frameTimeNs + lookaheadNs_)) {
+    telemetry::PoseSample sample;
+    sample.timestampNs = record->timestampNs;
+    sample.position = record->position;
+    sample.bodyToNed = record->bodyToNed;
+    sample.gimbal = record->gimbal;
+    push(sample, buffer);
+  }
+}
+
+bool MavlinkPoseInput::open(const config::TelemetryLinkConfig& config, std::string* why) {
+  mavlink::PoseAssemblerConfig assembler;
+  assembler.geoidSeparationM = config.geoidSeparation_m;
+  assembler.linkLatencyNs = static_cast<std::int64_t>(config.linkLatency_s * 1e9);
+  assembler.systemId = static_cast<std::uint8_t>(config.systemId);
+  assembler_ = std::make_unique<mavlink::MavlinkPoseAssembler>(assembler);
+  if (config.source == config::TelemetrySourceKind::MavlinkSerial) {
+    return serial_.open(config.serialDevice, config.serialBaud, why);
+  }
+  return udp_.open(config.udpBindAddress, static_cast<std::uint16_t>(config.udpPort), why);
+}
+
+void MavlinkPoseInput::poll(std::int64_t /*frameTimeNs*/, telemetry::PoseBuffer& buffer) {
+  const std::int64_t receiveNs = clock_.nowNs();
+  const std::uint64_t rejectedBefore = assembler_->counters().rejected;
+  const auto onFrame = [&](const mavlink::MavlinkFrame& frame) {
+    const std::optional<mavlink::Message> message = mavlink::decode(frame);
+    if (!message || !assembler_->add(*message, frame.systemId, receiveNs)) {
+      return;
+    }
+    const mavlink::PoseSample& in = assembler_->sample();
+    telemetry::PoseSample sample;
+    sample.timestampNs = in.timestampNs;
+    sample.position = in.position;
+    sample.bodyToNed = in.bodyToNed;
+    sample.gimbal = in.hasGimbal ? in.gimbal : defaultGimbal_;
+    push(sample, buffer);
+  };
+  const std::span<std::uint8_t> scratch(scratch_);
+  const long result = serial_.isOpen()
+                          ? platform::mavlink::drainSerial(serial_, parser_, scratch, onFrame)
+                          : platform::mavlink::drainUdp(udp_, parser_, scratch, onFrame);
+  if (result < 0) {
+    ++counters_.readErrors;
+  }
+  counters_.linkRejected += assembler_->counters().rejected - rejectedBefore;
+}
+
+}  // namespace vp::app

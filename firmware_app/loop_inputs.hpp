@@ -1,0 +1,147 @@
+// firmware_app/loop_inputs: the two inputs of the loop behind small interfaces: where frames
+// come from (capture thread) and where the drone's pose comes from (processing thread).
+//
+// Contract: a FrameSource fills the caller's pool frame in place and reports what happened as
+// a value (never throws): a frame, a bad frame (corrupt, truncated, flagged by the driver), a
+// retry (timeout, camera lost, camera back) or the end of the source. It runs on the capture
+// thread, where allocation is accepted (replay decodes image files; see frame_sources.md).
+// A PoseInput moves the samples that have arrived into the loop's PoseBuffer without
+// blocking; it runs on the processing thread before each frame and allocates nothing after
+// open(). Samples a link refuses (NaN, bad quaternion) and samples the buffer refuses are
+// counted, never used. Both are wired by the app from the configuration; tests substitute
+// their own (the seams of app.hpp).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "config/config.hpp"
+#include "core/frame_pool.hpp"
+#include "mavlink/mavlink_parser.hpp"
+#include "mavlink/pose_assembler.hpp"
+#include "platform/clock/monotonic_clock.hpp"
+#include "platform/mavlink/mavlink_link.hpp"
+#include "platform/replay/sequence_replay.hpp"
+#include "platform/v4l2/v4l2_camera.hpp"
+#include "telemetry/pose_buffer.hpp"
+
+namespace vp::app {
+
+enum class SourceStatus : std::uint8_t {
+  Frame,     // the frame was filled
+  BadFrame,  // this frame is unusable (message() says why); the next call goes on
+  Retry,     // nothing this time (timeout, device lost or back); call again
+  End,       // no more frames
+};
+
+struct SourceEvents {
+  std::uint64_t timeouts = 0;
+  std::uint64_t deviceLosses = 0;
+  std::uint64_t reopens = 0;
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual SourceStatus next(Frame& out) = 0;
+  virtual const char* message() const = 0;  // the last bad frame or event, with context
+  virtual SourceEvents events() const { return {}; }
+  virtual bool capturesOnMonotonicClock() const = 0;  // frame stamps are CLOCK_MONOTONIC
+  virtual double nominalFrameRateHz() const = 0;
+};
+
+class ReplayFrameSource final : public FrameSource {
+ public:
+  explicit ReplayFrameSource(platform::Clock& clock) : replay_(clock) {}
+  bool open(const std::string& directory, bool paced, bool loop, std::string* why);
+  SourceStatus next(Frame& out) override;
+  const char* message() const override { return message_.c_str(); }
+  bool capturesOnMonotonicClock() const override { return false; }
+  double nominalFrameRateHz() const override { return replay_.reader().info().frameRateHz; }
+  const platform::replay::SequenceReplay& replay() const { return replay_; }
+
+ private:
+  platform::replay::SequenceReplay replay_;
+  std::string message_;
+};
+
+class CameraFrameSource final : public FrameSource {
+ public:
+  CameraFrameSource(platform::v4l2::V4l2Device& device, platform::Clock& clock)
+      : camera_(device, clock) {}
+  bool open(const config::V4l2SourceConfig& config, std::string* why);
+  SourceStatus next(Frame& out) override;
+  const char* message() const override { return message_.data(); }
+  SourceEvents events() const override;
+  bool capturesOnMonotonicClock() const override { return true; }
+  double nominalFrameRateHz() const override { return 10.0; }  // seed 000's camera
+  const platform::v4l2::V4l2Camera& camera() const { return camera_; }
+
+ private:
+  platform::v4l2::V4l2Camera camera_;
+  std::array<char, 320> message_{};
+};
+
+struct PoseInputCounters {
+  std::uint64_t received = 0;        // samples the link delivered
+  std::uint64_t linkRejected = 0;    // refused by the link's own checks (NaN, quaternion, ...)
+  std::uint64_t bufferRejected = 0;  // refused by the PoseBuffer (see its counters)
+  std::uint64_t readErrors = 0;      // failed reads of the link
+};
+
+class PoseInput {
+ public:
+  virtual ~PoseInput() = default;
+  // Moves what has arrived (a recording: the samples due up to frameTimeNs + lookahead) into
+  // buffer. Non-blocking, no allocation.
+  virtual void poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) = 0;
+  virtual const char* name() const = 0;
+  const PoseInputCounters& counters() const { return counters_; }
+
+ protected:
+  void push(const telemetry::PoseSample& sample, telemetry::PoseBuffer& buffer);
+  PoseInputCounters counters_{};
+};
+
+// The recorded telemetry.csv of the sequence being replayed.
+class RecordingPoseInput final : public PoseInput {
+ public:
+  void open(const platform::replay::SequenceReplay& replay, bool loop, double lookahead_s);
+  void poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) override;
+  const char* name() const override { return "recording"; }
+
+ private:
+  platform::replay::TelemetryReplay telemetry_;
+  std::int64_t lookaheadNs_ = 0;
+};
+
+// MAVLink 2 over UDP or a serial port, through the pose assembler (docs/telemetry.md).
+class MavlinkPoseInput final : public PoseInput {
+ public:
+  MavlinkPoseInput(platform::Clock& clock, const geodesy::GimbalState& defaultGimbal)
+      : clock_(clock), defaultGimbal_(defaultGimbal) {}
+  bool open(const config::TelemetryLinkConfig& config, std::string* why);
+  void poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) override;
+  const char* name() const override { return serial_.isOpen() ? "mavlink serial" : "mavlink udp"; }
+  const mavlink::MavlinkPoseAssembler& assembler() const { return *assembler_; }
+
+ private:
+  platform::Clock& clock_;
+  geodesy::GimbalState defaultGimbal_;
+  platform::mavlink::UdpSocket udp_;
+  platform::mavlink::SerialPort serial_;
+  mavlink::MavlinkParser parser_;
+  std::unique_ptr<mavlink::MavlinkPoseAssembler> assembler_;
+  std::array<std::uint8_t, platform::mavlink::kLinkScratchBytes> scratch_{};
+};
+
+// No telemetry: every frame has NoPose (detections are kept image-only).
+class NoPoseInput final : public PoseInput {
+ public:
+  void poll(std::int64_t, telemetry::PoseBuffer&) override {}
+  const char* name() const override { return "none"; }
+};
+
+}  // namespace vp::app

@@ -1,0 +1,172 @@
+#include "loop_outputs.hpp"
+
+namespace vp::app {
+
+sequence::LiftStatus toFileStatus(perception::LiftStatus status) {
+  using In = perception::LiftStatus;
+  using Out = sequence::LiftStatus;
+  switch (status) {
+    case In::Ok:
+      return Out::Ok;
+    case In::NoPose:
+      return Out::NoPose;
+    case In::StalePose:
+      return Out::StalePose;
+    case In::InvalidPose:
+      return Out::InvalidPose;
+    case In::InvalidBox:
+      return Out::InvalidBox;
+    case In::OutsideLens:
+      return Out::OutsideLens;
+    case In::BehindCamera:
+      return Out::BehindCamera;
+    case In::OutsideDtm:
+      return Out::OutsideDtm;
+    case In::NoData:
+      return Out::NoData;
+    case In::NoIntersection:
+      return Out::NoIntersection;
+  }
+  return Out::NotLifted;
+}
+
+sequence::DetectionRecord toDetectionRecord(std::int64_t frameId, int detId,
+                                            const perception::VehicleObservation& observation) {
+  sequence::DetectionRecord record;
+  const detection::Detection& d = observation.detection;
+  record.frameId = frameId;
+  record.detId = detId;
+  record.score = d.score;
+  record.box = d.box;
+  record.directionKnown = d.directionKnown;
+  record.typeProbabilities = d.typeProbabilities;
+  record.gamma = d.gamma;
+  record.liftStatus = toFileStatus(observation.liftStatus);
+  if (observation.liftStatus == perception::LiftStatus::Ok) {
+    record.positionEnu = observation.ground.centreEnu;
+    record.latitudeDeg = observation.ground.centreWgs84.latitudeDeg;
+    record.longitudeDeg = observation.ground.centreWgs84.longitudeDeg;
+    record.heightM = observation.ground.centreWgs84.heightM;
+    record.headingEnuRad = observation.ground.headingEnuRad;
+    record.dimensionsM =
+        Eigen::Vector3d(observation.ground.lengthM, observation.ground.widthM, observation.heightM);
+  }
+  return record;
+}
+
+LoopOutputs::~LoopOutputs() {
+  close(nullptr);
+}
+
+void LoopOutputs::fail(const std::string& what) {
+  ++errors_;
+  if (lastError_.empty()) {
+    lastError_ = what;
+  }
+}
+
+bool LoopOutputs::open(const OutputSpec& spec, std::string* why) {
+  spec_ = spec;
+  if (!spec.trajectoryCsv.empty()) {
+    sequence::TrajectoryFileInfo info;
+    info.gammaColumns = spec.gammaColumns;
+    if (!trajectory_.open(spec.trajectoryCsv, info, why)) {
+      return false;
+    }
+  }
+  if (!spec.detectionsCsv.empty()) {
+    sequence::DetectionsFileInfo info;
+    info.key = sequence::DetectionsKey::FrameId;
+    info.gammaColumns = spec.gammaColumns;
+    info.model = spec.model;
+    info.source = spec.source;
+    if (!detections_.open(spec.detectionsCsv, info, why)) {
+      return false;
+    }
+  }
+  if (!spec.annotatedVideo.empty()) {
+    std::string problem;
+    if (!annotator_.init(annotation::AnnotationStyle{}, &problem)) {
+      if (why) {
+        *why = "annotation: " + problem;
+      }
+      return false;
+    }
+    annotated_.create(spec.frameSize, CV_8UC3);
+    if (!video_.open(spec.annotatedVideo, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+                     spec.videoFps, spec.frameSize, true)) {
+      if (why) {
+        *why = spec.annotatedVideo + ": cannot open the annotated video (MJPG/AVI, " +
+               std::to_string(spec.frameSize.width) + "x" + std::to_string(spec.frameSize.height) +
+               ")";
+      }
+      return false;
+    }
+  }
+  return true;
+}
+
+void LoopOutputs::writeTracks(std::int64_t frameId, std::span<const tracking::TrackState> tracks,
+                              std::span<const messages::VehicleState> states) {
+  if (!trajectory_.isOpen()) {
+    return;
+  }
+  for (std::size_t i = 0; i < tracks.size() && i < states.size(); ++i) {
+    const tracking::Wgs84Position wgs84{states[i].position.latitudeDeg,
+                                        states[i].position.longitudeDeg,
+                                        states[i].position.heightM};
+    if (!trajectory_.writeRow(frameId, tracks[i], &wgs84, nullptr)) {
+      fail(spec_.trajectoryCsv + ": a row was not written (frame " + std::to_string(frameId) +
+           ", track " + std::to_string(tracks[i].id) + ")");
+      continue;
+    }
+    ++trajectoryRows_;
+  }
+}
+
+void LoopOutputs::writeDetections(std::int64_t frameId,
+                                  std::span<const perception::VehicleObservation> observations) {
+  if (!detections_.isOpen()) {
+    return;
+  }
+  int detId = 0;
+  for (const perception::VehicleObservation& observation : observations) {
+    const sequence::DetectionRecord record = toDetectionRecord(frameId, detId++, observation);
+    if (!detections_.writeRow(record, nullptr)) {
+      fail(spec_.detectionsCsv + ": row not written");
+    }
+  }
+}
+
+void LoopOutputs::writeVideo(const cv::Mat& correctedFrame,
+                             std::span<const perception::VehicleObservation> observations,
+                             const lifting::Lifter* lifter,
+                             const lifting::CameraPoseWorld* cameraPose) {
+  if (!video_.isOpened() || correctedFrame.size() != annotated_.size() ||
+      correctedFrame.type() != CV_8UC3) {
+    return;
+  }
+  correctedFrame.copyTo(annotated_);
+  annotator_.drawFrame(annotated_, observations, {}, lifter, cameraPose);
+  video_.write(annotated_);
+}
+
+bool LoopOutputs::close(std::string* why) {
+  bool ok = true;
+  std::string problem;
+  if (trajectory_.isOpen() && !trajectory_.close(&problem)) {
+    ok = false;
+  }
+  if (detections_.isOpen() && !detections_.close(&problem)) {
+    ok = false;
+  }
+  if (video_.isOpened()) {
+    video_.release();
+  }
+  if (!ok && why) {
+    *why = problem;
+  }
+  return ok;
+}
+
+}  // namespace vp::app

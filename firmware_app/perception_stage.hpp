@@ -1,0 +1,70 @@
+// firmware_app/perception_stage: the loop's view of "one frame and its pose in, vehicle
+// observations out", so that the loop runs the shipped pipeline on the drone and, in tests, a
+// stage that injects known detections (the seam that makes the loop's tests independent of the
+// detector's accuracy).
+//
+// Contract: process() is called on the processing thread once per frame after init, never
+// throws and allocates nothing; a refused frame returns a status other than Ok and lastError()
+// names the problem. The results stay valid until the next process(). PipelinePerception is
+// the product's stage: perception::FramePipeline (preprocess -> detect -> lift) built from the
+// `perception:` configuration.
+#pragma once
+
+#include <span>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "config/config.hpp"
+#include "perception/frame_pipeline.hpp"
+
+namespace vp::app {
+
+class FramePerception {
+ public:
+  virtual ~FramePerception() = default;
+  virtual perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+                                             const telemetry::PoseEstimate& pose) = 0;
+  virtual std::span<const perception::VehicleObservation> observations() const = 0;
+  virtual const perception::FrameLiftSummary& liftSummary() const = 0;
+  virtual const perception::PipelineTimings& timings() const = 0;
+  virtual const char* lastError() const = 0;
+  // The frame the observations' pixels refer to, and the Lifter on its camera (annotation,
+  // the camera's ground footprint for the occupancy grid).
+  virtual const cv::Mat& correctedFrame() const = 0;
+  virtual const lifting::Lifter& lifter() const = 0;
+  virtual const char* modelId() const = 0;  // for the drone status, e.g. "detector_int8"
+};
+
+// perception::PipelineOptions from the `perception:` section.
+perception::PipelineOptions pipelineOptions(const config::PerceptionConfig& config);
+
+class PipelinePerception final : public FramePerception {
+ public:
+  bool init(const config::PerceptionConfig& config, const camera::CameraModel& rawCamera,
+            const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
+            const geodesy::LocalFrame& frame, const shape::ActiveShapeModel& shapeModel,
+            std::string* why);
+
+  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+                                     const telemetry::PoseEstimate& pose) override {
+    return pipeline_.process(bgrFrame, timestampNs, pose);
+  }
+  std::span<const perception::VehicleObservation> observations() const override {
+    return pipeline_.observations();
+  }
+  const perception::FrameLiftSummary& liftSummary() const override {
+    return pipeline_.liftSummary();
+  }
+  const perception::PipelineTimings& timings() const override { return pipeline_.timings(); }
+  const char* lastError() const override { return pipeline_.lastError(); }
+  const cv::Mat& correctedFrame() const override { return pipeline_.correctedFrame(); }
+  const lifting::Lifter& lifter() const override { return pipeline_.lifter(); }
+  const char* modelId() const override { return modelId_.c_str(); }
+
+ private:
+  perception::FramePipeline pipeline_;
+  std::string modelId_;
+};
+
+}  // namespace vp::app

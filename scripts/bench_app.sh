@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# End-to-end benchmark of vp_firmware_app at 2592 x 2048 on a simulated sequence:
+#   scripts/bench_app.sh [SEQUENCE_DIR]     (BUILD=build/release by default; FRAMES=30)
+# Runs, with DDS off (the loop alone) and the shipped int8 models:
+#   1. every frame processed (--fast --every-frame), pinned to 1 core and to 2 cores (taskset,
+#      --threads = cores): frames per second, per-stage and end-to-end latency (median, p99),
+#      peak RSS (/usr/bin/time -v);
+#   2. a source faster than the loop (--fast, drop-oldest), 2 cores: drops counted, latency
+#      bounded.
+# Without SEQUENCE_DIR, FRAMES frames are rendered with vp_simulate (seed 5) into /tmp.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build="${BUILD:-build/release}"
+frames="${FRAMES:-30}"
+if [ ! -f "$build/build.ninja" ]; then
+  cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+fi
+cmake --build "$build" --target vp_firmware_app vp_simulate -j"${JOBS:-2}" >/dev/null
+app="$build/firmware_app/vp_firmware_app"
+out="$(mktemp -d /tmp/bench_app.XXXXXX)"
+
+sequence="${1:-}"
+if [ -z "$sequence" ]; then
+  sequence="/tmp/bench_app_sequence_${frames}"
+  if [ ! -f "$sequence/frames.csv" ]; then
+    rm -rf "$sequence"
+    "$build/tools/simulator/vp_simulate" --scene intersection --seed 5 --frames "$frames" \
+      --out "$sequence" >/dev/null
+  fi
+fi
+echo "bench_app: $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg); sequence $sequence; logs in $out"
+
+# value KEY LOGFILE: the number after KEY= on the summary line
+value() { grep -o "$1=[0-9.]*" "$2" | tail -1 | cut -d= -f2; }
+
+run() {  # run NAME CPUS THREADS ARGS...
+  local name=$1 cpus=$2 threads=$3
+  shift 3
+  taskset -c "$cpus" /usr/bin/time -v "$app" --config config/default.yaml --sequence "$sequence" \
+    --no-dds --quiet --threads "$threads" "$@" 2>"$out/$name.log" >/dev/null
+  local rss
+  rss=$(awk -F: '/Maximum resident set size/ { gsub(/ /, "", $2); print $2 }' "$out/$name.log")
+  printf '%-22s %6s fps  in %4s processed %4s dropped %4s |' "$name" \
+    "$(value fps "$out/$name.log")" "$(value frames_in "$out/$name.log")" \
+    "$(value processed "$out/$name.log")" "$(value dropped "$out/$name.log")"
+  for stage in preprocess detector decode crops lift track e2e queue; do
+    printf ' %s %s/%s' "$stage" "$(value ${stage}_median_ms "$out/$name.log")" \
+      "$(value ${stage}_p99_ms "$out/$name.log")"
+  done
+  printf ' | peak RSS %s MiB\n' "$((rss / 1024))"
+}
+
+echo "ms median/p99 per stage; e2e = capture -> published; queue = capture -> processing start"
+run every_frame_1_core 0 1 --fast --every-frame
+run every_frame_2_cores 0-1 2 --fast --every-frame
+run fast_source_2_cores 0-1 2 --fast

@@ -1,0 +1,139 @@
+#include "perception/frame_pipeline.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace vp::perception {
+
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+}  // namespace
+
+const char* toString(PipelineStatus status) {
+  switch (status) {
+    case PipelineStatus::Ok:
+      return "ok";
+    case PipelineStatus::NotInitialised:
+      return "not initialised";
+    case PipelineStatus::PreprocessFailed:
+      return "preprocessing refused the frame";
+    case PipelineStatus::DetectionFailed:
+      return "detection failed";
+  }
+  return "unknown";
+}
+
+double PoseGsdProvider::groundSampleDistance_m(const detection::Detection& detection) const {
+  if (lifter_ == nullptr || pose_ == nullptr) {
+    return 0.0;
+  }
+  const Eigen::Vector2d centre(detection.box.cx, detection.box.cy);
+  const auto p0 = lifter_->pixelToWorld(*pose_, centre);
+  const auto pu = lifter_->pixelToWorld(*pose_, centre + Eigen::Vector2d(1.0, 0.0));
+  const auto pv = lifter_->pixelToWorld(*pose_, centre + Eigen::Vector2d(0.0, 1.0));
+  if (!p0 || !pu || !pv) {
+    return 0.0;
+  }
+  // Ground area covered by one pixel; its square root is the isotropic GSD the crop uses.
+  const double area = (*pu - *p0).cross(*pv - *p0).norm();
+  return area > 0.0 && std::isfinite(area) ? std::sqrt(area) : 0.0;
+}
+
+void FramePipeline::setError(const char* stage, const char* detail) {
+  std::snprintf(lastError_.data(), lastError_.size(), "%s: %s", stage, detail);
+}
+
+bool FramePipeline::init(const PipelineOptions& options, const camera::CameraModel& rawCamera,
+                         const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
+                         const geodesy::LocalFrame& frame,
+                         const shape::ActiveShapeModel& shapeModel, std::string* why) {
+  initialised_ = false;
+  std::string detail;
+  if (!detection_.init(options.detection, preprocess::kMaxTiles, &detail)) {
+    if (why)
+      *why = "detection stage: " + detail;
+    return false;
+  }
+  // The tiles must be exactly the detector's input.
+  preprocess::PreprocessOptions pre = options.preprocess;
+  pre.networkWidthPx = detection_.detectorInputWidth();
+  pre.networkHeightPx = detection_.detectorInputHeight();
+  const cv::Size frameSize(rawCamera.intrinsics().widthPx, rawCamera.intrinsics().heightPx);
+  if (!preprocessor_.init(pre, rawCamera, frameSize, &detail)) {
+    if (why)
+      *why = "preprocessing: " + detail;
+    return false;
+  }
+  if (!lifter_.init(preprocessor_.frameCamera(), mount, terrain, frame, &detail)) {
+    if (why)
+      *why = "lifting: " + detail;
+    return false;
+  }
+  if (!detectionLifter_.init(terrain, frame, shapeModel, &detail)) {
+    if (why)
+      *why = "detection lifter: " + detail;
+    return false;
+  }
+  lastError_[0] = '\0';
+  initialised_ = true;
+  return true;
+}
+
+PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+                                      const telemetry::PoseEstimate& pose) {
+  timings_ = PipelineTimings{};
+  liftSummary_ = FrameLiftSummary{};
+  if (!initialised_) {
+    setError("pipeline", "process() before a successful init()");
+    return PipelineStatus::NotInitialised;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const preprocess::PreprocessStatus pre = preprocessor_.process(bgrFrame);
+  timings_.preprocess_ms = msSince(start);
+  if (pre != preprocess::PreprocessStatus::Ok) {
+    setError("preprocessing", preprocessor_.lastError());
+    return PipelineStatus::PreprocessFailed;
+  }
+
+  // The camera pose at the frame time, for the second stage's GSD; lifting recomputes the
+  // same pose from the same estimate (cheap: one attitude chain).
+  const PoseGsdProvider* gsd = nullptr;
+  if (pose.status == telemetry::PoseStatus::Ok) {
+    const auto camera = lifter_.cameraPose(toDronePose(pose.pose));
+    if (camera) {
+      cameraPose_ = *camera;
+      gsd_.setPose(&lifter_, &cameraPose_);
+      gsd = &gsd_;
+    }
+  }
+  std::size_t count = 0;
+  const detection::DetectionStatus det =
+      detection_.run(preprocessor_.output(), detections_, &count, gsd);
+  gsd_.setPose(nullptr, nullptr);
+  const detection::DetectionStats& stats = detection_.stats();
+  timings_.detector_ms = stats.detector_ms;
+  timings_.decode_ms = stats.decode_ms;
+  timings_.crops_ms = stats.crops_ms;
+  if (det != detection::DetectionStatus::Ok) {
+    setError("detection", detection::toString(det));
+    timings_.total_ms = msSince(start);
+    return PipelineStatus::DetectionFailed;
+  }
+
+  const auto liftStart = std::chrono::steady_clock::now();
+  liftSummary_ = detectionLifter_.liftFrame(
+      lifter_, timestampNs, pose, std::span<const detection::Detection>(detections_.data(), count),
+      observations_);
+  timings_.lift_ms = msSince(liftStart);
+  timings_.total_ms = msSince(start);
+  lastError_[0] = '\0';
+  return PipelineStatus::Ok;
+}
+
+}  // namespace vp::perception

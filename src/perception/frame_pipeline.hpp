@@ -1,0 +1,127 @@
+// perception/frame_pipeline: one camera frame and the drone's pose in, vehicles in the world
+// out — the stages of docs/perception.md composed in their fixed order, in fixed memory.
+//
+// Contract: init() builds, in this order, the preprocessor (undistortion, white balance,
+// working-resolution tiles), the detection stage (detector + second-stage crop network), the
+// Lifter on the camera of the *corrected* frame (the pinhole camera when undistortion runs)
+// and the detection lifter; it fails with *why naming the part and the problem. process()
+// then runs per frame: preprocess -> camera pose at the frame time (from the pose estimate
+// the caller took from its telemetry::PoseBuffer) -> detection, with the second stage's crops
+// cut at the ground sample distance computed from that pose and the DTM at each detection
+// (PoseGsdProvider; without a usable pose the detection stage's own estimate) -> lifting.
+// Every detection is kept as a VehicleObservation, lifted or with the status saying why not
+// (no/stale/invalid pose, off the DTM, ...). process() never throws and performs no heap
+// allocation after init(); a refused frame (wrong size/type, engine failure) returns a status
+// and lastError() names the problem, and the next frame is processed normally. The terrain,
+// world frame and ASM are borrowed and must outlive the pipeline; the pipeline itself must
+// not move after init() (its parts point at each other). Not thread-safe: one loop thread.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "camera/camera_model.hpp"
+#include "detection/detection.hpp"
+#include "detection/detection_stage.hpp"
+#include "detection/ground_sample_distance.hpp"
+#include "geodesy/attitude.hpp"
+#include "geodesy/geodesy.hpp"
+#include "lifting/lifting.hpp"
+#include "perception/detection_lifter.hpp"
+#include "preprocess/preprocessor.hpp"
+#include "shape/vehicle_model.hpp"
+#include "telemetry/pose_buffer.hpp"
+#include "terrain/terrain_model.hpp"
+
+namespace vp::perception {
+
+struct PipelineOptions {
+  preprocess::PreprocessOptions preprocess{};
+  detection::DetectionStageOptions detection{};
+};
+
+// Wall time of each stage of the last processed frame, ms.
+struct PipelineTimings {
+  double preprocess_ms = 0.0;
+  double detector_ms = 0.0;
+  double decode_ms = 0.0;
+  double crops_ms = 0.0;
+  double lift_ms = 0.0;
+  double total_ms = 0.0;
+};
+
+enum class PipelineStatus : std::uint8_t {
+  Ok,
+  NotInitialised,
+  PreprocessFailed,  // the frame was refused (lastError() says why)
+  DetectionFailed,   // the detector could not run on the frame
+};
+const char* toString(PipelineStatus status);
+
+// GSD (m per corrected-frame pixel) at a detection's centre from the camera pose and the
+// DTM: the ground area one pixel covers there, lifted through the Lifter (square root of
+// the area of the lifted pixel's parallelogram). <= 0 when the pose is not set or the
+// ray misses the DTM, so the detection stage falls back to its own estimate.
+class PoseGsdProvider final : public detection::GsdProvider {
+ public:
+  void setPose(const lifting::Lifter* lifter, const lifting::CameraPoseWorld* pose) {
+    lifter_ = lifter;
+    pose_ = pose;
+  }
+  double groundSampleDistance_m(const detection::Detection& detection) const override;
+
+ private:
+  const lifting::Lifter* lifter_ = nullptr;
+  const lifting::CameraPoseWorld* pose_ = nullptr;
+};
+
+class FramePipeline {
+ public:
+  FramePipeline() = default;
+  FramePipeline(const FramePipeline&) = delete;
+  FramePipeline& operator=(const FramePipeline&) = delete;
+
+  // Start-up. rawCamera is the camera's calibration (its image size is the frame size).
+  bool init(const PipelineOptions& options, const camera::CameraModel& rawCamera,
+            const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
+            const geodesy::LocalFrame& frame, const shape::ActiveShapeModel& shapeModel,
+            std::string* why);
+
+  // Real-time path. The pose estimate is the one at timestampNs (PoseBuffer::poseAt).
+  PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+                         const telemetry::PoseEstimate& pose);
+
+  std::span<const VehicleObservation> observations() const {
+    return {observations_.data(), liftSummary_.written};
+  }
+  const FrameLiftSummary& liftSummary() const { return liftSummary_; }
+  const detection::DetectionStats& detectionStats() const { return detection_.stats(); }
+  const PipelineTimings& timings() const { return timings_; }
+  // The corrected full-resolution frame of the last process() (what the detections' pixels
+  // refer to; for annotation) and the Lifter on its camera.
+  const cv::Mat& correctedFrame() const { return preprocessor_.output().frame; }
+  const lifting::Lifter& lifter() const { return lifter_; }
+  const char* lastError() const { return lastError_.data(); }
+
+ private:
+  void setError(const char* stage, const char* detail);
+
+  bool initialised_ = false;
+  preprocess::Preprocessor preprocessor_;
+  detection::DetectionStage detection_;
+  lifting::Lifter lifter_;
+  DetectionLifter detectionLifter_;
+  PoseGsdProvider gsd_;
+  lifting::CameraPoseWorld cameraPose_{};
+  std::array<detection::Detection, detection::kMaxDetectionsPerFrame> detections_{};
+  std::array<VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
+  FrameLiftSummary liftSummary_{};
+  PipelineTimings timings_{};
+  std::array<char, 256> lastError_{};
+};
+
+}  // namespace vp::perception

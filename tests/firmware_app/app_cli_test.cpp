@@ -1,0 +1,171 @@
+// The vp_firmware_app executable: --help, usage and configuration errors (exit 2, the message
+// names the option or key), a start-up failure (exit 1), the shipped default configuration on
+// the fixture sequence, and a clean stop on SIGTERM (exit 0, every frame back in the pool).
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "app_test_support.hpp"
+#include "sequence/trajectory_file.hpp"
+
+extern char** environ;
+
+namespace vp::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int exitCode = -1;
+  std::string output;  // stdout and stderr together
+};
+
+// Runs the app with the arguments through the shell, capturing both outputs.
+Result runApp(const std::string& arguments) {
+  const std::string command = std::string(VP_FIRMWARE_APP) + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  Result result;
+  if (pipe == nullptr) {
+    return result;
+  }
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) {
+    result.output += buffer;
+  }
+  const int status = pclose(pipe);
+  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+const std::string kDefaultConfig = std::string(VP_SOURCE_DIR) + "/config/default.yaml";
+const std::string kSequence = std::string(VP_FIXTURE_DIR) + "/sequence_min";
+
+TEST(AppCli, HelpListsEveryOptionAndExitsZero) {
+  const Result help = runApp("--help");
+  EXPECT_EQ(help.exitCode, 0);
+  for (const char* option :
+       {"--config", "--sequence", "--camera", "--camera-bus", "--fast", "--every-frame", "--loop",
+        "--max-frames", "--trajectory-csv", "--detections-csv", "--annotated-video", "--no-dds",
+        "--threads", "--quiet", "--help", "Exit status"}) {
+    EXPECT_NE(help.output.find(option), std::string::npos) << option;
+  }
+}
+
+TEST(AppCli, UsageErrorsExitTwoNamingTheOption) {
+  Result r = runApp("");
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.output.find("--config FILE is required"), std::string::npos) << r.output;
+  r = runApp("--config " + kDefaultConfig + " --frobnicate");
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.output.find("unknown option '--frobnicate'"), std::string::npos) << r.output;
+  r = runApp("--config " + kDefaultConfig + " --threads 99");
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.output.find("--threads: expected an integer in [1, 16], got '99'"), std::string::npos)
+      << r.output;
+  r = runApp("--config " + kDefaultConfig + " --sequence a --camera /dev/video0");
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.output.find("exclude each other"), std::string::npos) << r.output;
+  r = runApp("--config " + kDefaultConfig);  // replay, but of what?
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.output.find("source.sequence_dir: no recorded sequence"), std::string::npos)
+      << r.output;
+}
+
+TEST(AppCli, ConfigurationErrorsExitTwoNamingTheKey) {
+  const std::string dir = test::scratchDir("cli_config");
+  std::string text = readText(kDefaultConfig);
+  text.replace(text.find("queue_depth: 1"), 14, "queue_depth: 9");
+  // Beside config/ so that the relative paths still resolve.
+  const std::string path =
+      std::string(VP_SOURCE_DIR) + "/config/.cli_test_" + std::to_string(getpid()) + ".yaml";
+  std::ofstream(path) << text;
+  const Result r = runApp("--config " + path + " --sequence " + kSequence + " --no-dds");
+  fs::remove(path);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.output.find(path + ": app.queue_depth: must be in [1, 8], got 9"), std::string::npos)
+      << r.output;
+  const Result missing = runApp("--config " + dir + "/absent.yaml --sequence " + kSequence);
+  EXPECT_EQ(missing.exitCode, 2);
+  EXPECT_NE(missing.output.find("absent.yaml: cannot open configuration file"), std::string::npos)
+      << missing.output;
+}
+
+TEST(AppCli, StartUpFailureExitsOneNamingWhatFailed) {
+  const Result r = runApp("--config " + kDefaultConfig + " --sequence /nonexistent/seq --no-dds");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.output.find("start-up failed: sequence /nonexistent/seq"), std::string::npos)
+      << r.output;
+}
+
+TEST(AppCli, DefaultConfigurationRunsTheFixtureSequence) {
+  const std::string dir = test::scratchDir("cli_run");
+  const Result r = runApp("--config " + kDefaultConfig + " --sequence " + kSequence +
+                          " --no-dds --fast --every-frame --trajectory-csv " + dir +
+                          "/tracks.csv --detections-csv " + dir + "/detections.csv");
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("summary: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("frames_in=2 processed=2 dropped=0 bad=0"), std::string::npos)
+      << r.output;
+  sequence::TrajectoryFile tracks;
+  std::string why;
+  EXPECT_TRUE(sequence::readTrajectoryFile(dir + "/tracks.csv", &tracks, &why)) << why;
+  EXPECT_TRUE(fs::exists(dir + "/detections.csv"));
+}
+
+TEST(AppCli, SigtermStopsCleanly) {
+  // A paced, looping replay never ends by itself; SIGTERM must stop it with exit 0 and every
+  // frame back in the pool (the app checks and exits 1 otherwise).
+  const std::string log = test::scratchDir("cli_sigterm") + "/log.txt";
+  std::vector<std::string> args = {VP_FIRMWARE_APP, "--config", kDefaultConfig, "--sequence",
+                                   kSequence,       "--loop",   "--no-dds"};
+  std::vector<char*> argv;
+  for (std::string& arg : args) {
+    argv.push_back(arg.data());
+  }
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, VP_FIRMWARE_APP, &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  // Signal once the loop runs (start-up can take seconds on a loaded machine), then let it
+  // take a few frames.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (readText(log).find("running: ") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ASSERT_EQ(kill(pid, SIGTERM), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  const std::string output = readText(log);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+  EXPECT_NE(output.find("summary: "), std::string::npos) << output;
+  EXPECT_EQ(output.find("not returned to the pool"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace vp::app

@@ -1,0 +1,148 @@
+#include "app_test_support.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <mutex>
+
+#include <gtest/gtest.h>
+
+#include "io/dtm_file.hpp"
+#include "simulator.hpp"
+
+namespace vp::test {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr float kTruthScore = 0.9F;
+constexpr float kTruthTypeProbability = 0.94F;  // the other six share the rest
+constexpr double kMaxTruncation = 0.3;          // vehicles mostly outside the image are skipped
+
+}  // namespace
+
+std::string scratchDir(const std::string& name) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("vp_app_test_" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+std::string simulatedSequence(const std::string& name, int frames, int widthPx, int heightPx,
+                              std::uint64_t seed) {
+  static std::mutex mutex;
+  static std::map<std::string, std::string> rendered;
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (const auto found = rendered.find(name); found != rendered.end()) {
+    return found->second;
+  }
+  const fs::path dir =
+      fs::temp_directory_path() / ("vp_app_test_" + std::to_string(::getpid())) / ("seq_" + name);
+  fs::remove_all(dir);
+  sim::SimOptions options;
+  options.scene = sim::SceneKind::Intersection;
+  options.seed = seed;
+  options.frames = frames;
+  options.outDir = dir.string();
+  options.width = widthPx;
+  options.height = heightPx;
+  options.png = true;
+  options.supersampling = 1;
+  options.asmPath = std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml";
+  sim::Simulator simulator;
+  std::string why;
+  if (!simulator.init(options, &why) || !simulator.write(&why)) {
+    ADD_FAILURE() << "simulating " << name << ": " << why;
+    return "";
+  }
+  rendered[name] = dir.string();
+  return dir.string();
+}
+
+std::string loopSequence() {
+  return simulatedSequence("loop", kLoopFrames, kLoopWidthPx, kLoopHeightPx, 7);
+}
+
+std::string copySequence(const std::string& from, const std::string& name) {
+  const std::string to = scratchDir(name);
+  fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+  return to;
+}
+
+config::AppConfig defaultConfigFor(const std::string& sequenceDir) {
+  config::AppConfig config =
+      config::loadConfig(std::string(VP_SOURCE_DIR) + "/config/default.yaml");
+  config.source.kind = config::FrameSourceKind::Replay;
+  config.source.sequenceDir = sequenceDir;
+  return config;
+}
+
+bool TruthPerception::init(const std::string& sequenceDir, std::string* why) {
+  if (!reader_.open(sequenceDir, why)) {
+    return false;
+  }
+  const config::AppConfig& rig = reader_.rig();
+  world_ = geodesy::LocalFrame(rig.origin);
+  terrain::TerrainGrid grid;
+  if (!io::loadDtm(rig.terrain.dtmPath, rig.terrain.crs, grid, why) ||
+      !terrain_.init(std::move(grid), world_, why) ||
+      !camera_.init(rig.camera.intrinsics, rig.camera.distortion, why) ||
+      !asm_.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", why) ||
+      !lifter_.init(camera_, rig.mount.mount, terrain_, world_, why) ||
+      !detectionLifter_.init(terrain_, world_, asm_, why)) {
+    return false;
+  }
+  for (const sequence::FrameRecord& frame : reader_.frames()) {
+    timestamps_.push_back(frame.timestampNs);
+  }
+  loopPeriodNs_ = platform::replay::loopPeriodNs(reader_);
+  detections_.resize(detection::kMaxDetectionsPerFrame);
+  observations_.resize(detection::kMaxDetectionsPerFrame);
+  return true;
+}
+
+perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
+                                                    std::int64_t timestampNs,
+                                                    const telemetry::PoseEstimate& pose) {
+  frame_ = bgrFrame;  // a header: shares the pool's pixels, no copy
+  summary_ = perception::FrameLiftSummary{};
+  if (timestamps_.empty()) {
+    return perception::PipelineStatus::DetectionFailed;
+  }
+  // A looping replay shifts every timestamp by whole loop periods.
+  std::int64_t t = timestampNs;
+  const std::int64_t first = timestamps_.front();
+  if (t > timestamps_.back() && loopPeriodNs_ > 0) {
+    t = first + (t - first) % loopPeriodNs_;
+  }
+  const auto at = std::lower_bound(timestamps_.begin(), timestamps_.end(), t);
+  if (at == timestamps_.end() || *at != t) {
+    return perception::PipelineStatus::DetectionFailed;
+  }
+  const std::int64_t frameId =
+      reader_.frames()[static_cast<std::size_t>(at - timestamps_.begin())].frameId;
+  std::size_t count = 0;
+  for (const sequence::ObjectTruth& object : reader_.objects(frameId)) {
+    if (object.truncation > kMaxTruncation || count >= detections_.size()) {
+      continue;
+    }
+    detection::Detection& d = detections_[count++];
+    d = detection::Detection{};
+    d.box = object.imageBox;
+    d.score = kTruthScore;
+    d.directionKnown = true;
+    d.typeProbabilities.fill((1.0F - kTruthTypeProbability) / (shape::kVehicleTypeCount - 1));
+    d.typeProbabilities[static_cast<std::size_t>(object.type)] = kTruthTypeProbability;
+    d.gamma = object.shape;
+  }
+  summary_ = detectionLifter_.liftFrame(
+      lifter_, timestampNs, pose, std::span<const detection::Detection>(detections_.data(), count),
+      observations_);
+  return perception::PipelineStatus::Ok;
+}
+
+}  // namespace vp::test

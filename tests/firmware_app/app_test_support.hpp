@@ -1,0 +1,75 @@
+// tests/firmware_app/app_test_support: what the loop's tests share: simulated sequences
+// rendered at test time (tools/simulator), configurations for them, and TruthPerception, the
+// perception seam that injects a sequence's ground-truth vehicles as detections (so the loop's
+// tests do not depend on the detector's accuracy) and lifts them with the product's
+// DetectionLifter on the recorded rig and telemetry.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "app.hpp"
+#include "perception/detection_lifter.hpp"
+#include "sequence/recorded_sequence.hpp"
+
+namespace vp::test {
+
+// Renders (once per process and name) a simulated sequence into a temporary directory and
+// returns it. Pinhole-free: the simulator's own rig (lens distortion included).
+std::string simulatedSequence(const std::string& name, int frames, int widthPx, int heightPx,
+                              std::uint64_t seed);
+
+// The sequence the loop's tests share (rendered once per process): intersection, seed 7,
+// kLoopFrames frames of kLoopWidthPx x kLoopHeightPx (one detector tile at working scale 1).
+constexpr int kLoopFrames = 24;
+constexpr int kLoopWidthPx = 320;
+constexpr int kLoopHeightPx = 256;
+std::string loopSequence();
+
+// Copies a sequence directory (to damage the copy).
+std::string copySequence(const std::string& from, const std::string& name);
+
+// The repository's config/default.yaml, loaded, with the given sequence to replay.
+config::AppConfig defaultConfigFor(const std::string& sequenceDir);
+
+// A fresh temporary directory for one test's outputs.
+std::string scratchDir(const std::string& name);
+
+// Ground-truth vehicles of each frame as detections (score 0.9, direction known, the true type
+// at probability 0.94, the true ASM gamma), lifted with the recorded rig. process() never
+// allocates after init(): the frames' truth is indexed at init.
+class TruthPerception final : public app::FramePerception {
+ public:
+  bool init(const std::string& sequenceDir, std::string* why);
+
+  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+                                     const telemetry::PoseEstimate& pose) override;
+  std::span<const perception::VehicleObservation> observations() const override {
+    return {observations_.data(), summary_.written};
+  }
+  const perception::FrameLiftSummary& liftSummary() const override { return summary_; }
+  const perception::PipelineTimings& timings() const override { return timings_; }
+  const char* lastError() const override { return "truth perception"; }
+  const cv::Mat& correctedFrame() const override { return frame_; }
+  const lifting::Lifter& lifter() const override { return lifter_; }
+  const char* modelId() const override { return "ground truth"; }
+
+ private:
+  sequence::SequenceReader reader_;
+  geodesy::LocalFrame world_;
+  terrain::TerrainModel terrain_;
+  camera::CameraModel camera_;
+  shape::ActiveShapeModel asm_;
+  lifting::Lifter lifter_;
+  perception::DetectionLifter detectionLifter_;
+  std::vector<std::int64_t> timestamps_;  // frames.csv order
+  std::int64_t loopPeriodNs_ = 0;
+  std::vector<detection::Detection> detections_;
+  std::vector<perception::VehicleObservation> observations_;
+  perception::FrameLiftSummary summary_{};
+  perception::PipelineTimings timings_{};
+  cv::Mat frame_;
+};
+
+}  // namespace vp::test
