@@ -110,20 +110,38 @@ FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter, std::
                                             const lifting::DronePose& pose,
                                             std::span<const detection::Detection> detections,
                                             std::span<VehicleObservation> out) const {
+  return liftFrame(lifter, timestampNs, cameraPoseFor(lifter, poseStatus, pose), detections, out);
+}
+
+FrameCameraPose DetectionLifter::cameraPoseFor(const lifting::Lifter& lifter,
+                                               telemetry::PoseStatus poseStatus,
+                                               const lifting::DronePose& pose) const {
+  FrameCameraPose camera;
+  camera.status = liftStatusFrom(poseStatus);
+  if (terrain_ == nullptr) {
+    camera.status = LiftStatus::NoPose;  // not initialised: nothing can be lifted
+  }
+  if (camera.status == LiftStatus::Ok) {
+    const auto cameraPose = lifter.cameraPose(pose);
+    if (cameraPose) {
+      camera.pose = *cameraPose;
+    } else {
+      camera.status = liftStatusFrom(cameraPose.error());
+    }
+  }
+  return camera;
+}
+
+FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+                                            const FrameCameraPose& camera,
+                                            std::span<const detection::Detection> detections,
+                                            std::span<VehicleObservation> out) const {
   FrameLiftSummary summary;
   summary.written = std::min(detections.size(), out.size());
   summary.dropped = detections.size() - summary.written;
-  summary.poseStatus = liftStatusFrom(poseStatus);
-  if (terrain_ == nullptr) {
-    summary.poseStatus = LiftStatus::NoPose;  // not initialised: nothing can be lifted
-  }
+  summary.poseStatus = terrain_ == nullptr ? LiftStatus::NoPose : camera.status;
   if (summary.poseStatus == LiftStatus::Ok) {
-    const auto cameraPose = lifter.cameraPose(pose);
-    if (cameraPose) {
-      summary.cameraPose = *cameraPose;
-    } else {
-      summary.poseStatus = liftStatusFrom(cameraPose.error());
-    }
+    summary.cameraPose = camera.pose;
   }
   for (std::size_t i = 0; i < summary.written; ++i) {
     VehicleObservation& observation = out[i];

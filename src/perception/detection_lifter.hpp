@@ -77,6 +77,13 @@ struct FrameLiftSummary {
   std::size_t dropped = 0;  // detections beyond the output's capacity
 };
 
+// The camera's pose for one frame, or the status saying why there is none (computed once per
+// frame; the pipeline also uses it for the second stage's ground sample distance).
+struct FrameCameraPose {
+  LiftStatus status = LiftStatus::NoPose;
+  lifting::CameraPoseWorld pose{};  // valid when status is Ok
+};
+
 // The most likely type of a detection and its probability (first on ties).
 shape::VehicleType mostLikelyType(const detection::Detection& detection, float* probability);
 
@@ -92,6 +99,14 @@ class DetectionLifter {
 
   FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
                              telemetry::PoseStatus poseStatus, const lifting::DronePose& pose,
+                             std::span<const detection::Detection> detections,
+                             std::span<VehicleObservation> out) const;
+  // The camera pose of a frame from the drone pose (status Ok only when the pose is usable).
+  FrameCameraPose cameraPoseFor(const lifting::Lifter& lifter, telemetry::PoseStatus poseStatus,
+                                const lifting::DronePose& pose) const;
+  // The same lift with the frame's camera pose already computed.
+  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+                             const FrameCameraPose& camera,
                              std::span<const detection::Detection> detections,
                              std::span<VehicleObservation> out) const;
   // The same with the buffer's estimate (its pose is used only when its status is Ok).

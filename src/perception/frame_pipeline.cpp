@@ -101,16 +101,14 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
     return PipelineStatus::PreprocessFailed;
   }
 
-  // The camera pose at the frame time, for the second stage's GSD; lifting recomputes the
-  // same pose from the same estimate (cheap: one attitude chain).
+  // The camera pose at the frame time, computed once: the second stage's GSD and lifting use it.
+  const FrameCameraPose camera =
+      detectionLifter_.cameraPoseFor(lifter_, pose.status, toDronePose(pose.pose));
   const PoseGsdProvider* gsd = nullptr;
-  if (pose.status == telemetry::PoseStatus::Ok) {
-    const auto camera = lifter_.cameraPose(toDronePose(pose.pose));
-    if (camera) {
-      cameraPose_ = *camera;
-      gsd_.setPose(&lifter_, &cameraPose_);
-      gsd = &gsd_;
-    }
+  if (camera.status == LiftStatus::Ok) {
+    cameraPose_ = camera.pose;
+    gsd_.setPose(&lifter_, &cameraPose_);
+    gsd = &gsd_;
   }
   std::size_t count = 0;
   const detection::DetectionStatus det =
@@ -128,8 +126,8 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
 
   const auto liftStart = std::chrono::steady_clock::now();
   liftSummary_ = detectionLifter_.liftFrame(
-      lifter_, timestampNs, pose, std::span<const detection::Detection>(detections_.data(), count),
-      observations_);
+      lifter_, timestampNs, camera,
+      std::span<const detection::Detection>(detections_.data(), count), observations_);
   timings_.lift_ms = msSince(liftStart);
   timings_.total_ms = msSince(start);
   lastError_[0] = '\0';
