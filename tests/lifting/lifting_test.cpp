@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "plane_dtm.hpp"
+
 namespace vp::lifting {
 namespace {
 
@@ -16,22 +18,7 @@ constexpr double kCellM = 2.0;
 
 // A UTM 16N grid around the origin: height = 260 + slopeEast * dE + slopeNorth * dN.
 terrain::TerrainGrid makeGrid(double slopeEast, double slopeNorth) {
-  const geodesy::UtmPoint centre = geodesy::toUtm(kOrigin);
-  terrain::TerrainGrid grid;
-  grid.cols = grid.rows = static_cast<int>(2.0 * kHalfExtentM / kCellM) + 1;
-  grid.crs = {terrain::HorizontalCrs::Utm, centre.zone, centre.northp};
-  grid.transform = {centre.eastingM - kHalfExtentM,  kCellM, 0.0,
-                    centre.northingM + kHalfExtentM, 0.0,    -kCellM};
-  grid.heightsM.resize(static_cast<std::size_t>(grid.cols * grid.rows));
-  for (int r = 0; r < grid.rows; ++r) {
-    for (int c = 0; c < grid.cols; ++c) {
-      const double dE = -kHalfExtentM + c * kCellM;
-      const double dN = kHalfExtentM - r * kCellM;
-      grid.heightsM[static_cast<std::size_t>(r * grid.cols + c)] =
-          static_cast<float>(kGroundM + slopeEast * dE + slopeNorth * dN);
-    }
-  }
-  return grid;
+  return test::planeDtm(kOrigin, kGroundM, slopeEast, slopeNorth, kHalfExtentM, kCellM);
 }
 
 camera::CameraModel makeCamera(camera::LensModel model) {

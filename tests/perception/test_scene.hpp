@@ -16,6 +16,7 @@
 #include "lifting/lifting.hpp"
 #include "perception/detection_lifter.hpp"
 #include "perception/footprint_projection.hpp"
+#include "plane_dtm.hpp"
 #include "shape/vehicle_model.hpp"
 #include "terrain/terrain_model.hpp"
 
@@ -28,23 +29,7 @@ constexpr double kAltitudeM = 100.0;  // drone above it
 // UTM grid of 2 m cells, +-halfExtent around the origin:
 // height = 260 + slopeEast * dE + slopeNorth * dN (m).
 inline terrain::TerrainGrid plane(double slopeEast, double slopeNorth, double halfExtentM = 300.0) {
-  constexpr double kCellM = 2.0;
-  const geodesy::UtmPoint centre = geodesy::toUtm(kOrigin);
-  terrain::TerrainGrid grid;
-  grid.cols = grid.rows = static_cast<int>(2.0 * halfExtentM / kCellM) + 1;
-  grid.crs = {terrain::HorizontalCrs::Utm, centre.zone, centre.northp};
-  grid.transform = {centre.eastingM - halfExtentM,  kCellM, 0.0,
-                    centre.northingM + halfExtentM, 0.0,    -kCellM};
-  grid.heightsM.resize(static_cast<std::size_t>(grid.cols * grid.rows));
-  for (int r = 0; r < grid.rows; ++r) {
-    for (int c = 0; c < grid.cols; ++c) {
-      const double dE = -halfExtentM + c * kCellM;
-      const double dN = halfExtentM - r * kCellM;
-      grid.heightsM[static_cast<std::size_t>(r * grid.cols + c)] =
-          static_cast<float>(kGroundM + slopeEast * dE + slopeNorth * dN);
-    }
-  }
-  return grid;
+  return test::planeDtm(kOrigin, kGroundM, slopeEast, slopeNorth, halfExtentM);
 }
 
 inline terrain::TerrainGrid fixtureDtm() {
