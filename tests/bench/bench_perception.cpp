@@ -21,6 +21,7 @@
 
 #include "detection/detection_stage.hpp"
 #include "preprocess/preprocessor.hpp"
+#include "synthetic_frame.hpp"
 
 namespace {
 
@@ -51,23 +52,7 @@ vp::camera::CameraModel benchCamera() {
 }
 
 cv::Mat benchFrame() {
-  cv::Mat frame(kFrameHeightPx, kFrameWidthPx, CV_8UC3);
-  cv::RNG rng(2024);
-  rng.fill(frame, cv::RNG::NORMAL, 110, 12);
-  for (int i = 0; i < 60; ++i) {
-    const cv::RotatedRect car(
-        {static_cast<float>(rng.uniform(100, 2500)), static_cast<float>(rng.uniform(100, 1950))},
-        {150.0F, 60.0F}, static_cast<float>(rng.uniform(0, 360)));
-    cv::Point2f corners[4];
-    car.points(corners);
-    std::array<cv::Point, 4> polygon;
-    for (int c = 0; c < 4; ++c) {
-      polygon[c] = corners[c];
-    }
-    const int shade = rng.uniform(0, 2) == 0 ? 30 : 230;
-    cv::fillConvexPoly(frame, polygon.data(), 4, cv::Scalar(shade, shade, shade + 10));
-  }
-  return frame;
+  return vp::test::syntheticCarFrame(kFrameWidthPx, kFrameHeightPx, 2024, 60);
 }
 
 void frameStages(benchmark::State& state, int threads, int cropThreads) {

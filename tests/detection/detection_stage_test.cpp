@@ -2,6 +2,7 @@
 // the final interface: nothing here assumes accuracy): a 2592 x 2048 frame runs end to end,
 // performs zero heap allocations per frame after the first, and bad input gives statuses.
 #include "detection/detection_stage.hpp"
+#include "synthetic_frame.hpp"
 
 #include <array>
 #include <cmath>
@@ -39,23 +40,7 @@ camera::CameraModel camera2592() {
 // A grey road texture with car-sized bright and dark rotated rectangles (not realistic; the
 // interim models only have to see some structure).
 cv::Mat sceneFrame() {
-  cv::Mat frame(2048, 2592, CV_8UC3);
-  cv::RNG rng(17);
-  rng.fill(frame, cv::RNG::NORMAL, 110, 12);
-  for (int i = 0; i < 40; ++i) {
-    const cv::RotatedRect car(
-        {static_cast<float>(rng.uniform(100, 2500)), static_cast<float>(rng.uniform(100, 1950))},
-        {150.0F, 60.0F}, static_cast<float>(rng.uniform(0, 360)));
-    cv::Point2f corners[4];
-    car.points(corners);
-    std::array<cv::Point, 4> polygon;
-    for (int k = 0; k < 4; ++k) {
-      polygon[k] = corners[k];
-    }
-    const int shade = rng.uniform(0, 2) == 0 ? 30 : 230;
-    cv::fillConvexPoly(frame, polygon.data(), 4, cv::Scalar(shade, shade, shade + 10));
-  }
-  return frame;
+  return test::syntheticCarFrame(2592, 2048, 17, 40);
 }
 
 DetectionStageOptions stageOptions(int threads) {
