@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/spsc_queue.hpp"
+#include "geometry/rotated_box.hpp"
 #include "io/dtm_file.hpp"
 #include "messages/occupancy.hpp"
 #include "platform/system/realtime.hpp"
@@ -145,6 +146,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   tracker.confirmHits = t.confirmHits;
   tracker.maxTentativeGap_s = t.maxTentativeGap_s;
   tracker.maxLost_s = t.maxLost_s;
+  tracker.maxCoast_s = t.coast_s;
   tracker.movingSpeed_mps = t.movingSpeed_mps;
   tracker.flipVotes = t.flipVotes;
   tracker.typeEvidenceWeight = t.typeEvidenceWeight;
@@ -152,6 +154,9 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   tracker.association.maxDistance_m = t.maxDistance_m;
   tracker.association.highScore = static_cast<float>(t.highScore);
   tracker.association.lowScore = static_cast<float>(t.lowScore);
+  tracker.noise.measurementPosition_m = t.measurementPosition_m;
+  tracker.noise.measurementHeading_rad = t.measurementHeading_deg * (geometry::kPi / 180.0);
+  tracker.noise.steeringDecay_s = t.steeringDecay_s;
   tracker.asmModel = &asm_;
   std::string problem;
   if (!tracker_.init(tracker, &problem)) {

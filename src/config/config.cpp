@@ -694,6 +694,8 @@ const Range kFlipVotesRange = Range::closed(1.0, 100.0);
 const Range kEvidenceWeightRange = Range{0.0, 1.0, true};
 const Range kShapeWeightRange = Range{0.0, 1e6, true};
 const Range kGateDistanceRangeM = Range{0.0, 100.0, true};
+const Range kMeasurementPositionRangeM = Range{0.0, 10.0, true};   // (0, 10] m
+const Range kMeasurementHeadingRangeDeg = Range{0.0, 90.0, true};  // (0, 90] deg
 const Range kCameraBuffersRange = Range::closed(2.0, 16.0);
 const Range kDequeueTimeoutRangeMs = Range::closed(1.0, 60000.0);
 const Range kPortRange = Range::closed(0.0, 65535.0);
@@ -825,6 +827,7 @@ TrackingConfig readTracking(MapReader section) {
   t.maxTentativeGap_s =
       section.number("max_tentative_gap_s", kTrackTimeRangeS, d.maxTentativeGap_s);
   t.maxLost_s = section.number("max_lost_s", kTrackTimeRangeS, d.maxLost_s);
+  t.coast_s = section.number("coast_s", kTrackTimeRangeS, d.coast_s);
   t.movingSpeed_mps = section.number("moving_speed_mps", kSpeedRangeMps, d.movingSpeed_mps);
   t.flipVotes = section.integer("flip_votes", kFlipVotesRange, d.flipVotes);
   t.typeEvidenceWeight =
@@ -833,6 +836,11 @@ TrackingConfig readTracking(MapReader section) {
   t.maxDistance_m = section.number("max_distance_m", kGateDistanceRangeM, d.maxDistance_m);
   t.highScore = section.number("high_score", kProbabilityRange, d.highScore);
   t.lowScore = section.number("low_score", Range::closed(0.0, t.highScore), d.lowScore);
+  t.measurementPosition_m =
+      section.number("measurement_position_m", kMeasurementPositionRangeM, d.measurementPosition_m);
+  t.measurementHeading_deg = section.number("measurement_heading_deg", kMeasurementHeadingRangeDeg,
+                                            d.measurementHeading_deg);
+  t.steeringDecay_s = section.number("steering_decay_s", kTrackTimeRangeS, d.steeringDecay_s);
   section.warnUnknownKeys();
   return t;
 }

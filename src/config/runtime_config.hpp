@@ -64,13 +64,17 @@ struct TrackingConfig {
   int confirmHits = 3;
   double maxTentativeGap_s = 0.25;
   double maxLost_s = 3.0;
+  double coast_s = 0.5;  // unmatched confirmed tracks stay confirmed this long, then lost
   double movingSpeed_mps = 1.5;
   int flipVotes = 3;
   double typeEvidenceWeight = 0.5;
   double shapeMaxWeight = 30.0;
-  double maxDistance_m = 6.0;  // association gate on the centre distance
-  double highScore = 0.5;      // first association pass and track birth from here
-  double lowScore = 0.1;       // second (ByteTrack) pass from here
+  double maxDistance_m = 6.0;           // association gate on the centre distance
+  double highScore = 0.45;              // first association pass and track birth from here
+  double lowScore = 0.1;                // second (ByteTrack) pass from here
+  double measurementPosition_m = 0.30;  // 1 sigma of a lifted detection's centre, per axis
+  double measurementHeading_deg = 8.0;  // 1 sigma of a detection's heading
+  double steeringDecay_s = 2.0;         // steering relaxes to 0 with this time constant; 0 = never
 };
 
 enum class FrameSourceKind : std::uint8_t { Replay, V4l2 };

@@ -107,7 +107,11 @@ bool MotionModel::predict(double dt, const MotionNoise& noise) {
     x_[kV] = v + a * dt;
     x_[kA] = a * decay;
   }
-  x_[kDelta] = std::clamp(delta, -noise.maxSteering_rad, noise.maxSteering_rad);
+  // Optional mean reversion of the steering: without measurements (a lost track) a noisy
+  // steering estimate would otherwise drive the prediction round in circles.
+  const double steeringDecay =
+      noise.steeringDecay_s > 0.0 ? std::exp(-dt / noise.steeringDecay_s) : 1.0;
+  x_[kDelta] = std::clamp(delta * steeringDecay, -noise.maxSteering_rad, noise.maxSteering_rad);
 
   // Jacobian of the midpoint form (chord ~ s): the sinc factor changes it by O(dpsi^2).
   StateMatrix f = StateMatrix::Identity();
@@ -128,6 +132,7 @@ bool MotionModel::predict(double dt, const MotionNoise& noise) {
   f(kPsi, kDelta) = s * dKappa;
   f(kV, kA) = dt;
   f(kA, kA) = decay;
+  f(kDelta, kDelta) = steeringDecay;
 
   // White jerk (continuous) integrated into v and a; white steering rate into delta; small
   // diffusion on position and heading for what the bicycle does not model (lane changes,

@@ -18,7 +18,8 @@
 // Equations over one step dt (exact arc for constant delta):
 //   s = v dt + a dt^2 / 2,  kappa = tan(delta) / L,  dpsi = s kappa
 //   x' = x + s sinc(dpsi / 2) cos(psi + dpsi / 2),  y' = y + s sinc(dpsi / 2) sin(psi + dpsi / 2)
-//   psi' = psi + dpsi,  v' = v + a dt,  a' = a exp(-dt / tauA),  delta' = delta
+//   psi' = psi + dpsi,  v' = v + a dt,  a' = a exp(-dt / tauA),
+//   delta' = delta exp(-dt / tauD)  (tauD = 0, the default: delta' = delta)
 // except in the standstill dead band (|v| < standstillSpeed, |a| small), where x, y, psi keep
 // their values and v, a decay to 0 with standstillDecay_s; so a vehicle with fixed delta drives a
 // circle of radius L / tan(delta) about its rear axle. Measurement: the box centre c = (x, y) + d
@@ -42,12 +43,13 @@ struct MotionNoise {
   double jerk_mPerS3 = 1.0;                    // white jerk drives a and v
   double steeringRate_radPerS = 0.15;          // white steering rate drives delta
   double accelerationDecay_s = 3.0;            // tauA: a relaxes to 0 (drivers stop accelerating)
-  double maxSteering_rad = 0.6;                // |delta| is clamped (mechanical limit)
-  double standstillSpeed_mps = 0.3;            // below: the mean does not move (dead band)
-  double standstillDecay_s = 0.5;              // v, a relax to 0 inside the dead band
-  double measurementPosition_m = 0.10;         // detection centre, per axis
-  double measurementHeading_rad = 0.06;        // detection heading
-  double initialSpeed_mps = 8.0;               // prior spread of v at track birth
+  double steeringDecay_s = 0.0;          // tauD: delta relaxes to 0 (drivers straighten); 0 = never
+  double maxSteering_rad = 0.6;          // |delta| is clamped (mechanical limit)
+  double standstillSpeed_mps = 0.3;      // below: the mean does not move (dead band)
+  double standstillDecay_s = 0.5;        // v, a relax to 0 inside the dead band
+  double measurementPosition_m = 0.10;   // detection centre, per axis
+  double measurementHeading_rad = 0.06;  // detection heading
+  double initialSpeed_mps = 8.0;         // prior spread of v at track birth
   double initialAcceleration_mps2 = 1.5;
   double initialSteering_rad = 0.15;
 };

@@ -334,6 +334,11 @@ Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestampNs,
         }
         break;
       case TrackStatus::Confirmed:
+        // Coasting: a miss or two (the detector's, a short occlusion) does not demote a
+        // confirmed track; its prediction stands in (updated = false) until maxCoast_s.
+        if (since <= config_.maxCoast_s) {
+          break;
+        }
         slot.out.status = TrackStatus::Lost;
         [[fallthrough]];
       case TrackStatus::Lost:

@@ -62,6 +62,7 @@ struct TrackerConfig {
   int confirmHits = 3;
   double maxTentativeGap_s = 0.25;
   double maxLost_s = 3.0;
+  double maxCoast_s = 0.0;  // a confirmed track unmatched this long stays confirmed, then lost
   double movingSpeed_mps = 1.5;
   int flipVotes = 3;
   double typeEvidenceWeight = 0.5;

@@ -137,6 +137,7 @@ tracking:
   confirm_hits: 4
   max_tentative_gap_s: 0.3
   max_lost_s: 2.5
+  coast_s: 0.4
   moving_speed_mps: 1.2
   flip_votes: 5
   type_evidence_weight: 0.4
@@ -144,6 +145,9 @@ tracking:
   max_distance_m: 5.0
   high_score: 0.6
   low_score: 0.15
+  measurement_position_m: 0.3
+  measurement_heading_deg: 5.0
+  steering_decay_s: 2.0
 source:
   kind: v4l2
   sequence_dir: seq/run1
@@ -672,6 +676,7 @@ const MalformedCase kMalformedCases[] = {
     {"max_tentative_gap_s: 0.3", "max_tentative_gap_s: -1", "tracking.max_tentative_gap_s",
      "must be in [0, 60], got -1"},
     {"max_lost_s: 2.5", "max_lost_s: 61", "tracking.max_lost_s", "must be in [0, 60], got 61"},
+    {"coast_s: 0.4", "coast_s: -0.1", "tracking.coast_s", "must be in [0, 60], got -0.1"},
     {"moving_speed_mps: 1.2", "moving_speed_mps: x", "tracking.moving_speed_mps",
      "expected a number, got 'x'"},
     {"flip_votes: 5", "flip_votes: 0", "tracking.flip_votes", "must be in [1, 100], got 0"},
@@ -683,6 +688,12 @@ const MalformedCase kMalformedCases[] = {
      "must be in (0, 100], got 0"},
     {"high_score: 0.6", "high_score: 1.5", "tracking.high_score", "must be in [0, 1], got 1.5"},
     {"low_score: 0.15", "low_score: 0.7", "tracking.low_score", "must be in [0, 0.6], got 0.7"},
+    {"measurement_position_m: 0.3", "measurement_position_m: 0", "tracking.measurement_position_m",
+     "must be in (0, 10], got 0"},
+    {"measurement_heading_deg: 5.0", "measurement_heading_deg: 95",
+     "tracking.measurement_heading_deg", "must be in (0, 90], got 95"},
+    {"steering_decay_s: 2.0", "steering_decay_s: -1", "tracking.steering_decay_s",
+     "must be in [0, 60], got -1"},
     // source
     {"source:\n  kind", "source: camera\nx:\n  kind", "source", "expected a map, got 'camera'"},
     {"kind: v4l2", "kind: file", "source.kind", "unknown value 'file' (expected replay, v4l2)"},
@@ -858,6 +869,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "tracking.confirm_hits",
                                                "tracking.max_tentative_gap_s",
                                                "tracking.max_lost_s",
+                                               "tracking.coast_s",
                                                "tracking.moving_speed_mps",
                                                "tracking.flip_votes",
                                                "tracking.type_evidence_weight",
@@ -865,6 +877,9 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "tracking.max_distance_m",
                                                "tracking.high_score",
                                                "tracking.low_score",
+                                               "tracking.measurement_position_m",
+                                               "tracking.measurement_heading_deg",
+                                               "tracking.steering_decay_s",
                                                "source",
                                                "source.kind",
                                                "source.sequence_dir",
@@ -1205,6 +1220,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(t.confirmHits, 4);
   EXPECT_DOUBLE_EQ(t.maxTentativeGap_s, 0.3);
   EXPECT_DOUBLE_EQ(t.maxLost_s, 2.5);
+  EXPECT_DOUBLE_EQ(t.coast_s, 0.4);
   EXPECT_DOUBLE_EQ(t.movingSpeed_mps, 1.2);
   EXPECT_EQ(t.flipVotes, 5);
   EXPECT_DOUBLE_EQ(t.typeEvidenceWeight, 0.4);
@@ -1212,6 +1228,9 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(t.maxDistance_m, 5.0);
   EXPECT_DOUBLE_EQ(t.highScore, 0.6);
   EXPECT_DOUBLE_EQ(t.lowScore, 0.15);
+  EXPECT_DOUBLE_EQ(t.measurementPosition_m, 0.3);
+  EXPECT_DOUBLE_EQ(t.measurementHeading_deg, 5.0);
+  EXPECT_DOUBLE_EQ(t.steeringDecay_s, 2.0);
   const SourceConfig& src = config.source;
   EXPECT_EQ(src.kind, FrameSourceKind::V4l2);
   EXPECT_EQ(src.sequenceDir, "/data/site/seq/run1");

@@ -104,6 +104,47 @@ TEST(TrackManager, LifecycleTentativeConfirmedLostReacquiredDeleted) {
   EXPECT_TRUE(m.tracks().empty());
 }
 
+TEST(TrackManager, ConfirmedTrackCoastsThroughShortMissesThenTurnsLost) {
+  TrackerConfig config = smallConfig();
+  config.maxCoast_s = 0.25;  // 2 missed frames at 10 Hz stay confirmed, the 3rd does not
+  TrackManager m;
+  ASSERT_TRUE(m.init(config));
+  std::int64_t t = 0;
+  double x = 0.0;
+  auto stepAt = [&](bool detected) {
+    std::vector<WorldDetection> d;
+    if (detected) {
+      d.push_back(car(x, 0.0, 0.0, t));
+    }
+    auto r = m.step(t, d);
+    EXPECT_TRUE(r.hasValue());
+    t += kFrameNs;
+    x += 1.0;
+    return r;
+  };
+  for (int k = 0; k < 10; ++k) {
+    stepAt(true);
+  }
+  ASSERT_EQ(m.tracks().size(), 1u);
+  ASSERT_EQ(m.tracks()[0].status, TrackStatus::Confirmed);
+  for (int k = 0; k < 2; ++k) {
+    stepAt(false);
+    EXPECT_EQ(m.tracks()[0].status, TrackStatus::Confirmed) << "miss " << k + 1;
+    EXPECT_FALSE(m.tracks()[0].updated);
+  }
+  // Back within the coast window: confirmed, not a re-acquisition.
+  auto back = stepAt(true);
+  EXPECT_EQ(m.tracks()[0].status, TrackStatus::Confirmed);
+  EXPECT_EQ(back->reacquisitions, 0);
+  for (int k = 0; k < 3; ++k) {
+    stepAt(false);
+  }
+  EXPECT_EQ(m.tracks()[0].status, TrackStatus::Lost);  // 0.3 s > 0.25 s
+  auto again = stepAt(true);
+  EXPECT_EQ(m.tracks()[0].status, TrackStatus::Confirmed);
+  EXPECT_EQ(again->reacquisitions, 1);
+}
+
 TEST(TrackManager, ParkedCarReacquiredAfterLongOcclusionKeepsId) {
   TrackManager m;
   ASSERT_TRUE(m.init(smallConfig()));
