@@ -806,6 +806,7 @@ PerceptionConfig readPerception(MapReader section, const std::string& baseDir) {
   p.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRangeM, d.fixedGsd_m);
   p.nominalCarLength_m =
       section.number("nominal_car_length_m", kCarLengthRangeM, d.nominalCarLength_m);
+  p.liftHeightShare = section.number("lift_height_share", kProbabilityRange, d.liftHeightShare);
   section.warnUnknownKeys();
   return p;
 }

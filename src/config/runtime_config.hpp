@@ -52,6 +52,7 @@ struct PerceptionConfig {
   bool applyRefine = true;
   double fixedGsd_m = 0.0;  // m per frame px; 0 = from the pose and DTM / estimated
   double nominalCarLength_m = 4.5;
+  double liftHeightShare = 0.5;  // boxes lifted at this share of the vehicle's height, [0, 1]
 };
 
 struct PoseConfig {

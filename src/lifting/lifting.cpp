@@ -94,11 +94,20 @@ Expected<CameraPoseWorld, LiftError> Lifter::cameraPose(const DronePose& pose) c
 
 Expected<Eigen::Vector3d, LiftError> Lifter::pixelToWorld(const CameraPoseWorld& pose,
                                                           const Eigen::Vector2d& pixel) const {
+  return pixelToGroundBelow(pose, pixel, 0.0);
+}
+
+Expected<Eigen::Vector3d, LiftError> Lifter::pixelToGroundBelow(const CameraPoseWorld& pose,
+                                                                const Eigen::Vector2d& pixel,
+                                                                double heightM) const {
   const auto ray = camera_->pixelToRay(pixel);
   if (!ray) {
     return unexpected(fromCamera(ray.error()));
   }
-  const auto hit = terrain_->intersectRay(pose.centreEnu, pose.cameraToEnu * *ray);
+  // The ray meets the DTM raised by h where the same ray lowered by h meets the DTM, at the
+  // same east/north: that point is the ground below the raised intersection.
+  const Eigen::Vector3d origin = pose.centreEnu - Eigen::Vector3d(0.0, 0.0, heightM);
+  const auto hit = terrain_->intersectRay(origin, pose.cameraToEnu * *ray);
   if (!hit) {
     return unexpected(fromTerrain(hit.error()));
   }
@@ -116,17 +125,18 @@ Expected<Eigen::Vector2d, LiftError> Lifter::worldToPixel(const CameraPoseWorld&
 }
 
 Expected<GroundBox, LiftError> Lifter::boxToGround(const CameraPoseWorld& pose,
-                                                   const geometry::RotatedBox& box) const {
+                                                   const geometry::RotatedBox& box,
+                                                   double boxHeightM) const {
   GroundBox out;
   const std::array<Eigen::Vector2d, 4> corners = geometry::corners(box);
   for (std::size_t i = 0; i < corners.size(); ++i) {
-    const auto corner = pixelToWorld(pose, corners[i]);
+    const auto corner = pixelToGroundBelow(pose, corners[i], boxHeightM);
     if (!corner) {
       return unexpected(corner.error());
     }
     out.cornersEnu[i] = *corner;
   }
-  const auto centre = pixelToWorld(pose, {box.cx, box.cy});
+  const auto centre = pixelToGroundBelow(pose, {box.cx, box.cy}, boxHeightM);
   if (!centre) {
     return unexpected(centre.error());
   }

@@ -75,11 +75,22 @@ class Lifter {
   // World ENU point -> distorted pixel (may lie outside the image; check inImage()).
   Expected<Eigen::Vector2d, LiftError> worldToPixel(const CameraPoseWorld& pose,
                                                     const Eigen::Vector3d& pointEnu) const;
-  // Image rotated box (its outline on the ground) -> ground footprint, heading, size.
+  // Image rotated box -> ground footprint, heading, size. With boxHeightM = 0 the box is the
+  // vehicle's outline on the ground. A detector's box encloses the whole vehicle, roof
+  // included, so on a tilted view its centre is the image of a point about half the vehicle's
+  // height above the ground, not of the footprint centre (0.27 m off for a 1.5 m car seen 20 deg
+  // off nadir): boxHeightM > 0 intersects the rays with the DTM raised by that height and
+  // returns the ground points below the intersections.
   Expected<GroundBox, LiftError> boxToGround(const CameraPoseWorld& pose,
-                                             const geometry::RotatedBox& box) const;
+                                             const geometry::RotatedBox& box,
+                                             double boxHeightM = 0.0) const;
 
  private:
+  // The ground point below where the pixel's ray is heightM above the DTM.
+  Expected<Eigen::Vector3d, LiftError> pixelToGroundBelow(const CameraPoseWorld& pose,
+                                                          const Eigen::Vector2d& pixel,
+                                                          double heightM) const;
+
   const camera::CameraModel* camera_ = nullptr;
   const terrain::TerrainModel* terrain_ = nullptr;
   const geodesy::LocalFrame* frame_ = nullptr;

@@ -86,12 +86,29 @@ lifting::DronePose toDronePose(const telemetry::PoseSample& sample) {
 
 bool DetectionLifter::init(const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
                            const shape::ActiveShapeModel& shapeModel, std::string* why) {
+  return init(terrain, frame, shapeModel, DetectionLifterOptions{}, why);
+}
+
+bool DetectionLifter::init(const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
+                           const shape::ActiveShapeModel& shapeModel,
+                           const DetectionLifterOptions& options, std::string* why) {
   if (terrain.grid().cols < 2 || terrain.grid().rows < 2) {
     if (why != nullptr) {
       *why = "detection lifter: the terrain model is not initialised";
     }
     return false;
   }
+  if (!(options.boxHeightShare >= 0.0 && options.boxHeightShare <= 1.0) ||
+      !(options.nominalHeightM > 0.0 && options.nominalHeightM <= 10.0)) {
+    if (why != nullptr) {
+      *why =
+          "detection lifter: box height share must be in [0, 1] and the nominal height in "
+          "(0, 10] m, got " +
+          std::to_string(options.boxHeightShare) + " and " + std::to_string(options.nominalHeightM);
+    }
+    return false;
+  }
+  options_ = options;
   terrain_ = &terrain;
   frame_ = &frame;
   shapeModel_ = &shapeModel;
@@ -170,12 +187,19 @@ void DetectionLifter::liftOne(const lifting::Lifter& lifter,
     observation.liftStatus = LiftStatus::InvalidBox;
     return;
   }
-  const auto ground = lifter.boxToGround(cameraPose, box);
+  // The shape first: its height places the box (a world value, kept only when lifted).
+  const shape::VehicleType type = mostLikelyType(observation.detection, nullptr);
+  const shape::VehicleGeometry geometry =
+      shape::vehicleGeometry(*shapeModel_, type, observation.detection.gamma);
+  const double vehicleHeightM =
+      geometry.hasKeypoints ? geometry.sizeM.z() : options_.nominalHeightM;
+  const auto ground = lifter.boxToGround(cameraPose, box, options_.boxHeightShare * vehicleHeightM);
   if (!ground) {
     observation.liftStatus = liftStatusFrom(ground.error());
     return;
   }
   observation.liftStatus = LiftStatus::Ok;
+  observation.type = type;
   observation.ground = *ground;
   // Width across the driving direction. boxToGround() measures it between the lifted side
   // midpoints; where perspective (a tilted view, a slope) skews the footprint in the image,
@@ -189,10 +213,6 @@ void DetectionLifter::liftOne(const lifting::Lifter& lifter,
     const Eigen::Vector3d f = forward / forwardNorm;
     observation.ground.widthM = (side - side.dot(f) * f).norm();
   }
-  observation.type = mostLikelyType(observation.detection, nullptr);
-
-  const shape::VehicleGeometry geometry =
-      shape::vehicleGeometry(*shapeModel_, observation.type, observation.detection.gamma);
   observation.heightM = geometry.hasKeypoints ? geometry.sizeM.z() : 0.0;
 
   // Heights of the points around the centre: the centre's ENU z plus the DTM's height

@@ -89,6 +89,15 @@ shape::VehicleType mostLikelyType(const detection::Detection& detection, float* 
 
 lifting::DronePose toDronePose(const telemetry::PoseSample& sample);
 
+struct DetectionLifterOptions {
+  // Height above the ground at which a box is lifted, as a share of the vehicle's height (the
+  // ASM shape of its most likely type, else nominalHeightM): 0 for boxes that outline the
+  // footprint on the ground; 0.5 for a detector's boxes, which enclose the whole vehicle, so
+  // their centre shows the vehicle's middle, about half its height up (Lifter::boxToGround).
+  double boxHeightShare = 0.0;  // [0, 1]
+  double nominalHeightM = 1.5;  // vehicles without an ASM shape (large vehicles), m
+};
+
 class DetectionLifter {
  public:
   DetectionLifter() = default;
@@ -96,6 +105,9 @@ class DetectionLifter {
   // Borrows the terrain and the world frame the Lifters are built with, and the ASM.
   bool init(const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
             const shape::ActiveShapeModel& shapeModel, std::string* why = nullptr);
+  bool init(const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
+            const shape::ActiveShapeModel& shapeModel, const DetectionLifterOptions& options,
+            std::string* why = nullptr);
 
   FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
                              telemetry::PoseStatus poseStatus, const lifting::DronePose& pose,
@@ -122,6 +134,7 @@ class DetectionLifter {
   const terrain::TerrainModel* terrain_ = nullptr;
   const geodesy::LocalFrame* frame_ = nullptr;
   const shape::ActiveShapeModel* shapeModel_ = nullptr;
+  DetectionLifterOptions options_{};
 };
 
 }  // namespace vp::perception

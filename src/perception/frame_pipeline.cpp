@@ -75,7 +75,7 @@ bool FramePipeline::init(const PipelineOptions& options, const camera::CameraMod
       *why = "lifting: " + detail;
     return false;
   }
-  if (!detectionLifter_.init(terrain, frame, shapeModel, &detail)) {
+  if (!detectionLifter_.init(terrain, frame, shapeModel, options.lift, &detail)) {
     if (why)
       *why = "detection lifter: " + detail;
     return false;

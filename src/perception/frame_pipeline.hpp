@@ -42,6 +42,7 @@ namespace vp::perception {
 struct PipelineOptions {
   preprocess::PreprocessOptions preprocess{};
   detection::DetectionStageOptions detection{};
+  DetectionLifterOptions lift{};
 };
 
 // Wall time of each stage of the last processed frame, ms.

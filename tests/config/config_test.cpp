@@ -129,6 +129,7 @@ perception:
   apply_refine: false
   fixed_gsd_m: 0.03
   nominal_car_length_m: 4.4
+  lift_height_share: 0.4
 pose:
   max_age_s: 0.3
   buffer_capacity: 128
@@ -662,6 +663,8 @@ const MalformedCase kMalformedCases[] = {
      "must be in [0, 1], got -0.1"},
     {"nominal_car_length_m: 4.4", "nominal_car_length_m: 0", "perception.nominal_car_length_m",
      "must be in (0, 30], got 0"},
+    {"lift_height_share: 0.4", "lift_height_share: 1.5", "perception.lift_height_share",
+     "must be in [0, 1], got 1.5"},
     // pose
     {"pose:\n  max_age_s", "pose: 1\nx:\n  max_age_s", "pose", "expected a map, got '1'"},
     {"max_age_s: 0.3", "max_age_s: 0", "pose.max_age_s", "must be in (0, 10], got 0"},
@@ -861,6 +864,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "perception.apply_refine",
                                                "perception.fixed_gsd_m",
                                                "perception.nominal_car_length_m",
+                                               "perception.lift_height_share",
                                                "pose",
                                                "pose.max_age_s",
                                                "pose.buffer_capacity",
@@ -1213,6 +1217,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_FALSE(p.applyRefine);
   EXPECT_DOUBLE_EQ(p.fixedGsd_m, 0.03);
   EXPECT_DOUBLE_EQ(p.nominalCarLength_m, 4.4);
+  EXPECT_DOUBLE_EQ(p.liftHeightShare, 0.4);
   EXPECT_DOUBLE_EQ(config.pose.maxAge_s, 0.3);
   EXPECT_EQ(config.pose.bufferCapacity, 128);
   const TrackingConfig& t = config.tracking;

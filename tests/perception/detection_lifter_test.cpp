@@ -4,12 +4,15 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
 #include "geometry/rotated_box.hpp"
+#include "shape/vehicle_geometry.hpp"
 #include "telemetry/pose_buffer.hpp"
 #include "test_scene.hpp"
 
@@ -132,6 +135,110 @@ INSTANTIATE_TEST_SUITE_P(
         LiftCase{"fixture_dtm_tilted_brown", true, 0.0, 0.0, camera::LensModel::BrownConrady,
                  -80.0}),
     [](const auto& testInfo) { return std::string(testInfo.param.name); });
+
+// The box a detector is trained on (the simulator's ground truth, tools/simulator/
+// ground_truth.cpp) encloses the whole vehicle, roof included, in the image, aligned with its
+// projected driving direction. Here: the hull of the vehicle's ASM keypoints.
+std::optional<geometry::RotatedBox> hullBox(const Scene& scene,
+                                            const lifting::CameraPoseWorld& pose,
+                                            const TruthVehicle& truth,
+                                            const detection::Detection& d) {
+  const shape::VehicleGeometry g = shape::vehicleGeometry(scene.asmModel, truth.type, d.gamma);
+  shape::PlacedVehicle placed;
+  const auto groundZ = [&](const Eigen::Vector2d& xy) -> std::optional<double> {
+    const auto p = scene.terrain.groundPointEnu(xy.x(), xy.y());
+    return p ? std::optional<double>(p->z()) : std::nullopt;
+  };
+  if (!shape::placeOnGround(g, truth.footprint, groundZ, &placed) || !placed.hasKeypoints) {
+    return std::nullopt;
+  }
+  const Eigen::Vector3d c = truth.footprint.centreEnu;
+  const Eigen::Vector3d ahead = c + Eigen::Vector3d(std::cos(truth.footprint.headingEnuRad),
+                                                    std::sin(truth.footprint.headingEnuRad), 0.0);
+  const auto p0 = scene.lifter.worldToPixel(pose, c);
+  const auto p1 = scene.lifter.worldToPixel(pose, ahead);
+  if (!p0 || !p1) {
+    return std::nullopt;
+  }
+  const Eigen::Vector2d f = (*p1 - *p0).normalized();
+  const Eigen::Vector2d n(-f.y(), f.x());
+  double fMin = 1e18, fMax = -1e18, nMin = 1e18, nMax = -1e18;
+  for (int k = 0; k < placed.keypointsEnu.cols(); ++k) {
+    const auto p = scene.lifter.worldToPixel(pose, placed.keypointsEnu.col(k));
+    if (!p) {
+      return std::nullopt;
+    }
+    const Eigen::Vector2d r = *p - *p0;
+    fMin = std::min(fMin, r.dot(f));
+    fMax = std::max(fMax, r.dot(f));
+    nMin = std::min(nMin, r.dot(n));
+    nMax = std::max(nMax, r.dot(n));
+  }
+  const Eigen::Vector2d centre = *p0 + f * (0.5 * (fMin + fMax)) + n * (0.5 * (nMin + nMax));
+  return geometry::RotatedBox{centre.x(), centre.y(), fMax - fMin, nMax - nMin,
+                              geometry::wrapTwoPi(std::atan2(f.y(), f.x()))};
+}
+
+// A box that encloses the whole vehicle shows, on a tilted view, the vehicle's middle about
+// half its height up: lifted at ground level its centre lands off the footprint by the
+// parallax (~ h/2 tan(off-nadir angle)); lifted at half the shape's height it lands on it.
+TEST(DetectionLifter, WholeVehicleBoxesLiftAtHalfTheirHeight) {
+  Scene scene(testworld::plane(0.04, -0.02), camera::LensModel::BrownConrady);
+  const lifting::DronePose pose = testworld::hoveringPose(30.0, -60.0);  // 30 deg off nadir
+  const auto cameraPose = scene.lifter.cameraPose(pose);
+  ASSERT_TRUE(cameraPose);
+  std::vector<TruthVehicle> seen;
+  std::vector<detection::Detection> detections;
+  for (const TruthVehicle& t : testworld::truthVehicles(scene.terrain, 90.0, 7.5)) {
+    detection::Detection d;
+    if (!testworld::perfectDetection(scene, *cameraPose, t, &d)) {
+      continue;
+    }
+    const auto box = hullBox(scene, *cameraPose, t, d);
+    if (box && scene.camera.inImage({box->cx, box->cy}, 50.0)) {
+      d.box = *box;
+      detections.push_back(d);
+      seen.push_back(t);
+    }
+  }
+  ASSERT_GT(detections.size(), 40U);
+
+  const auto medianError = [&](double share) {
+    DetectionLifter lifter;
+    DetectionLifterOptions options;
+    options.boxHeightShare = share;
+    std::string why;
+    EXPECT_TRUE(lifter.init(scene.terrain, scene.frame, scene.asmModel, options, &why)) << why;
+    std::vector<VehicleObservation> out(detections.size());
+    const FrameLiftSummary summary =
+        lifter.liftFrame(scene.lifter, 1, telemetry::PoseStatus::Ok, pose, detections, out);
+    EXPECT_EQ(summary.lifted, detections.size());
+    std::vector<double> errors;
+    for (std::size_t i = 0; i < detections.size(); ++i) {
+      errors.push_back(
+          (out[i].ground.centreEnu.head<2>() - seen[i].footprint.centreEnu.head<2>()).norm());
+    }
+    std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2),
+                     errors.end());
+    return errors[errors.size() / 2];
+  };
+  const double atGround = medianError(0.0);
+  const double atHalfHeight = medianError(0.5);
+  std::printf(
+      "[ hull boxes, 30 deg off nadir ] %zu vehicles: median position error %.3f m at "
+      "ground level, %.3f m at half height\n",
+      detections.size(), atGround, atHalfHeight);
+  EXPECT_GT(atGround, 0.25);  // ~0.75 m * tan(30 deg) and more off-centre
+  EXPECT_LT(atHalfHeight, 0.10);
+  EXPECT_LT(atHalfHeight, 0.3 * atGround);
+
+  DetectionLifter bad;
+  DetectionLifterOptions wrong;
+  wrong.boxHeightShare = 1.5;
+  std::string why;
+  EXPECT_FALSE(bad.init(scene.terrain, scene.frame, scene.asmModel, wrong, &why));
+  EXPECT_NE(why.find("box height share"), std::string::npos) << why;
+}
 
 // Returns true when the observation carries no world value (all zero, flags off).
 bool noWorldValues(const VehicleObservation& o) {
