@@ -49,7 +49,7 @@ struct MotionNoise {
   double standstillDecay_s = 0.5;        // v, a relax to 0 inside the dead band
   double measurementPosition_m = 0.10;   // detection centre, per axis
   double measurementHeading_rad = 0.06;  // detection heading
-  double initialSpeed_mps = 8.0;         // prior spread of v at track birth
+  double initialSpeed_mps = 20.0;        // prior spread of v at track birth
   double initialAcceleration_mps2 = 1.5;
   double initialSteering_rad = 0.15;
 };
