@@ -21,12 +21,6 @@ bool inUnitInterval(double value, bool allowZero) {
 }
 
 // Axis-aligned extent of a rotated box: half sizes along u and v.
-void halfExtents(const geometry::RotatedBox& box, double* halfU, double* halfV) {
-  const double c = std::abs(std::cos(box.angle));
-  const double s = std::abs(std::sin(box.angle));
-  *halfU = 0.5 * (box.length * c + box.width * s);
-  *halfV = 0.5 * (box.length * s + box.width * c);
-}
 
 }  // namespace
 
@@ -190,7 +184,7 @@ DecodeStatus DetectionDecoder::decodeTile(const HeadTensors& heads,
     // Cut by an inner tile edge? (tile px; the tile's outer pixel edges are at -0.5, size-0.5)
     double halfU = 0.0;
     double halfV = 0.0;
-    halfExtents(box, &halfU, &halfV);
+    geometry::axisAlignedHalfExtents(box, &halfU, &halfV);
     const bool cut = (rect.innerLeft && box.cx - halfU < -0.5 + margin) ||
                      (rect.innerTop && box.cy - halfV < -0.5 + margin) ||
                      (rect.innerRight && box.cx + halfU > rect.widthPx - 0.5 - margin) ||

@@ -32,6 +32,8 @@ struct Detection {
   float flipProbability = 0.0F;  // second stage's belief that the first stage's front was the rear
                                  // (already applied to box.angle; kept for the tracker / reports)
   std::int16_t tile = -1;        // index of the tile it came from (diagnostics)
+  bool atFrameEdge = false;      // the box reaches the frame's border: the vehicle may be cut
+                                 // off there, so its centre and size are biased
 };
 
 // Most likely type and the runner-up (the pipeline keeps the top two).

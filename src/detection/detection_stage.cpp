@@ -207,6 +207,7 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
   // same car. A last suppression on the refined boxes keeps the better one. Cars do not
   // overlap each other on the ground, so the "contained in" test is safe within a tile too.
   const std::size_t refinedKept = secondStage ? suppressRefinedDuplicates(out.first(kept)) : kept;
+  markFrameEdge(frame.geometry, out.first(refinedKept));
   stats_.refinedDuplicates = static_cast<int>(kept - refinedKept);
   stats_.crops_ms = millisecondsBetween(nmsEnd, Clock::now());
   stats_.detector_ms = detectorMs;
@@ -218,6 +219,22 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
   stats_.droppedForCapacity = static_cast<int>(decoder_.droppedForCapacity());
   *count = refinedKept;
   return DetectionStatus::Ok;
+}
+
+void DetectionStage::markFrameEdge(const preprocess::FrameGeometry& geometry,
+                                   std::span<Detection> detections) const {
+  // The decoder's cut margin (working px) in frame px; frame pixel edges at -0.5, size - 0.5.
+  const double margin =
+      options_.decoder.cutEdgeMarginPx / std::min(geometry.scaleX, geometry.scaleY);
+  const double right = geometry.frameWidthPx - 0.5 - margin;
+  const double bottom = geometry.frameHeightPx - 0.5 - margin;
+  for (Detection& d : detections) {
+    double halfU = 0.0;
+    double halfV = 0.0;
+    geometry::axisAlignedHalfExtents(d.box, &halfU, &halfV);
+    d.atFrameEdge = d.box.cx - halfU < -0.5 + margin || d.box.cy - halfV < -0.5 + margin ||
+                    d.box.cx + halfU > right || d.box.cy + halfV > bottom;
+  }
 }
 
 std::size_t DetectionStage::suppressRefinedDuplicates(std::span<Detection> detections) const {

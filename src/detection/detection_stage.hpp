@@ -92,6 +92,10 @@ class DetectionStage {
  private:
   // Removes detections that overlap a better one after the second stage; returns the count kept.
   std::size_t suppressRefinedDuplicates(std::span<Detection> detections) const;
+  // Sets Detection::atFrameEdge: the box's bounds come within the decoder's cut margin of the
+  // frame's border.
+  void markFrameEdge(const preprocess::FrameGeometry& geometry,
+                     std::span<Detection> detections) const;
 
   bool initialised_ = false;
   DetectionStageOptions options_{};

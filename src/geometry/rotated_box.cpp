@@ -118,6 +118,13 @@ double area(const RotatedBox& box) {
   return box.length * box.width;
 }
 
+void axisAlignedHalfExtents(const RotatedBox& box, double* halfU, double* halfV) {
+  const double c = std::abs(std::cos(box.angle));
+  const double s = std::abs(std::sin(box.angle));
+  *halfU = 0.5 * (box.length * c + box.width * s);
+  *halfV = 0.5 * (box.length * s + box.width * c);
+}
+
 double intersectionArea(const RotatedBox& boxA, const RotatedBox& boxB) {
   if (isDegenerate(boxA) || isDegenerate(boxB)) {
     return 0.0;

@@ -35,6 +35,9 @@ std::array<Eigen::Vector2d, 4> corners(const RotatedBox& box);
 // Area of the box (length * width).
 double area(const RotatedBox& box);
 
+// Half width and half height of the box's axis-aligned bounding box.
+void axisAlignedHalfExtents(const RotatedBox& box, double* halfU, double* halfV);
+
 // Exact area of the intersection of two rotated boxes (convex polygon clipping).
 double intersectionArea(const RotatedBox& a, const RotatedBox& b);
 

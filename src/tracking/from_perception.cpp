@@ -16,6 +16,7 @@ bool toWorldDetection(const perception::VehicleObservation& observation, WorldDe
   out->score = d.score;
   out->typeProbabilities = d.typeProbabilities;
   out->shape = d.gamma;
+  out->atFrameEdge = d.atFrameEdge;
   return true;
 }
 

@@ -78,6 +78,13 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
       !(config.shapeMaxWeight > 0.0)) {
     return fail("tracking: times, noise sigmas, typeFloor and shapeMaxWeight must be > 0");
   }
+  if (!(config.maxCoast_s >= 0.0) || !(config.noise.steeringDecay_s >= 0.0) ||
+      !(config.frameEdgeNoiseFactor >= 1.0) ||
+      !(config.frameEdgeShapeWeight > 0.0 && config.frameEdgeShapeWeight <= 1.0)) {
+    return fail(
+        "tracking: maxCoast_s and steeringDecay_s must be >= 0, frameEdgeNoiseFactor >= 1, "
+        "frameEdgeShapeWeight in (0, 1]");
+  }
   config_ = config;
   if (!associator_.init(config.maxTracks, config.maxDetections, config.association)) {
     return fail("tracking: association parameters invalid (lowScore > highScore?)");
@@ -172,7 +179,17 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
       slot.disagreeRun = 0;
     }
   }
-  slot.motion.update(d.centreEnu, heading, d.headingKnown, config_.noise);
+  // A vehicle cut off by the image border is seen in part: its box centre lags behind the
+  // vehicle's (entering) or runs ahead (leaving), its length is short. Such a detection can be
+  // given a larger position noise (frameEdgeNoiseFactor) and hardly changes the fused size and
+  // shape.
+  if (d.atFrameEdge) {
+    MotionNoise edgeNoise = config_.noise;
+    edgeNoise.measurementPosition_m *= config_.frameEdgeNoiseFactor;
+    slot.motion.update(d.centreEnu, heading, d.headingKnown, edgeNoise);
+  } else {
+    slot.motion.update(d.centreEnu, heading, d.headingKnown, config_.noise);
+  }
 
   // Direction of travel decides the heading of a moving car; a run of disagreeing
   // detections decides it for a standing one (its first detection may have been flipped).
@@ -197,7 +214,8 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   }
 
   // Shape and size: score-weighted running means with a capped weight.
-  const double w = std::max(1e-3, static_cast<double>(d.score));
+  const double w = std::max(1e-3, static_cast<double>(d.score)) *
+                   (d.atFrameEdge ? config_.frameEdgeShapeWeight : 1.0);
   const double keep = std::min(1.0, config_.shapeMaxWeight / (slot.sizeWeight + w));
   out.lengthM = (slot.sizeWeight * out.lengthM + w * d.lengthM) / (slot.sizeWeight + w);
   out.widthM = (slot.sizeWeight * out.widthM + w * d.widthM) / (slot.sizeWeight + w);

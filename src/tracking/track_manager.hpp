@@ -68,6 +68,12 @@ struct TrackerConfig {
   double typeEvidenceWeight = 0.5;
   double typeFloor = 0.02;
   double shapeMaxWeight = 30.0;
+  // A detection cut by the image border (WorldDetection::atFrameEdge): its position noise is
+  // scaled by this factor (1: treated as any other; 3 made the speed of young tracks worse on
+  // the tuning seeds, 0.57 -> 0.62 m/s RMSE, docs/tracking.md), and its weight in the size and
+  // shape means by the second (its length is short).
+  double frameEdgeNoiseFactor = 1.0;
+  double frameEdgeShapeWeight = 0.05;
   const shape::ActiveShapeModel* asmModel = nullptr;  // borrowed; wheelbase from gamma
 };
 

@@ -30,6 +30,7 @@ struct WorldDetection {
   float score = 0.0f;                   // detector confidence, [0, 1]
   std::array<float, shape::kVehicleTypeCount> typeProbabilities{};  // sum 1
   shape::ShapeParams shape{};                                       // ASM gamma
+  bool atFrameEdge = false;  // cut by the image border: centre and size biased (less weight)
 };
 
 }  // namespace vp::tracking

@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -140,3 +142,74 @@ TEST(TileBorder, AStraddlingVehicleIsDetectedOnceWheneverItsWholeTileFindsIt) {
 }
 
 }  // namespace
+
+// A vehicle cut off by the frame's border is seen in part, so its box is biased: the detection
+// stage marks it (Detection::atFrameEdge) for the tracker, and only such detections.
+TEST(FrameBorder, DetectionsOfVehiclesCutByTheFrameBorderAreMarked) {
+  vp::sim::SimOptions sim;
+  sim.scene = vp::sim::SceneKind::Intersection;  // cars drive in and out of the frame
+  sim.seed = 9105;                               // held-out range
+  sim.frames = 1;
+  sim.width = 1296;
+  sim.height = 1024;
+  sim.supersampling = 1;
+  sim.threads = 2;
+  vp::sim::Simulator simulator;
+  std::string why;
+  ASSERT_TRUE(simulator.init(sim, &why)) << why;
+  vp::sim::FrameOutput frame;
+  ASSERT_TRUE(simulator.nextFrame(frame, &why)) << why;
+
+  vp::detection::DetectionStageOptions options;
+  options.detectorModelPath = std::string(VP_SOURCE_DIR) + "/models/detector/detector_int8.onnx";
+  options.cropModelPath = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
+  options.decoder.scoreThreshold = 0.1F;  // marking, not recall, is tested: keep weak ones
+  vp::detection::DetectionStage stage;
+  ASSERT_TRUE(stage.init(options, vp::preprocess::kMaxTiles, &why)) << why;
+  vp::preprocess::PreprocessOptions pre;
+  pre.workingScale = 0.5;
+  pre.networkWidthPx = stage.detectorInputWidth();
+  pre.networkHeightPx = stage.detectorInputHeight();
+  vp::preprocess::Preprocessor preprocessor;
+  ASSERT_TRUE(preprocessor.init(pre, simulator.camera(), frame.image.size(), &why)) << why;
+  ASSERT_EQ(preprocessor.process(frame.image), vp::preprocess::PreprocessStatus::Ok);
+  std::vector<Detection> all(vp::detection::kMaxDetectionsPerFrame);
+  std::size_t count = 0;
+  ASSERT_EQ(stage.run(preprocessor.output(), all, &count), vp::detection::DetectionStatus::Ok);
+  all.resize(count);
+
+  const double w = frame.image.cols, h = frame.image.rows;
+  int cutFound = 0, cutMarked = 0, insideFound = 0, insideMarked = 0;
+  for (const auto& object : frame.objects) {
+    const RotatedBox& truth = object.imageBox;
+    // The detection lying most on the vehicle (a cut vehicle's box is only its visible part,
+    // so its centre can be far from the whole vehicle's): at least half of it on the truth.
+    const Detection* best = nullptr;
+    double bestShare = 0.5;
+    for (const Detection& d : all) {
+      const double share = vp::geometry::intersectionArea(truth, d.box) / vp::geometry::area(d.box);
+      if (share > bestShare) {
+        bestShare = share;
+        best = &d;
+      }
+    }
+    if (best == nullptr || object.occlusion > 0.5) {
+      continue;
+    }
+    const double reach = truth.length;  // a car length from every border: wholly inside
+    if (object.truncation > 0.1) {
+      ++cutFound;
+      cutMarked += best->atFrameEdge;
+    } else if (object.truncation == 0.0 && truth.cx > reach && truth.cx < w - reach &&
+               truth.cy > reach && truth.cy < h - reach) {
+      ++insideFound;
+      insideMarked += best->atFrameEdge;
+    }
+  }
+  std::printf("frame border: %d cut vehicles found, %d marked; %d inside found, %d marked\n",
+              cutFound, cutMarked, insideFound, insideMarked);
+  EXPECT_GE(cutFound, 2) << "the scene must put vehicles across the frame's border";
+  EXPECT_EQ(cutMarked, cutFound);
+  EXPECT_GE(insideFound, 10);
+  EXPECT_EQ(insideMarked, 0);
+}

@@ -104,6 +104,40 @@ TEST(TrackManager, LifecycleTentativeConfirmedLostReacquiredDeleted) {
   EXPECT_TRUE(m.tracks().empty());
 }
 
+// A detection cut by the image border (a vehicle driving into the frame: its visible part's
+// centre lags behind, its length is short) pulls the track less than a whole one.
+TEST(TrackManager, DetectionsAtTheFrameEdgeMoveTheTrackLess) {
+  const auto run = [](bool atEdge) {
+    TrackerConfig config = smallConfig();
+    config.noise.measurementPosition_m = 0.3;  // the app's (docs/tracking.md)
+    config.frameEdgeNoiseFactor = 3.0;
+    TrackManager m;
+    EXPECT_TRUE(m.init(config));
+    std::int64_t t = 0;
+    for (int k = 0; k < 10; ++k, t += kFrameNs) {
+      EXPECT_TRUE(m.step(t, std::vector<WorldDetection>{car(0.0, 0.0, 0.0, t)}).hasValue());
+    }
+    WorldDetection cut = car(-0.5, 0.0, 0.0, t);  // centre 0.5 m behind, 3.5 m seen
+    cut.lengthM = 3.5;
+    cut.atFrameEdge = atEdge;
+    EXPECT_TRUE(m.step(t, std::vector<WorldDetection>{cut}).hasValue());
+    EXPECT_EQ(m.tracks().size(), 1u);
+    return m.tracks()[0];
+  };
+  const TrackState whole = run(false);
+  const TrackState edge = run(true);
+  EXPECT_LT(std::abs(edge.centreEnu.x()), 0.5 * std::abs(whole.centreEnu.x()));
+  EXPECT_LT(std::abs(edge.lengthM - 4.5), 0.2 * std::abs(whole.lengthM - 4.5));
+  EXPECT_GT(std::abs(whole.lengthM - 4.5), 0.05);
+
+  TrackerConfig bad = smallConfig();
+  bad.frameEdgeNoiseFactor = 0.5;
+  TrackManager m;
+  std::string why;
+  EXPECT_FALSE(m.init(bad, &why));
+  EXPECT_NE(why.find("frameEdgeNoiseFactor"), std::string::npos) << why;
+}
+
 TEST(TrackManager, ConfirmedTrackCoastsThroughShortMissesThenTurnsLost) {
   TrackerConfig config = smallConfig();
   config.maxCoast_s = 0.25;  // 2 missed frames at 10 Hz stay confirmed, the 3rd does not
