@@ -111,7 +111,13 @@ std::string joinColumns(const std::vector<std::string>& names) {
 // ---- reader --------------------------------------------------------------------------------
 
 std::string quote(std::string_view text) {
-  return "'" + std::string(text) + "'";
+  // Built by appending: GCC 12 at -O3 reports a false -Wrestrict on "'" + std::string(...).
+  std::string out;
+  out.reserve(text.size() + 2);
+  out.push_back('\'');
+  out.append(text);
+  out.push_back('\'');
+  return out;
 }
 
 std::string location(const std::string& file, int line) {
