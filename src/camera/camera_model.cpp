@@ -305,6 +305,11 @@ Expected<Eigen::Vector2d, CameraError> CameraModel::undistortToNormalized(
 }
 
 Eigen::Vector2d CameraModel::distortPixel(const Eigen::Vector2d& idealPixel) const {
+  if (distortion_.model == LensModel::Pinhole) {
+    // Exactly the identity: through the normalised plane and back, a fused multiply-add (the
+    // default contraction on aarch64) would change the last bit.
+    return idealPixel;
+  }
   const Eigen::Vector2d ideal((idealPixel.x() - intrinsics_.cxPx) / intrinsics_.fxPx,
                               (idealPixel.y() - intrinsics_.cyPx) / intrinsics_.fyPx);
   const Eigen::Vector2d distorted = distortNormalized(ideal);
