@@ -39,6 +39,10 @@ QosProfile DdsConfig::defaultOccupancyQos() {
   return qos;
 }
 
+const char* defaultDdsPluginDir() {
+  return VP_DEFAULT_DDS_PLUGIN_DIR;
+}
+
 const char* toString(Reliability reliability) {
   return reliability == Reliability::Reliable ? "reliable" : "best_effort";
 }

@@ -31,10 +31,13 @@ struct QosProfile {
   double livelinessLease_s = 0.0;  // automatic liveliness lease
 };
 
+// Where Debian's libddsc0debian installs Cyclone's security plugins (outside the linker path)
+// for the architecture built for: /usr/lib/<multiarch triplet>/libddsc0debian.
+const char* defaultDdsPluginDir();
+
 struct SecurityConfig {
   bool enabled = false;
-  // Debian's libddsc0debian installs the plugins outside the linker path.
-  std::string pluginDir = "/usr/lib/x86_64-linux-gnu/libddsc0debian";
+  std::string pluginDir = defaultDdsPluginDir();
   std::string identityCa;           // PEM file
   std::string identityCertificate;  // PEM file
   std::string privateKey;           // PEM file

@@ -1066,7 +1066,12 @@ TEST(ConfigDds, AbsentSectionGivesTheDocumentedDefaults) {
   EXPECT_EQ(dds.grid.rows, 200U);
   EXPECT_EQ(dds.grid.cols, 200U);
   EXPECT_FALSE(dds.security.enabled);
-  EXPECT_EQ(dds.security.pluginDir, "/usr/lib/x86_64-linux-gnu/libddsc0debian");
+  EXPECT_EQ(dds.security.pluginDir, defaultDdsPluginDir());
+#if defined(__x86_64__)
+  EXPECT_STREQ(defaultDdsPluginDir(), "/usr/lib/x86_64-linux-gnu/libddsc0debian");
+#elif defined(__aarch64__)
+  EXPECT_STREQ(defaultDdsPluginDir(), "/usr/lib/aarch64-linux-gnu/libddsc0debian");
+#endif
   EXPECT_TRUE(dds.security.identityCa.empty());
   EXPECT_EQ(dds.telemetry.source, TelemetrySource::None);
   EXPECT_EQ(dds.telemetry.domainId, 0U);
