@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -60,38 +61,53 @@ int matches(const RotatedBox& truth, const std::vector<Detection>& detections) {
   return n;
 }
 
-TEST(TileBorder, AStraddlingVehicleIsDetectedOnceWheneverItsWholeTileFindsIt) {
+// One 1296 x 1024 frame of a held-out simulated scene (seeds 9000-9999 are never trained on).
+vp::sim::SimOptions heldOutFrame(vp::sim::SceneKind scene, std::uint64_t seed) {
   vp::sim::SimOptions sim;
-  sim.scene = vp::sim::SceneKind::Parking;  // many cars, some across the tile borders
-  sim.seed = 9101;                          // held-out range: never used in training
+  sim.scene = scene;
+  sim.seed = seed;
   sim.frames = 1;
   sim.width = 1296;
   sim.height = 1024;
-  sim.altitudeM = 125.0;  // ~10 cm per pixel at this size: the detector's working GSD
-  sim.tiltDeg = 0.0;
   sim.supersampling = 1;
   sim.threads = 2;
-  vp::sim::Simulator simulator;
+  return sim;
+}
+
+// Renders the frame, starts the shipped two-stage detector with the score threshold and
+// preprocesses the frame at the working scale for it (gtest assertions: call under
+// ASSERT_NO_FATAL_FAILURE).
+void prepare(const vp::sim::SimOptions& sim, float scoreThreshold, double workingScale,
+             vp::sim::Simulator& simulator, vp::sim::FrameOutput& frame,
+             vp::detection::DetectionStage& stage, vp::preprocess::Preprocessor& preprocessor) {
   std::string why;
   ASSERT_TRUE(simulator.init(sim, &why)) << why;
-  vp::sim::FrameOutput frame;
   ASSERT_TRUE(simulator.nextFrame(frame, &why)) << why;
-
   vp::detection::DetectionStageOptions options;
   options.detectorModelPath = std::string(VP_SOURCE_DIR) + "/models/detector/detector_int8.onnx";
   options.cropModelPath = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
-  options.decoder.scoreThreshold = 0.4F;
-  vp::detection::DetectionStage stage;
+  options.decoder.scoreThreshold = scoreThreshold;
   ASSERT_TRUE(stage.init(options, vp::preprocess::kMaxTiles, &why)) << why;
-
   vp::preprocess::PreprocessOptions pre;
   pre.undistort = false;
-  pre.workingScale = 1.0;  // frame pixels = working pixels: tiles are needed
+  pre.workingScale = workingScale;
   pre.networkWidthPx = stage.detectorInputWidth();
   pre.networkHeightPx = stage.detectorInputHeight();
-  vp::preprocess::Preprocessor preprocessor;
   ASSERT_TRUE(preprocessor.init(pre, simulator.camera(), frame.image.size(), &why)) << why;
   ASSERT_EQ(preprocessor.process(frame.image), vp::preprocess::PreprocessStatus::Ok);
+}
+
+TEST(TileBorder, AStraddlingVehicleIsDetectedOnceWheneverItsWholeTileFindsIt) {
+  // Many cars, some across the tile borders; ~10 cm per pixel at this size (the detector's
+  // working GSD), so frame pixels = working pixels and the frame needs tiles.
+  vp::sim::SimOptions sim = heldOutFrame(vp::sim::SceneKind::Parking, 9101);
+  sim.altitudeM = 125.0;
+  sim.tiltDeg = 0.0;
+  vp::sim::Simulator simulator;
+  vp::sim::FrameOutput frame;
+  vp::detection::DetectionStage stage;
+  vp::preprocess::Preprocessor preprocessor;
+  ASSERT_NO_FATAL_FAILURE(prepare(sim, 0.4F, 1.0, simulator, frame, stage, preprocessor));
   const vp::preprocess::PreprocessedFrame& tiled = preprocessor.output();
   ASSERT_GE(tiled.tiles.size(), 2U);
 
@@ -146,33 +162,14 @@ TEST(TileBorder, AStraddlingVehicleIsDetectedOnceWheneverItsWholeTileFindsIt) {
 // A vehicle cut off by the frame's border is seen in part, so its box is biased: the detection
 // stage marks it (Detection::atFrameEdge) for the tracker, and only such detections.
 TEST(FrameBorder, DetectionsOfVehiclesCutByTheFrameBorderAreMarked) {
-  vp::sim::SimOptions sim;
-  sim.scene = vp::sim::SceneKind::Intersection;  // cars drive in and out of the frame
-  sim.seed = 9105;                               // held-out range
-  sim.frames = 1;
-  sim.width = 1296;
-  sim.height = 1024;
-  sim.supersampling = 1;
-  sim.threads = 2;
+  // Cars drive in and out of the frame at an intersection. Marking, not recall, is tested:
+  // a low threshold keeps the weak detections of cut vehicles.
   vp::sim::Simulator simulator;
-  std::string why;
-  ASSERT_TRUE(simulator.init(sim, &why)) << why;
   vp::sim::FrameOutput frame;
-  ASSERT_TRUE(simulator.nextFrame(frame, &why)) << why;
-
-  vp::detection::DetectionStageOptions options;
-  options.detectorModelPath = std::string(VP_SOURCE_DIR) + "/models/detector/detector_int8.onnx";
-  options.cropModelPath = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
-  options.decoder.scoreThreshold = 0.1F;  // marking, not recall, is tested: keep weak ones
   vp::detection::DetectionStage stage;
-  ASSERT_TRUE(stage.init(options, vp::preprocess::kMaxTiles, &why)) << why;
-  vp::preprocess::PreprocessOptions pre;
-  pre.workingScale = 0.5;
-  pre.networkWidthPx = stage.detectorInputWidth();
-  pre.networkHeightPx = stage.detectorInputHeight();
   vp::preprocess::Preprocessor preprocessor;
-  ASSERT_TRUE(preprocessor.init(pre, simulator.camera(), frame.image.size(), &why)) << why;
-  ASSERT_EQ(preprocessor.process(frame.image), vp::preprocess::PreprocessStatus::Ok);
+  ASSERT_NO_FATAL_FAILURE(prepare(heldOutFrame(vp::sim::SceneKind::Intersection, 9105), 0.1F, 0.5,
+                                  simulator, frame, stage, preprocessor));
   std::vector<Detection> all(vp::detection::kMaxDetectionsPerFrame);
   std::size_t count = 0;
   ASSERT_EQ(stage.run(preprocessor.output(), all, &count), vp::detection::DetectionStatus::Ok);
