@@ -1,5 +1,6 @@
 #include "lifting/lifting.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace vp::lifting {
@@ -122,6 +123,37 @@ Expected<Eigen::Vector2d, LiftError> Lifter::worldToPixel(const CameraPoseWorld&
     return unexpected(fromCamera(pixel.error()));
   }
   return *pixel;
+}
+
+Expected<geometry::RotatedBox, LiftError> Lifter::enclosingImageBox(
+    const CameraPoseWorld& pose, const Eigen::Vector3d& originEnu, const Eigen::Vector3d& aheadEnu,
+    std::span<const Eigen::Vector3d> pointsEnu) const {
+  const auto p0 = worldToPixel(pose, originEnu);
+  if (!p0) {
+    return unexpected(p0.error());
+  }
+  const auto p1 = worldToPixel(pose, aheadEnu);
+  if (!p1) {
+    return unexpected(p1.error());
+  }
+  const Eigen::Vector2d d = *p1 - *p0;
+  const double angle = geometry::wrapTwoPi(std::atan2(d.y(), d.x()));
+  const Eigen::Vector2d f(std::cos(angle), std::sin(angle));
+  const Eigen::Vector2d n(-f.y(), f.x());
+  double fMin = 1e18, fMax = -1e18, nMin = 1e18, nMax = -1e18;
+  for (const Eigen::Vector3d& point : pointsEnu) {
+    const auto p = worldToPixel(pose, point);
+    if (!p) {
+      return unexpected(p.error());
+    }
+    const Eigen::Vector2d r = *p - *p0;
+    fMin = std::min(fMin, r.dot(f));
+    fMax = std::max(fMax, r.dot(f));
+    nMin = std::min(nMin, r.dot(n));
+    nMax = std::max(nMax, r.dot(n));
+  }
+  const Eigen::Vector2d c = *p0 + f * (0.5 * (fMin + fMax)) + n * (0.5 * (nMin + nMax));
+  return geometry::RotatedBox{c.x(), c.y(), fMax - fMin, nMax - nMin, angle};
 }
 
 Expected<GroundBox, LiftError> Lifter::boxToGround(const CameraPoseWorld& pose,

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <span>
 #include <string>
 
 #include <Eigen/Core>
@@ -84,6 +85,15 @@ class Lifter {
   Expected<GroundBox, LiftError> boxToGround(const CameraPoseWorld& pose,
                                              const geometry::RotatedBox& box,
                                              double boxHeightM = 0.0) const;
+
+  // The image box that encloses world points, its axis along the image direction from
+  // originEnu to aheadEnu (angle = that direction over 360 degrees): the box a whole vehicle
+  // (its vertices or keypoints; origin and a point ahead on its axis) makes in the image — the
+  // simulator's ground truth and so the detector's target. Fails when a point cannot be
+  // projected.
+  Expected<geometry::RotatedBox, LiftError> enclosingImageBox(
+      const CameraPoseWorld& pose, const Eigen::Vector3d& originEnu,
+      const Eigen::Vector3d& aheadEnu, std::span<const Eigen::Vector3d> pointsEnu) const;
 
  private:
   // The ground point below where the pixel's ray is heightM above the DTM.

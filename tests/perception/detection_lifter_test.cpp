@@ -155,28 +155,12 @@ std::optional<geometry::RotatedBox> hullBox(const Scene& scene,
   const Eigen::Vector3d c = truth.footprint.centreEnu;
   const Eigen::Vector3d ahead = c + Eigen::Vector3d(std::cos(truth.footprint.headingEnuRad),
                                                     std::sin(truth.footprint.headingEnuRad), 0.0);
-  const auto p0 = scene.lifter.worldToPixel(pose, c);
-  const auto p1 = scene.lifter.worldToPixel(pose, ahead);
-  if (!p0 || !p1) {
-    return std::nullopt;
-  }
-  const Eigen::Vector2d f = (*p1 - *p0).normalized();
-  const Eigen::Vector2d n(-f.y(), f.x());
-  double fMin = 1e18, fMax = -1e18, nMin = 1e18, nMax = -1e18;
+  std::vector<Eigen::Vector3d> points;
   for (int k = 0; k < placed.keypointsEnu.cols(); ++k) {
-    const auto p = scene.lifter.worldToPixel(pose, placed.keypointsEnu.col(k));
-    if (!p) {
-      return std::nullopt;
-    }
-    const Eigen::Vector2d r = *p - *p0;
-    fMin = std::min(fMin, r.dot(f));
-    fMax = std::max(fMax, r.dot(f));
-    nMin = std::min(nMin, r.dot(n));
-    nMax = std::max(nMax, r.dot(n));
+    points.push_back(placed.keypointsEnu.col(k));
   }
-  const Eigen::Vector2d centre = *p0 + f * (0.5 * (fMin + fMax)) + n * (0.5 * (nMin + nMax));
-  return geometry::RotatedBox{centre.x(), centre.y(), fMax - fMin, nMax - nMin,
-                              geometry::wrapTwoPi(std::atan2(f.y(), f.x()))};
+  const auto box = scene.lifter.enclosingImageBox(pose, c, ahead, points);
+  return box ? std::optional<geometry::RotatedBox>(*box) : std::nullopt;
 }
 
 // A box that encloses the whole vehicle shows, on a tilted view, the vehicle's middle about

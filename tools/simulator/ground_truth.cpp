@@ -11,34 +11,17 @@ constexpr double kKeypointDepthToleranceM = 0.15;
 
 bool imageBox(const SimVehicle& vehicle, const GroundTruthContext& ctx, geometry::RotatedBox* box) {
   const VehiclePose pose = vehiclePose(vehicle, *ctx.world);
-  const Eigen::Vector3d ahead = pose.toWorld({1.0, 0.0, 0.0});
-  const auto p0 = ctx.lifter->worldToPixel(ctx.pose, pose.originEnu);
-  const auto p1 = ctx.lifter->worldToPixel(ctx.pose, ahead);
-  if (!p0 || !p1) {
+  std::vector<Eigen::Vector3d> vertices;
+  vertices.reserve(vehicle.model->vertices.size());
+  for (const Eigen::Vector3d& v : vehicle.model->vertices) {
+    vertices.push_back(pose.toWorld(v));
+  }
+  const auto enclosing = ctx.lifter->enclosingImageBox(ctx.pose, pose.originEnu,
+                                                       pose.toWorld({1.0, 0.0, 0.0}), vertices);
+  if (!enclosing) {
     return false;
   }
-  const Eigen::Vector2d d = *p1 - *p0;
-  const double angle = geometry::wrapTwoPi(std::atan2(d.y(), d.x()));
-  const Eigen::Vector2d f(std::cos(angle), std::sin(angle));
-  const Eigen::Vector2d n(-f.y(), f.x());
-  double fMin = 1e18, fMax = -1e18, nMin = 1e18, nMax = -1e18;
-  for (const Eigen::Vector3d& v : vehicle.model->vertices) {
-    const auto p = ctx.lifter->worldToPixel(ctx.pose, pose.toWorld(v));
-    if (!p) {
-      return false;
-    }
-    const Eigen::Vector2d r = *p - *p0;
-    fMin = std::min(fMin, r.dot(f));
-    fMax = std::max(fMax, r.dot(f));
-    nMin = std::min(nMin, r.dot(n));
-    nMax = std::max(nMax, r.dot(n));
-  }
-  const Eigen::Vector2d c = *p0 + f * (0.5 * (fMin + fMax)) + n * (0.5 * (nMin + nMax));
-  box->cx = c.x();
-  box->cy = c.y();
-  box->length = fMax - fMin;
-  box->width = nMax - nMin;
-  box->angle = angle;
+  *box = *enclosing;
   return true;
 }
 
