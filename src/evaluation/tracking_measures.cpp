@@ -1,5 +1,6 @@
 #include "evaluation/tracking_measures.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "geometry/rotated_box.hpp"
@@ -97,11 +98,85 @@ int TrackingEvaluator::trackKey(std::int64_t id) {
   return it->second;
 }
 
+// The truth vehicles not marked ignore, and the observations the pairing rule does not pair
+// with an ignored one (previous: as for matchByDistance, over all of truth).
+template <typename Observation, typename Position>
+void TrackingEvaluator::keepCounted(std::span<const TruthVehicle> truth,
+                                    std::span<const Observation> observations, Position position,
+                                    std::span<const int> previous,
+                                    std::vector<TruthVehicle>& keptTruth,
+                                    std::vector<Observation>& keptObservations, int& ignoredTruth,
+                                    int& ignoredObservations) const {
+  keptTruth.clear();
+  keptObservations.clear();
+  std::vector<Eigen::Vector2d> truthPositions(truth.size());
+  std::vector<Eigen::Vector2d> positions(observations.size());
+  for (std::size_t g = 0; g < truth.size(); ++g) {
+    truthPositions[g] = truth[g].positionEnu;
+  }
+  for (std::size_t h = 0; h < observations.size(); ++h) {
+    positions[h] = position(observations[h]);
+  }
+  const std::vector<int> pairs =
+      matchByDistance(truthPositions, positions, previous, options_.matchDistance_m);
+  std::vector<bool> dropped(observations.size(), false);
+  for (std::size_t g = 0; g < truth.size(); ++g) {
+    if (!truth[g].ignore) {
+      keptTruth.push_back(truth[g]);
+      continue;
+    }
+    ++ignoredTruth;
+    if (pairs[g] >= 0) {
+      dropped[static_cast<std::size_t>(pairs[g])] = true;
+      ++ignoredObservations;
+    }
+  }
+  for (std::size_t h = 0; h < observations.size(); ++h) {
+    if (!dropped[h]) {
+      keptObservations.push_back(observations[h]);
+    }
+  }
+}
+
 void TrackingEvaluator::addFrame(std::span<const TruthVehicle> truth,
                                  std::span<const TrackObservation> tracks) {
   if (sequence_ < 0) {
     beginSequence();
   }
+  const bool anyIgnored =
+      std::any_of(truth.begin(), truth.end(), [](const TruthVehicle& t) { return t.ignore; });
+  if (anyIgnored) {
+    std::vector<TruthVehicle> keptTruth;
+    std::vector<TrackObservation> keptTracks;
+    keepCounted(
+        truth, tracks, [](const TrackObservation& t) { return t.centreEnu; },
+        previousPairs(truth, tracks), keptTruth, keptTracks, ignoredTruth_, ignoredTrackRows_);
+    addCountedFrame(keptTruth, keptTracks);
+    return;
+  }
+  addCountedFrame(truth, tracks);
+}
+
+std::vector<int> TrackingEvaluator::previousPairs(std::span<const TruthVehicle> truth,
+                                                  std::span<const TrackObservation> tracks) {
+  std::vector<int> previous(truth.size(), -1);
+  for (std::size_t g = 0; g < truth.size(); ++g) {
+    const auto it = previousMatch_.find(truthKey(truth[g].id));
+    if (it == previousMatch_.end()) {
+      continue;
+    }
+    for (std::size_t h = 0; h < tracks.size(); ++h) {
+      if (trackKey(tracks[h].id) == it->second) {
+        previous[g] = static_cast<int>(h);
+        break;
+      }
+    }
+  }
+  return previous;
+}
+
+void TrackingEvaluator::addCountedFrame(std::span<const TruthVehicle> truth,
+                                        std::span<const TrackObservation> tracks) {
   std::vector<int> truthKeys(truth.size());
   std::vector<int> trackKeys(tracks.size());
   std::vector<Eigen::Vector2d> truthPositions(truth.size());
@@ -125,21 +200,8 @@ void TrackingEvaluator::addFrame(std::span<const TruthVehicle> truth,
   }
   mot_.addFrame(truthObjects, trackObjects);
 
-  std::vector<int> previous(truth.size(), -1);
-  for (std::size_t g = 0; g < truth.size(); ++g) {
-    const auto it = previousMatch_.find(truthKeys[g]);
-    if (it == previousMatch_.end()) {
-      continue;
-    }
-    for (std::size_t h = 0; h < tracks.size(); ++h) {
-      if (trackKeys[h] == it->second) {
-        previous[g] = static_cast<int>(h);
-        break;
-      }
-    }
-  }
-  const std::vector<int> pairs =
-      matchByDistance(truthPositions, trackPositions, previous, options_.matchDistance_m);
+  const std::vector<int> pairs = matchByDistance(
+      truthPositions, trackPositions, previousPairs(truth, tracks), options_.matchDistance_m);
   std::map<int, int> current;
   for (std::size_t g = 0; g < truth.size(); ++g) {
     const TruthVehicle& t = truth[g];
@@ -172,6 +234,23 @@ void TrackingEvaluator::addFrame(std::span<const TruthVehicle> truth,
 
 void TrackingEvaluator::addDetectorFrame(std::span<const TruthVehicle> truth,
                                          std::span<const DetectionObservation> detections) {
+  const bool anyIgnored =
+      std::any_of(truth.begin(), truth.end(), [](const TruthVehicle& t) { return t.ignore; });
+  if (anyIgnored) {
+    std::vector<TruthVehicle> keptTruth;
+    std::vector<DetectionObservation> keptDetections;
+    int ignoredTruth = 0;  // counted once, by addFrame
+    keepCounted(
+        truth, detections, [](const DetectionObservation& d) { return d.positionEnu; }, {},
+        keptTruth, keptDetections, ignoredTruth, ignoredDetections_);
+    addCountedDetectorFrame(keptTruth, keptDetections);
+    return;
+  }
+  addCountedDetectorFrame(truth, detections);
+}
+
+void TrackingEvaluator::addCountedDetectorFrame(std::span<const TruthVehicle> truth,
+                                                std::span<const DetectionObservation> detections) {
   ++detectorFrames_;
   detections_ += static_cast<int>(detections.size());
   std::vector<Eigen::Vector2d> truthPositions(truth.size());
@@ -212,6 +291,9 @@ TrackingSummary TrackingEvaluator::summary() const {
   s.sequences = sequence_ + 1;
   s.tracks = static_cast<int>(tracks_.size());
   s.truthMoving = truthMoving_;
+  s.ignoredTruth = ignoredTruth_;
+  s.ignoredTrackRows = ignoredTrackRows_;
+  s.ignoredDetections = ignoredDetections_;
   s.speedSamples = speedSamples_;
   s.speedRmse_mps = speedSamples_ > 0 ? std::sqrt(speedSquaredSum_ / speedSamples_) : kNaN;
   s.trackHeadingSamples = trackHeadingSamples_;

@@ -6,6 +6,11 @@
 // Contract: a TrackingEvaluator is given, frame by frame, the ground-truth vehicles and the
 // confirmed tracks (addFrame), and optionally the same frame's lifted detections
 // (addDetectorFrame); summary() computes the measures. Definitions (docs/evaluation.md):
+//   - ignored truth: a vehicle marked ignore (hardly visible: the detection evaluation's
+//     occlusion / truncation limits) is neither a miss when no track is on it nor makes the
+//     track on it a false positive: per frame, tracks are first paired with all vehicles by
+//     the rule below; the ignored vehicles and the tracks paired with them are then left out
+//     of every measure (the MOT Challenge's treatment of distractors);
 //   - matching, per frame in world ENU: a truth/track pair counts when the footprint centres
 //     are at most matchDistance_m apart; a pair matched in the previous frame is kept while it
 //     stays within the distance, the rest are paired by minimum total distance (Hungarian) —
@@ -48,7 +53,8 @@ struct TruthVehicle {
   Eigen::Vector2d positionEnu{0.0, 0.0};  // footprint centre, world ENU, m
   double headingEnuRad = 0.0;             // driving direction
   double speedMps = 0.0;
-  int type = -1;  // static_cast<int>(shape::VehicleType), -1 unknown
+  int type = -1;        // static_cast<int>(shape::VehicleType), -1 unknown
+  bool ignore = false;  // hardly visible: left out with whatever is paired with it
 };
 
 struct TrackObservation {
@@ -77,8 +83,11 @@ struct TrackingSummary {
   tracking::MotSummary mot{};  // MOTA, MOTP, IDF1, id switches, ... (its speed/heading/type
                                // fields are unused: see the fields below)
   int sequences = 0;
-  int tracks = 0;       // distinct confirmed tracks
-  int truthMoving = 0;  // truth vehicle-frames that move
+  int tracks = 0;             // distinct confirmed tracks
+  int ignoredTruth = 0;       // truth vehicle-frames marked ignore (not in truthObjects)
+  int ignoredTrackRows = 0;   // track rows paired with them (not in hypotheses)
+  int ignoredDetections = 0;  // detections paired with them (detector alone)
+  int truthMoving = 0;        // truth vehicle-frames that move
   // speed (matched track-frames of moving vehicles)
   int speedSamples = 0;
   double speedRmse_mps = 0.0;
@@ -125,6 +134,19 @@ class TrackingEvaluator {
   };
   int truthKey(std::int64_t id);
   int trackKey(std::int64_t id);
+  // For each truth, the index of the track it was paired with in the last frame, or -1.
+  std::vector<int> previousPairs(std::span<const TruthVehicle> truth,
+                                 std::span<const TrackObservation> tracks);
+  template <typename Observation, typename Position>
+  void keepCounted(std::span<const TruthVehicle> truth, std::span<const Observation> observations,
+                   Position position, std::span<const int> previous,
+                   std::vector<TruthVehicle>& keptTruth, std::vector<Observation>& keptObservations,
+                   int& ignoredTruth, int& ignoredObservations) const;
+  // The frame without ignored vehicles and what is paired with them.
+  void addCountedFrame(std::span<const TruthVehicle> truth,
+                       std::span<const TrackObservation> tracks);
+  void addCountedDetectorFrame(std::span<const TruthVehicle> truth,
+                               std::span<const DetectionObservation> detections);
 
   TrackingOptions options_;
   tracking::MotAccumulator mot_;
@@ -136,6 +158,9 @@ class TrackingEvaluator {
   std::map<int, TrackRecord> tracks_;                      // track key -> record
   int matchOrder_ = 0;
   int truthMoving_ = 0;
+  int ignoredTruth_ = 0;
+  int ignoredTrackRows_ = 0;
+  int ignoredDetections_ = 0;
   int speedSamples_ = 0;
   double speedSquaredSum_ = 0.0;
   int trackHeadingSamples_ = 0;

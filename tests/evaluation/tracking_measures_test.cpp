@@ -127,6 +127,42 @@ TEST(TrackingMeasures, MissesFalseTracksAndFragmentation) {
   EXPECT_EQ(s.typedTracks, 1);
 }
 
+TEST(TrackingMeasures, IgnoredVehiclesAndWhatIsPairedWithThemAreNotCounted) {
+  // Vehicle A is tracked throughout; vehicle B is hardly visible (ignore) in frames 0..4 and
+  // has a track on it only in frames 3..9; vehicle C is ignore and never tracked.
+  TrackingEvaluator e;
+  for (int f = 0; f < 10; ++f) {
+    const TruthVehicle a = vehicle(1, f, 0.0);
+    TruthVehicle b = vehicle(2, f, 10.0);
+    b.ignore = f < 5;
+    TruthVehicle c = vehicle(3, 40.0, 40.0, 0.0);
+    c.ignore = true;
+    std::vector<TrackObservation> tracks{trackOn(1, a)};
+    if (f >= 3) {
+      tracks.push_back(trackOn(2, b, 0.5));
+    }
+    e.addFrame(std::vector<TruthVehicle>{a, b, c}, tracks);
+    e.addDetectorFrame(std::vector<TruthVehicle>{a, b, c},
+                       std::vector<DetectionObservation>{{a.positionEnu, 0.0, true, kSedan},
+                                                         {c.positionEnu, 0.0, true, kSedan}});
+  }
+  const TrackingSummary s = e.summary();
+  // Counted: A in 10 frames, B in frames 5..9; C never.
+  EXPECT_EQ(s.mot.truthObjects, 15);
+  EXPECT_EQ(s.ignoredTruth, 15);
+  EXPECT_EQ(s.ignoredTrackRows, 2);  // track 2 on B in frames 3 and 4
+  EXPECT_EQ(s.mot.hypotheses, 15);
+  EXPECT_EQ(s.mot.misses, 0);
+  EXPECT_EQ(s.mot.falsePositives, 0);
+  EXPECT_DOUBLE_EQ(s.mot.mota, 1.0);
+  EXPECT_DOUBLE_EQ(s.mot.idf1, 1.0);
+  EXPECT_EQ(s.mot.truthTracks, 2);
+  // The detector's detection on C is paired with it and left out as well.
+  EXPECT_EQ(s.ignoredDetections, 10);
+  EXPECT_EQ(s.detections, 10);
+  EXPECT_EQ(s.detectionsMatched, 10);
+}
+
 TEST(TrackingMeasures, SpeedAndHeadingOfMovingVehiclesOnly) {
   // A drives east at 10 m/s; B is parked. Track on A: 11, 9, 11, ... m/s for frames 0..7,
   // then reversed (heading pi, -10 m/s) for frames 8 and 9. Track on B: 3 m/s, flipped.

@@ -386,6 +386,9 @@ bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& opt
       truth.headingEnuRad = object.headingEnuRad;
       truth.speedMps = object.speedMps;
       truth.type = static_cast<int>(object.type);
+      // Hardly visible vehicles are 'ignore' here as in the detection measures.
+      truth.ignore =
+          object.occlusion > options.maxOcclusion || object.truncation > options.maxTruncation;
       data.truth.push_back(truth);
     }
     out->frames.push_back(std::move(data));

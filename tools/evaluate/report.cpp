@@ -233,6 +233,10 @@ std::vector<Row> trackingRows(const evaluation::TrackingSummary& t) {
       {mot, "misses", "misses", static_cast<double>(m.misses), Unit::Count},
       {mot, "false positives", "false_positives", static_cast<double>(m.falsePositives),
        Unit::Count},
+      {mot, "ignored vehicle-frames (hardly visible, not counted)", "ignored_truth",
+       static_cast<double>(t.ignoredTruth), Unit::Count},
+      {mot, "track-frames on ignored vehicles (not counted)", "ignored_track_rows",
+       static_cast<double>(t.ignoredTrackRows), Unit::Count},
       {mot, "confirmed tracks", "tracks", static_cast<double>(t.tracks), Unit::Count},
       {mot, "confirmed tracks never matched", "unmatched_tracks",
        static_cast<double>(t.unmatchedTracks), Unit::Count},
@@ -267,7 +271,11 @@ std::string trackingMarkdown(const ReportContext& context) {
   std::ostringstream md;
   md << "\n## Tracking\n\n";
   md << "- hypotheses: the `confirmed` rows of the trajectory files (tentative and lost rows are "
-        "not); truth: every ground-truth vehicle of each evaluated frame\n";
+        "not); truth: every ground-truth vehicle of each evaluated frame, except those with "
+        "occlusion > "
+     << shortest(context.maxOcclusion) << " or truncation > " << shortest(context.maxTruncation)
+     << ": they and the tracks (detections) paired with them are ignored, neither misses nor "
+        "false positives\n";
   md << "- matching: per frame in world ENU, footprint centres at most "
      << shortest(context.trackMatchDistance_m)
      << " m apart; last frame's pairs kept while within that distance, the rest by minimum "
