@@ -666,17 +666,15 @@ void App::publishFrame(std::int64_t timestampNs, std::int64_t frameId) {
   const std::span<const tracking::TrackState> tracks = tracker_.tracks();
   stateCount_ = 0;
   for (const tracking::TrackState& track : tracks) {
-    const double age_s = ages_.ageOf(track.id, timestampNs);
     // Tentative tracks are never published (the publisher would skip them too).
     if (track.status == tracking::TrackStatus::Tentative || stateCount_ >= states_.size()) {
       continue;
     }
     states_[stateCount_] =
-        toVehicleState(track, age_s, config_.dds.droneId, toUtcNs_, frame_, &terrain_, &asm_);
+        toVehicleState(track, config_.dds.droneId, toUtcNs_, frame_, &terrain_, &asm_);
     published_[stateCount_] = track;
     ++stateCount_;
   }
-  ages_.retain(tracks);
   const std::span<const messages::VehicleState> states(states_.data(), stateCount_);
   if (dds_) {
     for (const messages::VehicleState& state : states) {

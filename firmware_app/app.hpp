@@ -144,7 +144,6 @@ class App {
   std::vector<tracking::TrackState> published_;  // the same tracks as the tracker has them
   std::size_t stateCount_ = 0;
   LoopCounters counters_{};  // processing thread's counts (capture's are in captureCounters_)
-  TrackAges ages_;
   messages::OccupancyGrid grid_;
 
   std::atomic<bool> stop_{false};

@@ -23,16 +23,16 @@ double wrapTwoPi(double angle) {
 
 }  // namespace
 
-messages::VehicleState toVehicleState(const tracking::TrackState& track, double trackAge_s,
-                                      std::uint32_t droneId, std::int64_t toUtcOffsetNs,
-                                      const geodesy::LocalFrame& frame,
+messages::VehicleState toVehicleState(const tracking::TrackState& track, std::uint32_t droneId,
+                                      std::int64_t toUtcOffsetNs, const geodesy::LocalFrame& frame,
                                       const terrain::TerrainModel* terrain,
                                       const shape::ActiveShapeModel* shapeModel) {
   messages::VehicleState state;
   state.droneId = droneId;
   state.trackId = track.id;
   state.measurementTimeNs = track.timestampNs + toUtcOffsetNs;
-  state.trackAge_s = static_cast<float>(trackAge_s);
+  state.trackAge_s =
+      static_cast<float>(static_cast<double>(track.timestampNs - track.birthNs) / kNsPerSecond);
 
   Eigen::Vector3d centre(track.centreEnu.x(), track.centreEnu.y(), 0.0);
   if (terrain != nullptr) {
@@ -58,6 +58,8 @@ messages::VehicleState toVehicleState(const tracking::TrackState& track, double 
   state.velocityEnu_mps = {static_cast<float>(track.speedMps * std::cos(heading)),
                            static_cast<float>(track.speedMps * std::sin(heading))};
   state.yawRate_radps = static_cast<float>(track.yawRateRadps);
+  state.yawRateVariance_rad2ps2 =
+      static_cast<float>(track.yawRateSigmaRadps * track.yawRateSigmaRadps);
   state.acceleration_mps2 = static_cast<float>(track.accelerationMps2);
   state.length_m = static_cast<float>(track.lengthM);
   state.width_m = static_cast<float>(track.widthM);
@@ -71,38 +73,14 @@ messages::VehicleState toVehicleState(const tracking::TrackState& track, double 
       state.height_m = static_cast<float>(geometry.sizeM.z());
     }
   }
-  const auto positionVariance = static_cast<float>(track.positionSigmaM * track.positionSigmaM);
-  state.poseCovariance = {positionVariance, 0.0F, 0.0F, positionVariance, 0.0F, 0.0F};
+  const Eigen::Matrix3d& c = track.poseCovariance;
+  state.poseCovariance = {static_cast<float>(c(0, 0)), static_cast<float>(c(0, 1)),
+                          static_cast<float>(c(0, 2)), static_cast<float>(c(1, 1)),
+                          static_cast<float>(c(1, 2)), static_cast<float>(c(2, 2))};
   state.speedVariance_m2ps2 = static_cast<float>(track.speedSigmaMps * track.speedSigmaMps);
-  state.detectionConfidence = 0.0F;  // not reported (see the contract)
+  state.detectionConfidence = static_cast<float>(track.score);
   state.status = track.status;
   return state;
-}
-
-double TrackAges::ageOf(std::uint32_t trackId, std::int64_t timestampNs) {
-  for (std::size_t i = 0; i < count_; ++i) {
-    if (entries_[i].id == trackId) {
-      return static_cast<double>(timestampNs - entries_[i].firstNs) / kNsPerSecond;
-    }
-  }
-  if (count_ < entries_.size()) {
-    entries_[count_++] = Entry{trackId, timestampNs};
-  }
-  return 0.0;
-}
-
-void TrackAges::retain(std::span<const tracking::TrackState> live) {
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < count_; ++i) {
-    bool alive = false;
-    for (const tracking::TrackState& track : live) {
-      alive = alive || track.id == entries_[i].id;
-    }
-    if (alive) {
-      entries_[kept++] = entries_[i];
-    }
-  }
-  count_ = kept;
 }
 
 }  // namespace vp::app

@@ -241,9 +241,21 @@ double MotionModel::yawRate() const {
 }
 
 Eigen::Matrix2d MotionModel::centreCovariance() const {
-  const Eigen::Matrix<double, 2, kStateSize> h =
-      measurementJacobian(x_, rearToCentre_).topRows<2>();
+  return poseCovariance().topLeftCorner<2, 2>();
+}
+
+Eigen::Matrix3d MotionModel::poseCovariance() const {
+  const Eigen::Matrix<double, 3, kStateSize> h = measurementJacobian(x_, rearToCentre_);
   return h * p_ * h.transpose();
+}
+
+double MotionModel::yawRateSigma() const {
+  // omega = v tan(delta) / L: d omega / d v = tan(delta) / L, d omega / d delta = v / (L cos^2).
+  const double c = std::cos(x_[kDelta]);
+  Eigen::Matrix<double, 1, kStateSize> j = Eigen::Matrix<double, 1, kStateSize>::Zero();
+  j(0, kV) = std::tan(x_[kDelta]) / wheelbase_;
+  j(0, kDelta) = x_[kV] / (wheelbase_ * c * c);
+  return std::sqrt(std::max(0.0, (j * p_ * j.transpose())(0, 0)));
 }
 
 }  // namespace vp::tracking

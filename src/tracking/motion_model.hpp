@@ -94,6 +94,10 @@ class MotionModel {
   double rearToCentre() const { return rearToCentre_; }
   // Covariance of the predicted box centre (for the Mahalanobis gate), m^2.
   Eigen::Matrix2d centreCovariance() const;
+  // Covariance of (centre x, centre y, heading), m^2, m rad, rad^2.
+  Eigen::Matrix3d poseCovariance() const;
+  // Standard deviation of yawRate() from the speed and steering covariance (first order), rad/s.
+  double yawRateSigma() const;
 
  private:
   StateVector x_{StateVector::Zero()};

@@ -69,8 +69,8 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
   if (config.maxTracks <= 0 || config.maxDetections <= 0) {
     return fail("tracking: maxTracks and maxDetections must be > 0");
   }
-  if (config.confirmHits < 1 || config.flipVotes < 1) {
-    return fail("tracking: confirmHits and flipVotes must be >= 1");
+  if (config.confirmHits < 1 || config.flipVotes < 1 || config.scoreMemory < 1) {
+    return fail("tracking: confirmHits, flipVotes and scoreMemory must be >= 1");
   }
   if (!(config.maxLost_s >= 0.0) || !(config.maxTentativeGap_s >= 0.0) ||
       !(config.noise.measurementPosition_m > 0.0) || !(config.noise.measurementHeading_rad > 0.0) ||
@@ -134,6 +134,8 @@ void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t times
   out.id = nextId_++;
   out.status = TrackStatus::Tentative;
   out.hits = 1;
+  out.birthNs = timestampNs;
+  out.score = static_cast<double>(d.score);
   out.updated = true;
   out.lengthM = d.lengthM;
   out.widthM = d.widthM;
@@ -238,6 +240,8 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   slot.lastUpdateNs = timestampNs;
   out.updated = true;
   ++out.hits;
+  const double scoreGain = 1.0 / std::min(out.hits, config_.scoreMemory);
+  out.score += scoreGain * (static_cast<double>(d.score) - out.score);
   if (out.status == TrackStatus::Lost) {
     out.status = TrackStatus::Confirmed;
     ++report.reacquisitions;
@@ -261,9 +265,11 @@ void TrackManager::publish(Slot& slot, std::int64_t timestampNs) {
   out.accelerationMps2 = x[kA];
   out.accelerationSigmaMps2 = std::sqrt(std::max(0.0, p(kA, kA)));
   out.yawRateRadps = m.yawRate();
+  out.yawRateSigmaRadps = m.yawRateSigma();
   out.steeringRad = x[kDelta];
   out.wheelbaseM = m.wheelbase();
-  const Eigen::Matrix2d c = m.centreCovariance();
+  out.poseCovariance = m.poseCovariance();
+  const Eigen::Matrix2d c = out.poseCovariance.topLeftCorner<2, 2>();
   const double tr = 0.5 * (c(0, 0) + c(1, 1));
   const double det = c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0);
   out.positionSigmaM = std::sqrt(std::max(0.0, tr + std::sqrt(std::max(0.0, tr * tr - det))));

@@ -68,6 +68,7 @@ struct TrackerConfig {
   double typeEvidenceWeight = 0.5;
   double typeFloor = 0.02;
   double shapeMaxWeight = 30.0;
+  int scoreMemory = 10;  // frames over which TrackState::score averages, >= 1
   // A detection cut by the image border (WorldDetection::atFrameEdge): its position noise is
   // scaled by this factor (1: treated as any other; 3 made the speed of young tracks worse on
   // the tuning seeds, 0.57 -> 0.62 m/s RMSE, docs/tracking.md), and its weight in the size and
@@ -84,6 +85,7 @@ struct TrackState {
   bool updated = false;                   // a detection was fused in this step
   std::int64_t timestampNs = 0;           // time of the state (this step)
   int hits = 0;                           // matched frames over the track's life
+  std::int64_t birthNs = 0;               // time of the track's first detection
   std::int64_t lastUpdateNs = 0;          // time of the last fused detection
   Eigen::Vector2d centreEnu{0.0, 0.0};    // footprint centre, m
   Eigen::Vector2d rearAxleEnu{0.0, 0.0};  // rear-axle centre (seed 002's reference), m
@@ -93,8 +95,14 @@ struct TrackState {
   double accelerationMps2 = 0.0;
   double accelerationSigmaMps2 = 0.0;
   double yawRateRadps = 0.0;
+  double yawRateSigmaRadps = 0.0;
   double steeringRad = 0.0;
   double positionSigmaM = 0.0;  // sqrt of the larger eigenvalue of the centre covariance
+  // Covariance of (centre east, centre north, heading), m^2, m rad, rad^2.
+  Eigen::Matrix3d poseCovariance{Eigen::Matrix3d::Zero()};
+  // The detector's score fused over the track: mean of the matched detections' scores over
+  // the last ~scoreMemory frames (a running mean while younger), [0, 1].
+  double score = 0.0;
   double lengthM = 0.0;
   double widthM = 0.0;
   double wheelbaseM = 0.0;

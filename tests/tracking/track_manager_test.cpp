@@ -6,9 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
+
+#include <Eigen/Eigenvalues>
 
 #include "alloc_counter.hpp"
 #include "geometry/rotated_box.hpp"
@@ -177,6 +180,40 @@ TEST(TrackManager, ConfirmedTrackCoastsThroughShortMissesThenTurnsLost) {
   auto again = stepAt(true);
   EXPECT_EQ(m.tracks()[0].status, TrackStatus::Confirmed);
   EXPECT_EQ(again->reacquisitions, 1);
+}
+
+TEST(TrackManager, TrackKeepsItsBirthTimeFusedScoreAndPoseCovariance) {
+  TrackerConfig config = smallConfig();
+  config.scoreMemory = 4;
+  TrackManager m;
+  ASSERT_TRUE(m.init(config));
+  const std::int64_t t0 = 3 * kFrameNs;
+  const float scores[] = {0.9f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f};
+  std::int64_t t = t0;
+  for (float score : scores) {
+    ASSERT_TRUE(m.step(t, std::vector{car(0.0, 0.0, 0.0, t, score)}).hasValue());
+    t += kFrameNs;
+  }
+  ASSERT_EQ(m.tracks().size(), 1u);
+  const TrackState& s = m.tracks()[0];
+  EXPECT_EQ(s.birthNs, t0);
+  // A running mean over the first 4 frames (0.6), then forgetting at the rate of a 4-frame
+  // mean over the next 4: 0.5 + 0.1 * (3/4)^4.
+  EXPECT_NEAR(s.score, 0.5 + 0.1 * std::pow(0.75, 4), 1e-6);
+  // The pose covariance is symmetric, positive definite, and agrees with the position sigma.
+  EXPECT_TRUE(s.poseCovariance.isApprox(s.poseCovariance.transpose()));
+  EXPECT_GT(s.poseCovariance.determinant(), 0.0);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s.poseCovariance.topLeftCorner<2, 2>());
+  EXPECT_NEAR(std::sqrt(eig.eigenvalues().maxCoeff()), s.positionSigmaM, 1e-9);
+  EXPECT_GT(s.poseCovariance(2, 2), 0.0);
+  EXPECT_LT(std::sqrt(s.poseCovariance(2, 2)), config.noise.measurementHeading_rad);
+  EXPECT_GE(s.yawRateSigmaRadps, 0.0);
+
+  config.scoreMemory = 0;
+  TrackManager bad;
+  std::string why;
+  EXPECT_FALSE(bad.init(config, &why));
+  EXPECT_NE(why.find("scoreMemory"), std::string::npos) << why;
 }
 
 TEST(TrackManager, ParkedCarReacquiredAfterLongOcclusionKeepsId) {

@@ -1,0 +1,52 @@
+// firmware_app/vehicle_state: a tracker state becomes the published message with the
+// tracker's own uncertainty, fused score and age (docs/dds.md field table).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "geometry/rotated_box.hpp"
+#include "vehicle_state.hpp"
+
+namespace vp::app {
+namespace {
+
+constexpr std::int64_t kNsPerS = 1'000'000'000;
+
+TEST(VehicleState, CarriesTheTrackersCovarianceScoreAndAge) {
+  tracking::TrackState track;
+  track.id = 42;
+  track.status = tracking::TrackStatus::Confirmed;
+  track.birthNs = 5 * kNsPerS;
+  track.timestampNs = 7 * kNsPerS + kNsPerS / 2;
+  track.centreEnu = {10.0, -4.0};
+  track.headingEnuRad = 0.5 * geometry::kPi;  // north
+  track.speedMps = 8.0;
+  track.speedSigmaMps = 0.5;
+  track.yawRateRadps = 0.1;
+  track.yawRateSigmaRadps = 0.02;
+  track.poseCovariance << 0.04, 0.01, 0.002, 0.01, 0.09, -0.003, 0.002, -0.003, 0.0025;
+  track.score = 0.73;
+  track.type = shape::VehicleType::Large;  // no ASM needed
+  const geodesy::LocalFrame frame(geodesy::GeodeticPoint{43.0731, -89.4012, 260.0});
+  const std::int64_t toUtc = 1'700'000'000LL * kNsPerS;
+
+  const messages::VehicleState s = toVehicleState(track, 3, toUtc, frame, nullptr, nullptr);
+  EXPECT_EQ(s.trackId, 42u);
+  EXPECT_EQ(s.droneId, 3u);
+  EXPECT_EQ(s.measurementTimeNs, track.timestampNs + toUtc);
+  EXPECT_FLOAT_EQ(s.trackAge_s, 2.5F);
+  // Upper triangle of (east, north, heading), row by row.
+  const std::array<float, 6> expected{0.04F, 0.01F, 0.002F, 0.09F, -0.003F, 0.0025F};
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_FLOAT_EQ(s.poseCovariance[i], expected[i]) << i;
+  }
+  EXPECT_FLOAT_EQ(s.speedVariance_m2ps2, 0.25F);
+  EXPECT_FLOAT_EQ(s.yawRateVariance_rad2ps2, 0.0004F);
+  EXPECT_FLOAT_EQ(s.detectionConfidence, 0.73F);
+  EXPECT_NEAR(s.headingTrueNorth_deg, 0.0, 0.01);
+  EXPECT_NEAR(s.velocityEnu_mps[1], 8.0F, 1e-5F);
+  EXPECT_FLOAT_EQ(s.height_m, 0.0F);  // large vehicles have no ASM height
+}
+
+}  // namespace
+}  // namespace vp::app
