@@ -56,6 +56,8 @@ options:
                         image's median box length taken as a 4.5 m car)
   --score-threshold T   detection score threshold, [0, 1] (default 0.4)
   --threads N           detector threads (default 1)
+  --no-flip             keep the detector's front/back (the second stage's flip is not applied)
+  --no-refine           keep the detector's box (the second stage's refinement is not applied)
   --help                this text
 )";
 
@@ -73,6 +75,8 @@ struct Options {
   double gsd = 0.0;
   double scoreThreshold = 0.4;  // chosen on the tuning seeds (docs/model_card.md)
   int threads = 1;
+  bool applyFlip = true;
+  bool applyRefine = true;
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -104,6 +108,14 @@ Options parseArguments(int argc, char** argv) {
     if (arg == "--help" || arg == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);
+    }
+    if (arg == "--no-flip") {
+      o.applyFlip = false;
+      continue;
+    }
+    if (arg == "--no-refine") {
+      o.applyRefine = false;
+      continue;
     }
     if (i + 1 >= argc)
       usageError(arg + ": missing value");
@@ -188,6 +200,8 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
   stageOptions.engine.threads = options.threads;
   stageOptions.decoder.scoreThreshold = static_cast<float>(options.scoreThreshold);
   stageOptions.gsd.fixedGsd_m = options.gsd;
+  stageOptions.secondStage.applyFlip = options.applyFlip;
+  stageOptions.secondStage.applyRefine = options.applyRefine;
   return stage.init(stageOptions, vp::preprocess::kMaxTiles, why);
 }
 
