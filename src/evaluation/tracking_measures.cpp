@@ -98,63 +98,66 @@ int TrackingEvaluator::trackKey(std::int64_t id) {
   return it->second;
 }
 
-// The truth vehicles not marked ignore, and the observations the pairing rule does not pair
-// with an ignored one (previous: as for matchByDistance, over all of truth).
-template <typename Observation, typename Position>
-void TrackingEvaluator::keepCounted(std::span<const TruthVehicle> truth,
-                                    std::span<const Observation> observations, Position position,
-                                    std::span<const int> previous,
-                                    std::vector<TruthVehicle>& keptTruth,
-                                    std::vector<Observation>& keptObservations, int& ignoredTruth,
-                                    int& ignoredObservations) const {
-  keptTruth.clear();
-  keptObservations.clear();
+namespace {
+
+// The observations (at these positions) that the matching rule pairs with an ignored vehicle.
+std::vector<bool> pairedWithIgnored(std::span<const TruthVehicle> truth,
+                                    std::span<const Eigen::Vector2d> positions,
+                                    std::span<const int> previous, double matchDistance_m) {
   std::vector<Eigen::Vector2d> truthPositions(truth.size());
-  std::vector<Eigen::Vector2d> positions(observations.size());
   for (std::size_t g = 0; g < truth.size(); ++g) {
     truthPositions[g] = truth[g].positionEnu;
   }
-  for (std::size_t h = 0; h < observations.size(); ++h) {
-    positions[h] = position(observations[h]);
-  }
   const std::vector<int> pairs =
-      matchByDistance(truthPositions, positions, previous, options_.matchDistance_m);
-  std::vector<bool> dropped(observations.size(), false);
+      matchByDistance(truthPositions, positions, previous, matchDistance_m);
+  std::vector<bool> paired(positions.size(), false);
   for (std::size_t g = 0; g < truth.size(); ++g) {
-    if (!truth[g].ignore) {
-      keptTruth.push_back(truth[g]);
-      continue;
-    }
-    ++ignoredTruth;
-    if (pairs[g] >= 0) {
-      dropped[static_cast<std::size_t>(pairs[g])] = true;
-      ++ignoredObservations;
+    if (truth[g].ignore && pairs[g] >= 0) {
+      paired[static_cast<std::size_t>(pairs[g])] = true;
     }
   }
-  for (std::size_t h = 0; h < observations.size(); ++h) {
-    if (!dropped[h]) {
-      keptObservations.push_back(observations[h]);
-    }
-  }
+  return paired;
 }
+
+template <typename T, typename Drop>
+std::vector<T> keepUnless(std::span<const T> items, Drop drop) {
+  std::vector<T> kept;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (!drop(i)) {
+      kept.push_back(items[i]);
+    }
+  }
+  return kept;
+}
+
+bool anyIgnored(std::span<const TruthVehicle> truth) {
+  return std::any_of(truth.begin(), truth.end(), [](const TruthVehicle& t) { return t.ignore; });
+}
+
+}  // namespace
 
 void TrackingEvaluator::addFrame(std::span<const TruthVehicle> truth,
                                  std::span<const TrackObservation> tracks) {
   if (sequence_ < 0) {
     beginSequence();
   }
-  const bool anyIgnored =
-      std::any_of(truth.begin(), truth.end(), [](const TruthVehicle& t) { return t.ignore; });
-  if (anyIgnored) {
-    std::vector<TruthVehicle> keptTruth;
-    std::vector<TrackObservation> keptTracks;
-    keepCounted(
-        truth, tracks, [](const TrackObservation& t) { return t.centreEnu; },
-        previousPairs(truth, tracks), keptTruth, keptTracks, ignoredTruth_, ignoredTrackRows_);
-    addCountedFrame(keptTruth, keptTracks);
+  if (!anyIgnored(truth)) {
+    addCountedFrame(truth, tracks);
     return;
   }
-  addCountedFrame(truth, tracks);
+  std::vector<Eigen::Vector2d> positions(tracks.size());
+  for (std::size_t h = 0; h < tracks.size(); ++h) {
+    positions[h] = tracks[h].centreEnu;
+  }
+  const std::vector<bool> drop =
+      pairedWithIgnored(truth, positions, previousPairs(truth, tracks), options_.matchDistance_m);
+  const std::vector<TruthVehicle> keptTruth =
+      keepUnless(truth, [&](std::size_t g) { return truth[g].ignore; });
+  const std::vector<TrackObservation> keptTracks =
+      keepUnless(tracks, [&](std::size_t h) { return drop[h]; });
+  ignoredTruth_ += static_cast<int>(truth.size() - keptTruth.size());
+  ignoredTrackRows_ += static_cast<int>(tracks.size() - keptTracks.size());
+  addCountedFrame(keptTruth, keptTracks);
 }
 
 std::vector<int> TrackingEvaluator::previousPairs(std::span<const TruthVehicle> truth,
@@ -234,19 +237,21 @@ void TrackingEvaluator::addCountedFrame(std::span<const TruthVehicle> truth,
 
 void TrackingEvaluator::addDetectorFrame(std::span<const TruthVehicle> truth,
                                          std::span<const DetectionObservation> detections) {
-  const bool anyIgnored =
-      std::any_of(truth.begin(), truth.end(), [](const TruthVehicle& t) { return t.ignore; });
-  if (anyIgnored) {
-    std::vector<TruthVehicle> keptTruth;
-    std::vector<DetectionObservation> keptDetections;
-    int ignoredTruth = 0;  // counted once, by addFrame
-    keepCounted(
-        truth, detections, [](const DetectionObservation& d) { return d.positionEnu; }, {},
-        keptTruth, keptDetections, ignoredTruth, ignoredDetections_);
-    addCountedDetectorFrame(keptTruth, keptDetections);
+  if (!anyIgnored(truth)) {
+    addCountedDetectorFrame(truth, detections);
     return;
   }
-  addCountedDetectorFrame(truth, detections);
+  std::vector<Eigen::Vector2d> positions(detections.size());
+  for (std::size_t d = 0; d < detections.size(); ++d) {
+    positions[d] = detections[d].positionEnu;
+  }
+  const std::vector<bool> drop = pairedWithIgnored(truth, positions, {}, options_.matchDistance_m);
+  const std::vector<DetectionObservation> keptDetections =
+      keepUnless(detections, [&](std::size_t d) { return drop[d]; });
+  ignoredDetections_ += static_cast<int>(detections.size() - keptDetections.size());
+  // The ignored vehicles themselves are counted once, by addFrame.
+  addCountedDetectorFrame(keepUnless(truth, [&](std::size_t g) { return truth[g].ignore; }),
+                          keptDetections);
 }
 
 void TrackingEvaluator::addCountedDetectorFrame(std::span<const TruthVehicle> truth,

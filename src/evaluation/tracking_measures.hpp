@@ -137,11 +137,6 @@ class TrackingEvaluator {
   // For each truth, the index of the track it was paired with in the last frame, or -1.
   std::vector<int> previousPairs(std::span<const TruthVehicle> truth,
                                  std::span<const TrackObservation> tracks);
-  template <typename Observation, typename Position>
-  void keepCounted(std::span<const TruthVehicle> truth, std::span<const Observation> observations,
-                   Position position, std::span<const int> previous,
-                   std::vector<TruthVehicle>& keptTruth, std::vector<Observation>& keptObservations,
-                   int& ignoredTruth, int& ignoredObservations) const;
   // The frame without ignored vehicles and what is paired with them.
   void addCountedFrame(std::span<const TruthVehicle> truth,
                        std::span<const TrackObservation> tracks);

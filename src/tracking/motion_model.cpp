@@ -241,7 +241,10 @@ double MotionModel::yawRate() const {
 }
 
 Eigen::Matrix2d MotionModel::centreCovariance() const {
-  return poseCovariance().topLeftCorner<2, 2>();
+  // Two rows only: the association asks for it per track and step.
+  const Eigen::Matrix<double, 2, kStateSize> h =
+      measurementJacobian(x_, rearToCentre_).topRows<2>();
+  return h * p_ * h.transpose();
 }
 
 Eigen::Matrix3d MotionModel::poseCovariance() const {
