@@ -163,12 +163,16 @@ def random_geometric(s: Sample, rng: np.random.Generator) -> Sample:
 
 
 def random_crop(s: Sample, size: Tuple[int, int], rng: np.random.Generator,
-                focus_objects: float = 0.7) -> Sample:
-    """A random (w, h) window; with probability ``focus_objects`` centred near an object."""
+                focus_objects: float = 0.7, weights: Optional[np.ndarray] = None) -> Sample:
+    """A random (w, h) window; with probability ``focus_objects`` centred near an object, drawn
+    uniformly or, given ``weights`` [N] (> 0), with probability proportional to its weight."""
     w, h = size
     H, W = s.image.shape[:2]
     if len(s) and rng.random() < focus_objects:
-        i = int(rng.integers(0, len(s)))
+        if weights is None:
+            i = int(rng.integers(0, len(s)))
+        else:
+            i = int(rng.choice(len(s), p=weights / weights.sum()))
         cx = s.boxes[i, 0] + rng.uniform(-0.4, 0.4) * w
         cy = s.boxes[i, 1] + rng.uniform(-0.4, 0.4) * h
         x0, y0 = int(round(cx - w / 2)), int(round(cy - h / 2))

@@ -18,6 +18,7 @@ gammas              [N, n_s] f32 ASM shape parameters, NaN where unknown (large,
 ignore              [N] bool     don't train on it, don't penalise detecting it (heavily
                                  occluded / truncated / DOTA 'difficult')
 gsd_m               [N] f64      metres per pixel at the object (NaN unknown)
+occlusion           [N] f64      share of the vehicle hidden (trees, buildings; NaN unknown)
 keypoints           [N,36,3]|None (u, v, visible) per ASM keypoint, NaN where unknown
 source, group       str          where it came from; split group (clip / sequence)
 =================== ============ ==================================================================
@@ -79,6 +80,7 @@ class Sample:
     gammas: np.ndarray
     ignore: np.ndarray
     gsd_m: np.ndarray
+    occlusion: np.ndarray
     keypoints: Optional[np.ndarray] = None
     image: Optional[np.ndarray] = None
     source: str = ""
@@ -120,7 +122,7 @@ class Sample:
         return self.copy(boxes=self.boxes[keep], direction_known=self.direction_known[keep],
                          aa_only=self.aa_only[keep], types=self.types[keep],
                          gammas=self.gammas[keep], ignore=self.ignore[keep],
-                         gsd_m=self.gsd_m[keep],
+                         gsd_m=self.gsd_m[keep], occlusion=self.occlusion[keep],
                          keypoints=None if self.keypoints is None else self.keypoints[keep])
 
 
@@ -128,7 +130,7 @@ def empty_like_arrays(n: int, n_s: int):
     return dict(boxes=np.zeros((n, 5)), direction_known=np.zeros(n, bool),
                 aa_only=np.zeros(n, bool), types=np.full(n, -1, np.int64),
                 gammas=np.full((n, n_s), np.nan, np.float32), ignore=np.zeros(n, bool),
-                gsd_m=np.full(n, np.nan))
+                gsd_m=np.full(n, np.nan), occlusion=np.full(n, np.nan))
 
 
 def load_image(path: str) -> np.ndarray:
@@ -266,6 +268,7 @@ def read_sequence(seq_dir: str, n_s: int = 3, max_occlusion: float = 0.7,
             a["types"][i] = o["type"]
             a["gammas"][i] = o["gamma"]
             a["ignore"][i] = o["occlusion"] > max_occlusion or o["truncation"] > max_truncation
+            a["occlusion"][i] = o["occlusion"]
             key = (fid, o["track_id"])
             gsd = math.nan
             if key in kp_by_obj:

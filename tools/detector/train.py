@@ -49,7 +49,7 @@ import torch
 
 from detector import augment, crops, targets
 from detector.asm import DEFAULT_ASM_PATH, REPO_ROOT, load_asm
-from detector.datasets import (Sample, read_dota, read_sequence, read_yolo,
+from detector.datasets import (LARGE, Sample, read_dota, read_sequence, read_yolo,
                                split_near_duplicate_free)
 from detector.losses import crop_loss, detector_loss, make_shape_loss
 from detector.model import CropNet, Detector, normalize
@@ -83,6 +83,11 @@ def parse_args(argv=None):
     p.add_argument("--schedule", choices=["steps", "time"], default="steps",
                    help="cosine learning-rate decay over the planned steps, or over the time budget "
                         "(for CPU runs whose step count the budget decides; resumable)")
+    p.add_argument("--hard-weight", type=float, default=1.0,
+                   help="object-centred tiles pick hard vehicles (large, or occluded by at least "
+                        "--hard-occlusion but not ignored) this many times as often as others")
+    p.add_argument("--hard-occlusion", type=float, default=0.2,
+                   help="occlusion share from which a vehicle counts as hard (--hard-weight)")
     p.add_argument("--working-width", type=int, default=648)
     p.add_argument("--working-gsd-range", type=float, nargs=2, default=(0.08, 0.18))
     p.add_argument("--shape-loss", choices=["l1", "l2"], default="l1", help="V_L1 or V_L2")
@@ -196,9 +201,17 @@ class Data:
             f = gsd / target if math.isfinite(gsd) else a.working_width / s.image.shape[1]
         f *= math.exp(rng.uniform(-0.15, 0.15))
         s = augment.scale(s, f)
-        s = augment.random_crop(s, (a.tile, a.tile), rng)
+        s = augment.random_crop(s, (a.tile, a.tile), rng, weights=self.tile_weights(s))
         s = augment.random_geometric(s, rng)
         return augment.photometric(s, rng)
+
+    def tile_weights(self, s: Sample) -> Optional[np.ndarray]:
+        """Sampling weights of the objects a tile is centred on (None: uniform, v1's rule)."""
+        a = self.args
+        if a.hard_weight == 1.0 or not len(s):
+            return None
+        hard = (s.types == LARGE) | (s.occlusion >= a.hard_occlusion)  # NaN compares False
+        return np.where(hard & ~s.ignore, a.hard_weight, 1.0)
 
     def detector_batch(self, rng, device) -> Dict[str, torch.Tensor]:
         items, imgs = [], []

@@ -106,6 +106,46 @@ class AngleConsistency(unittest.TestCase):
         self.assertEqual(p.image.dtype, np.uint8)
 
 
+class WeightedFocus(unittest.TestCase):
+    """Object-centred tiles follow the per-object weights (train.py --hard-weight)."""
+
+    @staticmethod
+    def two_far_objects():
+        a = empty_like_arrays(2, 3)
+        a["boxes"][0] = [20, 20, 10, 4, 0]
+        a["boxes"][1] = [380, 380, 10, 6, 0]  # tagged by its width: the crop tells which it kept
+        return Sample(image_path=None, image=np.zeros((400, 400, 3), np.uint8), **a)
+
+    def test_uniform_and_weighted(self):
+        s, rng = self.two_far_objects(), np.random.default_rng(1)
+        picks = []
+        for weights in (None, np.array([1.0, 19.0])):
+            near_second = 0
+            for _ in range(400):
+                c = augment.random_crop(s, (64, 64), rng, focus_objects=1.0, weights=weights)
+                near_second += bool(len(c)) and bool((c.boxes[:, 3] == 6).any())
+            picks.append(near_second / 400)
+        self.assertAlmostEqual(picks[0], 0.5, delta=0.1)  # v1's rule: uniform over objects
+        self.assertAlmostEqual(picks[1], 0.95, delta=0.05)
+
+    def test_tile_weights_mark_large_and_occluded(self):
+        from argparse import Namespace
+
+        from detector.datasets import LARGE
+        from detector.train import Data
+
+        a = empty_like_arrays(4, 3)
+        a["types"][:] = [0, LARGE, 1, 2]
+        a["occlusion"][:] = [0.0, 0.0, 0.3, 0.9]
+        a["ignore"][3] = True  # too occluded to train on: not hard, just ignored
+        s = Sample(image_path=None, **a)
+        data = Data.__new__(Data)
+        data.args = Namespace(hard_weight=8.0, hard_occlusion=0.2)
+        np.testing.assert_array_equal(data.tile_weights(s), [1, 8, 8, 1])
+        data.args.hard_weight = 1.0
+        self.assertIsNone(data.tile_weights(s))
+
+
 class RotatedIoU(unittest.TestCase):
     def test_identical_and_disjoint(self):
         b = [10, 10, 8, 4, 0.7]
