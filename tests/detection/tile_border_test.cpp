@@ -169,9 +169,8 @@ TEST(TileBorder, AStraddlingVehicleIsDetectedOnceWheneverItsWholeTileFindsIt) {
                     << ")";
   }
   std::printf(
-      "tiles %zu, straddling vehicles %d, found by every tile that holds them whole %d, found once "
-      "in the "
-      "tiled frame %d, twice or more %d\n",
+      "tiles %zu, straddling vehicles %d, found by every tile that holds them whole %d, "
+      "found once in the tiled frame %d, twice or more %d\n",
       tiled.tiles.size(), straddlers, referenceFound, foundOnce, duplicates);
   EXPECT_GE(straddlers, 3) << "the scene must put vehicles across the tile borders";
   EXPECT_GE(referenceFound, 3);

@@ -141,6 +141,16 @@ def estimate_gsd(s: Sample) -> float:
     return math.nan
 
 
+def hard_example_weights(s: Sample, weight: float, min_occlusion: float) -> Optional[np.ndarray]:
+    """Weights of the objects an object-centred tile is drawn around: ``weight`` for the hard
+    ones (large, or occluded by at least ``min_occlusion`` but not ignored), 1 for the others;
+    None (uniform, v1's rule) when ``weight`` is 1."""
+    if weight == 1.0 or not len(s):
+        return None
+    hard = (s.types == LARGE) | (s.occlusion >= min_occlusion)  # unknown (NaN) is not hard
+    return np.where(hard & ~s.ignore, weight, 1.0)
+
+
 class Data:
     """Training and validation sources and the batch makers (all randomness from ``rng``)."""
 
@@ -201,17 +211,10 @@ class Data:
             f = gsd / target if math.isfinite(gsd) else a.working_width / s.image.shape[1]
         f *= math.exp(rng.uniform(-0.15, 0.15))
         s = augment.scale(s, f)
-        s = augment.random_crop(s, (a.tile, a.tile), rng, weights=self.tile_weights(s))
+        s = augment.random_crop(s, (a.tile, a.tile), rng,
+                                weights=hard_example_weights(s, a.hard_weight, a.hard_occlusion))
         s = augment.random_geometric(s, rng)
         return augment.photometric(s, rng)
-
-    def tile_weights(self, s: Sample) -> Optional[np.ndarray]:
-        """Sampling weights of the objects a tile is centred on (None: uniform, v1's rule)."""
-        a = self.args
-        if a.hard_weight == 1.0 or not len(s):
-            return None
-        hard = (s.types == LARGE) | (s.occlusion >= a.hard_occlusion)  # NaN compares False
-        return np.where(hard & ~s.ignore, a.hard_weight, 1.0)
 
     def detector_batch(self, rng, device) -> Dict[str, torch.Tensor]:
         items, imgs = [], []
@@ -283,6 +286,9 @@ def _check_out_dir(out: str) -> None:
 
 def train(args) -> dict:
     _check_out_dir(args.out)
+    if not args.hard_weight > 0 or not 0.0 <= args.hard_occlusion <= 1.0:
+        raise SystemExit(f"--hard-weight must be > 0 (got {args.hard_weight}) and --hard-occlusion "
+                         f"in [0, 1] (got {args.hard_occlusion})")
     os.makedirs(args.out, exist_ok=True)
     log_path = os.path.join(args.out, "train_log.jsonl")
 

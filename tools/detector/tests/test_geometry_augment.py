@@ -128,22 +128,17 @@ class WeightedFocus(unittest.TestCase):
         self.assertAlmostEqual(picks[0], 0.5, delta=0.1)  # v1's rule: uniform over objects
         self.assertAlmostEqual(picks[1], 0.95, delta=0.05)
 
-    def test_tile_weights_mark_large_and_occluded(self):
-        from argparse import Namespace
-
+    def test_hard_example_weights_mark_large_and_occluded(self):
         from detector.datasets import LARGE
-        from detector.train import Data
+        from detector.train import hard_example_weights
 
         a = empty_like_arrays(4, 3)
         a["types"][:] = [0, LARGE, 1, 2]
         a["occlusion"][:] = [0.0, 0.0, 0.3, 0.9]
         a["ignore"][3] = True  # too occluded to train on: not hard, just ignored
         s = Sample(image_path=None, **a)
-        data = Data.__new__(Data)
-        data.args = Namespace(hard_weight=8.0, hard_occlusion=0.2)
-        np.testing.assert_array_equal(data.tile_weights(s), [1, 8, 8, 1])
-        data.args.hard_weight = 1.0
-        self.assertIsNone(data.tile_weights(s))
+        np.testing.assert_array_equal(hard_example_weights(s, 8.0, 0.2), [1, 8, 8, 1])
+        self.assertIsNone(hard_example_weights(s, 1.0, 0.2))
 
 
 class RotatedIoU(unittest.TestCase):
