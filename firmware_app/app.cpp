@@ -157,6 +157,10 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   tracker.noise.measurementPosition_m = t.measurementPosition_m;
   tracker.noise.measurementHeading_rad = t.measurementHeading_deg * (geometry::kPi / 180.0);
   tracker.noise.steeringDecay_s = t.steeringDecay_s;
+  tracker.confirmWholeHits = t.confirmWholeHits;
+  tracker.confirmHitsAnyway = t.confirmHitsAnyway;
+  tracker.partialInsideShare = t.partialInsideShare;
+  tracker.partialAlongNoiseFactor = t.partialAlongNoiseFactor;
   tracker.asmModel = &asm_;
   std::string problem;
   if (!tracker_.init(tracker, &problem)) {

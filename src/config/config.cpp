@@ -688,6 +688,7 @@ const Range kPoseCapacityRange = Range::closed(2.0, 100000.0);
 // The publisher's table of published tracks holds 1024 (VehicleStatePublisher::kMaxTracks).
 const Range kMaxTracksRange = Range::closed(1.0, 1024.0);
 const Range kConfirmHitsRange = Range::closed(1.0, 100.0);
+const Range kConfirmWholeHitsRange = Range::closed(0.0, 100.0);
 const Range kTrackTimeRangeS = Range::closed(0.0, 60.0);
 const Range kSpeedRangeMps = Range::closed(0.0, 50.0);
 const Range kFlipVotesRange = Range::closed(1.0, 100.0);
@@ -696,6 +697,7 @@ const Range kShapeWeightRange = Range{0.0, 1e6, true};
 const Range kGateDistanceRangeM = Range{0.0, 100.0, true};
 const Range kMeasurementPositionRangeM = Range{0.0, 10.0, true};   // (0, 10] m
 const Range kMeasurementHeadingRangeDeg = Range{0.0, 90.0, true};  // (0, 90] deg
+const Range kNoiseFactorRange = Range::closed(1.0, 1000.0);
 const Range kCameraBuffersRange = Range::closed(2.0, 16.0);
 const Range kDequeueTimeoutRangeMs = Range::closed(1.0, 60000.0);
 const Range kPortRange = Range::closed(0.0, 65535.0);
@@ -842,6 +844,14 @@ TrackingConfig readTracking(MapReader section) {
   t.measurementHeading_deg = section.number("measurement_heading_deg", kMeasurementHeadingRangeDeg,
                                             d.measurementHeading_deg);
   t.steeringDecay_s = section.number("steering_decay_s", kTrackTimeRangeS, d.steeringDecay_s);
+  t.confirmWholeHits =
+      section.integer("confirm_whole_hits", kConfirmWholeHitsRange, d.confirmWholeHits);
+  t.confirmHitsAnyway =
+      section.integer("confirm_hits_anyway", kConfirmHitsRange, d.confirmHitsAnyway);
+  t.partialInsideShare =
+      section.number("partial_inside_share", kProbabilityRange, d.partialInsideShare);
+  t.partialAlongNoiseFactor =
+      section.number("partial_along_noise_factor", kNoiseFactorRange, d.partialAlongNoiseFactor);
   section.warnUnknownKeys();
   return t;
 }

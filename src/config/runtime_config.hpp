@@ -76,6 +76,10 @@ struct TrackingConfig {
   double measurementPosition_m = 0.30;  // 1 sigma of a lifted detection's centre, per axis
   double measurementHeading_deg = 8.0;  // 1 sigma of a detection's heading
   double steeringDecay_s = 2.0;         // steering relaxes to 0 with this time constant; 0 = never
+  int confirmWholeHits = 2;             // of the confirm_hits, detections not partial, [0, 100]
+  int confirmHitsAnyway = 5;            // matches that confirm a track whatever they were, [1, 100]
+  double partialInsideShare = 0.9;      // a detection with less of its box in the frame is partial
+  double partialAlongNoiseFactor = 10.0;  // its along-axis position sigma factor, [1, 1000]
 };
 
 enum class FrameSourceKind : std::uint8_t { Replay, V4l2 };

@@ -34,6 +34,7 @@ struct Detection {
   std::int16_t tile = -1;        // index of the tile it came from (diagnostics)
   bool atFrameEdge = false;      // the box reaches the frame's border: the vehicle may be cut
                                  // off there, so its centre and size are biased
+  float insideShare = 1.0F;      // share of the box's area inside the frame, [0, 1]
 };
 
 // Most likely type and the runner-up (the pipeline keeps the top two).

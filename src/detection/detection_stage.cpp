@@ -1,5 +1,6 @@
 #include "detection/detection_stage.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -228,12 +229,20 @@ void DetectionStage::markFrameEdge(const preprocess::FrameGeometry& geometry,
       options_.decoder.cutEdgeMarginPx / std::min(geometry.scaleX, geometry.scaleY);
   const double right = geometry.frameWidthPx - 0.5 - margin;
   const double bottom = geometry.frameHeightPx - 0.5 - margin;
+  const geometry::RotatedBox frame{
+      0.5 * geometry.frameWidthPx - 0.5, 0.5 * geometry.frameHeightPx - 0.5,
+      static_cast<double>(geometry.frameWidthPx), static_cast<double>(geometry.frameHeightPx), 0.0};
   for (Detection& d : detections) {
     double halfU = 0.0;
     double halfV = 0.0;
     geometry::axisAlignedHalfExtents(d.box, &halfU, &halfV);
     d.atFrameEdge = d.box.cx - halfU < -0.5 + margin || d.box.cy - halfV < -0.5 + margin ||
                     d.box.cx + halfU > right || d.box.cy + halfV > bottom;
+    const double boxArea = geometry::area(d.box);
+    d.insideShare = !d.atFrameEdge || !(boxArea > 0.0)
+                        ? 1.0F
+                        : static_cast<float>(std::clamp(
+                              geometry::intersectionArea(d.box, frame) / boxArea, 0.0, 1.0));
   }
 }
 

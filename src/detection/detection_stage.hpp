@@ -93,7 +93,7 @@ class DetectionStage {
   // Removes detections that overlap a better one after the second stage; returns the count kept.
   std::size_t suppressRefinedDuplicates(std::span<Detection> detections) const;
   // Sets Detection::atFrameEdge: the box's bounds come within the decoder's cut margin of the
-  // frame's border.
+  // frame's border; and Detection::insideShare, the share of its area inside the frame.
   void markFrameEdge(const preprocess::FrameGeometry& geometry,
                      std::span<Detection> detections) const;
 

@@ -17,6 +17,7 @@ bool toWorldDetection(const perception::VehicleObservation& observation, WorldDe
   out->typeProbabilities = d.typeProbabilities;
   out->shape = d.gamma;
   out->atFrameEdge = d.atFrameEdge;
+  out->insideShare = d.insideShare;
   return true;
 }
 

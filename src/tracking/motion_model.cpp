@@ -54,7 +54,8 @@ bool kalmanUpdate(StateVector& x, StateMatrix& p, const Eigen::Matrix<double, M,
 }  // namespace
 
 void MotionModel::initialise(const Eigen::Vector2d& centre, double headingRad, double wheelbaseM,
-                             double rearToCentreM, const MotionNoise& noise) {
+                             double rearToCentreM, const MotionNoise& noise,
+                             double alongAxisFactor) {
   wheelbase_ = wheelbaseM;
   rearToCentre_ = rearToCentreM;
   const double psi = geometry::wrapTwoPi(headingRad);
@@ -65,6 +66,9 @@ void MotionModel::initialise(const Eigen::Vector2d& centre, double headingRad, d
   p_ = StateMatrix::Zero();
   const double sp = noise.measurementPosition_m;
   p_(kX, kX) = p_(kY, kY) = sp * sp + std::pow(rearToCentreM * noise.measurementHeading_rad, 2);
+  const double k = std::isfinite(alongAxisFactor) ? std::max(1.0, alongAxisFactor) : 1.0;
+  const Eigen::Vector2d u(std::cos(psi), std::sin(psi));
+  p_.topLeftCorner<2, 2>() += (k * k - 1.0) * sp * sp * u * u.transpose();
   p_(kPsi, kPsi) = noise.measurementHeading_rad * noise.measurementHeading_rad;
   p_(kV, kV) = noise.initialSpeed_mps * noise.initialSpeed_mps;
   p_(kA, kA) = noise.initialAcceleration_mps2 * noise.initialAcceleration_mps2;
@@ -167,27 +171,32 @@ Innovation MotionModel::innovation(const Eigen::Vector2d& centre, double heading
 }
 
 bool MotionModel::update(const Eigen::Vector2d& centre, double headingRad, bool hasHeading,
-                         const MotionNoise& noise) {
-  if (!finite(centre) || (hasHeading && !std::isfinite(headingRad))) {
+                         const MotionNoise& noise, double alongAxisFactor) {
+  if (!finite(centre) || (hasHeading && !std::isfinite(headingRad)) || !(alongAxisFactor >= 1.0) ||
+      !std::isfinite(alongAxisFactor)) {
     return false;
   }
   const Eigen::Matrix<double, 3, kStateSize> h = measurementJacobian(x_, rearToCentre_);
   const Eigen::Vector2d predicted = this->centre();
   const double rp = noise.measurementPosition_m * noise.measurementPosition_m;
+  // R_pos = rp (I + (k^2 - 1) u u^T), u the track's axis: k times the sigma along it.
+  const Eigen::Vector2d u(std::cos(x_[kPsi]), std::sin(x_[kPsi]));
+  const Eigen::Matrix2d rPosition =
+      rp *
+      (Eigen::Matrix2d::Identity() + (alongAxisFactor * alongAxisFactor - 1.0) * u * u.transpose());
   bool ok = false;
   if (hasHeading) {
     Eigen::Vector3d residual;
     residual.head<2>() = centre - predicted;
     residual[2] = geometry::angleDifference(headingRad, x_[kPsi]);
     Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
-    r(0, 0) = r(1, 1) = rp;
+    r.topLeftCorner<2, 2>() = rPosition;
     r(2, 2) = noise.measurementHeading_rad * noise.measurementHeading_rad;
     ok = kalmanUpdate<3>(x_, p_, h, residual, r);
   } else {
     const Eigen::Matrix<double, 2, kStateSize> h2 = h.topRows<2>();
     const Eigen::Vector2d residual = centre - predicted;
-    const Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * rp;
-    ok = kalmanUpdate<2>(x_, p_, h2, residual, r);
+    ok = kalmanUpdate<2>(x_, p_, h2, residual, rPosition);
   }
   x_[kPsi] = geometry::wrapTwoPi(x_[kPsi]);
   x_[kDelta] = std::clamp(x_[kDelta], -noise.maxSteering_rad, noise.maxSteering_rad);

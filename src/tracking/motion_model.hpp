@@ -65,9 +65,10 @@ class MotionModel {
  public:
   MotionModel() = default;
 
-  // Starts a track at a detected box centre and heading, speed 0 with a wide prior.
+  // Starts a track at a detected box centre and heading, speed 0 with a wide prior;
+  // alongAxisFactor as in update().
   void initialise(const Eigen::Vector2d& centre, double headingRad, double wheelbaseM,
-                  double rearToCentreM, const MotionNoise& noise);
+                  double rearToCentreM, const MotionNoise& noise, double alongAxisFactor = 1.0);
 
   // Propagates the state by dt >= 0 seconds; false (state unchanged) for a bad dt.
   bool predict(double dt, const MotionNoise& noise);
@@ -76,8 +77,10 @@ class MotionModel {
   Innovation innovation(const Eigen::Vector2d& centre, double headingRad, bool hasHeading,
                         const MotionNoise& noise) const;
   // EKF update with that detection; false (state unchanged) when S is not positive definite.
+  // alongAxisFactor >= 1 scales the position noise along the track's axis only (a detection
+  // that tells where the vehicle is across its lane better than where along it).
   bool update(const Eigen::Vector2d& centre, double headingRad, bool hasHeading,
-              const MotionNoise& noise);
+              const MotionNoise& noise, double alongAxisFactor = 1.0);
 
   // New wheelbase / rear-to-centre offset (fused ASM shape); keeps the box centre fixed.
   void setGeometry(double wheelbaseM, double rearToCentreM);

@@ -17,7 +17,8 @@ constexpr double kRearAxlePerLength = 0.28;
 bool valid(const WorldDetection& d) {
   if (!std::isfinite(d.centreEnu.x()) || !std::isfinite(d.centreEnu.y()) ||
       !std::isfinite(d.headingEnuRad) || !std::isfinite(d.lengthM) || !std::isfinite(d.widthM) ||
-      !(d.lengthM > 0.0) || !(d.widthM > 0.0) || !(d.score >= 0.0f) || !(d.score <= 1.0f)) {
+      !(d.lengthM > 0.0) || !(d.widthM > 0.0) || !(d.score >= 0.0f) || !(d.score <= 1.0f) ||
+      !(d.insideShare >= 0.0 && d.insideShare <= 1.0)) {
     return false;
   }
   for (float p : d.typeProbabilities) {
@@ -79,11 +80,15 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
     return fail("tracking: times, noise sigmas, typeFloor and shapeMaxWeight must be > 0");
   }
   if (!(config.maxCoast_s >= 0.0) || !(config.noise.steeringDecay_s >= 0.0) ||
-      !(config.frameEdgeNoiseFactor >= 1.0) ||
+      !(config.partialAlongNoiseFactor >= 1.0) ||
+      !(config.partialInsideShare >= 0.0 && config.partialInsideShare <= 1.0) ||
       !(config.frameEdgeShapeWeight > 0.0 && config.frameEdgeShapeWeight <= 1.0)) {
     return fail(
-        "tracking: maxCoast_s and steeringDecay_s must be >= 0, frameEdgeNoiseFactor >= 1, "
-        "frameEdgeShapeWeight in (0, 1]");
+        "tracking: maxCoast_s and steeringDecay_s must be >= 0, partialAlongNoiseFactor >= 1, "
+        "partialInsideShare in [0, 1], frameEdgeShapeWeight in (0, 1]");
+  }
+  if (config.confirmWholeHits < 0 || config.confirmHitsAnyway < 1) {
+    return fail("tracking: confirmWholeHits must be >= 0 and confirmHitsAnyway >= 1");
   }
   config_ = config;
   if (!associator_.init(config.maxTracks, config.maxDetections, config.association)) {
@@ -134,6 +139,7 @@ void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t times
   out.id = nextId_++;
   out.status = TrackStatus::Tentative;
   out.hits = 1;
+  slot.wholeHits = partial(d) ? 0 : 1;
   out.birthNs = timestampNs;
   out.score = static_cast<double>(d.score);
   out.updated = true;
@@ -157,7 +163,7 @@ void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t times
   const auto best = std::max_element(slot.typeLog.begin(), slot.typeLog.end());
   out.type = static_cast<shape::VehicleType>(best - slot.typeLog.begin());
   slot.motion.initialise(d.centreEnu, d.headingEnuRad, kWheelbasePerLength * d.lengthM,
-                         kRearAxlePerLength * d.lengthM, config_.noise);
+                         kRearAxlePerLength * d.lengthM, config_.noise, alongAxisFactor(d));
   updateGeometry(slot);
 }
 
@@ -182,16 +188,9 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
     }
   }
   // A vehicle cut off by the image border is seen in part: its box centre lags behind the
-  // vehicle's (entering) or runs ahead (leaving), its length is short. Such a detection can be
-  // given a larger position noise (frameEdgeNoiseFactor) and hardly changes the fused size and
-  // shape.
-  if (d.atFrameEdge) {
-    MotionNoise edgeNoise = config_.noise;
-    edgeNoise.measurementPosition_m *= config_.frameEdgeNoiseFactor;
-    slot.motion.update(d.centreEnu, heading, d.headingKnown, edgeNoise);
-  } else {
-    slot.motion.update(d.centreEnu, heading, d.headingKnown, config_.noise);
-  }
+  // vehicle's (entering) or runs ahead (leaving). A partial detection says little about where
+  // along its axis the vehicle is (partialAlongNoiseFactor).
+  slot.motion.update(d.centreEnu, heading, d.headingKnown, config_.noise, alongAxisFactor(d));
 
   // Direction of travel decides the heading of a moving car; a run of disagreeing
   // detections decides it for a standing one (its first detection may have been flipped).
@@ -240,12 +239,15 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   slot.lastUpdateNs = timestampNs;
   out.updated = true;
   ++out.hits;
+  slot.wholeHits += partial(d) ? 0 : 1;
   const double scoreGain = 1.0 / std::min(out.hits, config_.scoreMemory);
   out.score += scoreGain * (static_cast<double>(d.score) - out.score);
   if (out.status == TrackStatus::Lost) {
     out.status = TrackStatus::Confirmed;
     ++report.reacquisitions;
-  } else if (out.status == TrackStatus::Tentative && out.hits >= config_.confirmHits) {
+  } else if (out.status == TrackStatus::Tentative && out.hits >= config_.confirmHits &&
+             (slot.wholeHits >= config_.confirmWholeHits ||
+              out.hits >= config_.confirmHitsAnyway)) {
     out.status = TrackStatus::Confirmed;
   }
 }

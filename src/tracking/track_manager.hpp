@@ -11,8 +11,9 @@
 //
 // Lifecycle (times in seconds of the detections' clock):
 //   birth: an unmatched detection with score >= association.highScore -> Tentative
-//   Tentative -> Confirmed after confirmHits matched frames; deleted when unmatched for
-//              longer than maxTentativeGap_s
+//   Tentative -> Confirmed after confirmHits matched frames of which confirmWholeHits were
+//              not partial (cut by the frame border), or after confirmHitsAnyway matches;
+//              deleted when unmatched for longer than maxTentativeGap_s
 //   Confirmed -> Lost when a frame brings no match; Lost -> Confirmed (same id) when a
 //              detection matches again (re-acquisition after an occlusion); Lost -> deleted
 //              after maxLost_s without a match. Lost tracks are predicted (a parked car
@@ -60,6 +61,11 @@ struct TrackerConfig {
   MotionNoise noise{};
   AssociationParams association{};
   int confirmHits = 3;
+  // Of those, at least this many whole (not partial, see below) detections: a vehicle seen only
+  // in part has an unobserved speed, which a confirmed track would publish. A track confirms
+  // after confirmHitsAnyway matches in any case (a car parked at the frame's border).
+  int confirmWholeHits = 2;
+  int confirmHitsAnyway = 5;
   double maxTentativeGap_s = 0.25;
   double maxLost_s = 3.0;
   double maxCoast_s = 0.0;  // a confirmed track unmatched this long stays confirmed, then lost
@@ -69,11 +75,14 @@ struct TrackerConfig {
   double typeFloor = 0.02;
   double shapeMaxWeight = 30.0;
   int scoreMemory = 10;  // frames over which TrackState::score averages, >= 1
-  // A detection cut by the image border (WorldDetection::atFrameEdge): its position noise is
-  // scaled by this factor (1: treated as any other; 3 made the speed of young tracks worse on
-  // the tuning seeds, 0.57 -> 0.62 m/s RMSE, docs/tracking.md), and its weight in the size and
-  // shape means by the second (its length is short).
-  double frameEdgeNoiseFactor = 1.0;
+  // A detection is partial when less than partialInsideShare of its image box lies inside the
+  // frame (WorldDetection::insideShare): the detector places a vehicle driving into view too
+  // far inside, so its centre hardly moves while the vehicle appears. Its position noise along
+  // the track's axis is scaled by partialAlongNoiseFactor (across the axis it is as good as
+  // any), at birth as in updates. A detection touching the border (atFrameEdge) weighs
+  // frameEdgeShapeWeight in the size and shape means (its length may be short).
+  double partialInsideShare = 0.9;
+  double partialAlongNoiseFactor = 10.0;
   double frameEdgeShapeWeight = 0.05;
   const shape::ActiveShapeModel* asmModel = nullptr;  // borrowed; wheelbase from gamma
 };
@@ -149,6 +158,7 @@ class TrackManager {
     std::array<double, shape::kMaxShapeComponents> gammaSum{};
     double gammaWeight = 0.0;
     double sizeWeight = 0.0;
+    int wholeHits = 0;  // matched detections that were not partial
     std::int64_t lastUpdateNs = 0;
     int disagreeRun = 0;
   };
@@ -157,6 +167,12 @@ class TrackManager {
   void fuse(Slot& slot, const WorldDetection& detection, std::int64_t timestampNs,
             StepReport& report);
   void updateGeometry(Slot& slot);
+  bool partial(const WorldDetection& detection) const {
+    return detection.insideShare < config_.partialInsideShare;
+  }
+  double alongAxisFactor(const WorldDetection& detection) const {
+    return partial(detection) ? config_.partialAlongNoiseFactor : 1.0;
+  }
   void publish(Slot& slot, std::int64_t timestampNs);
 
   TrackerConfig config_{};

@@ -8,7 +8,7 @@
 // over shape::VehicleType (index = static_cast<int>(type)); shape holds the detector's ASM
 // gamma (count 0 when it has none, e.g. large vehicles). score in [0, 1] splits the
 // detections into the two association passes. A detection with a non-finite field, a size
-// <= 0 or a score outside [0, 1] is rejected and counted by the tracker, never used.
+// <= 0, a score or insideShare outside [0, 1] is rejected and counted by the tracker, never used.
 #pragma once
 
 #include <array>
@@ -31,6 +31,7 @@ struct WorldDetection {
   std::array<float, shape::kVehicleTypeCount> typeProbabilities{};  // sum 1
   shape::ShapeParams shape{};                                       // ASM gamma
   bool atFrameEdge = false;  // cut by the image border: centre and size biased (less weight)
+  double insideShare = 1.0;  // share of the image box inside the frame, [0, 1]
 };
 
 }  // namespace vp::tracking

@@ -149,6 +149,10 @@ tracking:
   measurement_position_m: 0.3
   measurement_heading_deg: 5.0
   steering_decay_s: 2.0
+  confirm_whole_hits: 1
+  confirm_hits_anyway: 7
+  partial_inside_share: 0.8
+  partial_along_noise_factor: 5
 source:
   kind: v4l2
   sequence_dir: seq/run1
@@ -697,6 +701,14 @@ const MalformedCase kMalformedCases[] = {
      "tracking.measurement_heading_deg", "must be in (0, 90], got 95"},
     {"steering_decay_s: 2.0", "steering_decay_s: -1", "tracking.steering_decay_s",
      "must be in [0, 60], got -1"},
+    {"confirm_whole_hits: 1", "confirm_whole_hits: -1", "tracking.confirm_whole_hits",
+     "must be in [0, 100], got -1"},
+    {"confirm_hits_anyway: 7", "confirm_hits_anyway: 0", "tracking.confirm_hits_anyway",
+     "must be in [1, 100], got 0"},
+    {"partial_inside_share: 0.8", "partial_inside_share: 1.2", "tracking.partial_inside_share",
+     "must be in [0, 1], got 1.2"},
+    {"partial_along_noise_factor: 5", "partial_along_noise_factor: 0.5",
+     "tracking.partial_along_noise_factor", "must be in [1, 1000], got 0.5"},
     // source
     {"source:\n  kind", "source: camera\nx:\n  kind", "source", "expected a map, got 'camera'"},
     {"kind: v4l2", "kind: file", "source.kind", "unknown value 'file' (expected replay, v4l2)"},
@@ -884,6 +896,10 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "tracking.measurement_position_m",
                                                "tracking.measurement_heading_deg",
                                                "tracking.steering_decay_s",
+                                               "tracking.confirm_whole_hits",
+                                               "tracking.confirm_hits_anyway",
+                                               "tracking.partial_inside_share",
+                                               "tracking.partial_along_noise_factor",
                                                "source",
                                                "source.kind",
                                                "source.sequence_dir",
@@ -1241,6 +1257,10 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(t.measurementPosition_m, 0.3);
   EXPECT_DOUBLE_EQ(t.measurementHeading_deg, 5.0);
   EXPECT_DOUBLE_EQ(t.steeringDecay_s, 2.0);
+  EXPECT_EQ(t.confirmWholeHits, 1);
+  EXPECT_EQ(t.confirmHitsAnyway, 7);
+  EXPECT_DOUBLE_EQ(t.partialInsideShare, 0.8);
+  EXPECT_DOUBLE_EQ(t.partialAlongNoiseFactor, 5.0);
   const SourceConfig& src = config.source;
   EXPECT_EQ(src.kind, FrameSourceKind::V4l2);
   EXPECT_EQ(src.sequenceDir, "/data/site/seq/run1");

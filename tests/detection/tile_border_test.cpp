@@ -180,7 +180,8 @@ TEST(TileBorder, AStraddlingVehicleIsDetectedOnceWheneverItsWholeTileFindsIt) {
 }  // namespace
 
 // A vehicle cut off by the frame's border is seen in part, so its box is biased: the detection
-// stage marks it (Detection::atFrameEdge) for the tracker, and only such detections.
+// stage marks it (Detection::atFrameEdge, with the share of its box inside the frame) for the
+// tracker, and only such detections.
 TEST(FrameBorder, DetectionsOfVehiclesCutByTheFrameBorderAreMarked) {
   // Cars drive in and out of the frame at an intersection. Marking, not recall, is tested:
   // a low threshold keeps the weak detections of cut vehicles.
@@ -196,7 +197,7 @@ TEST(FrameBorder, DetectionsOfVehiclesCutByTheFrameBorderAreMarked) {
   all.resize(count);
 
   const double w = frame.image.cols, h = frame.image.rows;
-  int cutFound = 0, cutMarked = 0, insideFound = 0, insideMarked = 0;
+  int cutFound = 0, cutMarked = 0, insideFound = 0, insideMarked = 0, insideShareNotOne = 0;
   for (const auto& object : frame.objects) {
     const RotatedBox& truth = object.imageBox;
     // The detection lying most on the vehicle (a cut vehicle's box is only its visible part,
@@ -217,10 +218,18 @@ TEST(FrameBorder, DetectionsOfVehiclesCutByTheFrameBorderAreMarked) {
     if (object.truncation > 0.1) {
       ++cutFound;
       cutMarked += best->atFrameEdge;
+      // The share of the box inside the frame, for the tracker (its partial detections).
+      const vp::geometry::RotatedBox image{0.5 * w - 0.5, 0.5 * h - 0.5, w, h, 0.0};
+      EXPECT_NEAR(best->insideShare,
+                  vp::geometry::intersectionArea(best->box, image) / vp::geometry::area(best->box),
+                  1e-4);
+      std::printf("cut vehicle: truncation %.2f, detection inside share %.2f\n", object.truncation,
+                  static_cast<double>(best->insideShare));
     } else if (object.truncation == 0.0 && truth.cx > reach && truth.cx < w - reach &&
                truth.cy > reach && truth.cy < h - reach) {
       ++insideFound;
       insideMarked += best->atFrameEdge;
+      insideShareNotOne += best->insideShare != 1.0F;
     }
   }
   std::printf("frame border: %d cut vehicles found, %d marked; %d inside found, %d marked\n",
@@ -229,4 +238,5 @@ TEST(FrameBorder, DetectionsOfVehiclesCutByTheFrameBorderAreMarked) {
   EXPECT_EQ(cutMarked, cutFound);
   EXPECT_GE(insideFound, 10);
   EXPECT_EQ(insideMarked, 0);
+  EXPECT_EQ(insideShareNotOne, 0);
 }

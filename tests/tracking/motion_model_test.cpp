@@ -113,6 +113,33 @@ TEST(MotionModel, GeometryChangeAndFlipKeepTheFootprintCentre) {
   EXPECT_NEAR(geometry::absAngleDifference(m.heading(), 0.7 + geometry::kPi), 0.0, 1e-12);
 }
 
+// alongAxisFactor k: the position noise along the vehicle's axis is k sigma, across it sigma,
+// at birth (covariance) and in an update (gain).
+TEST(MotionModel, AlongAxisFactorWeakensPositionOnlyAlongTheAxis) {
+  MotionNoise noise;
+  noise.measurementPosition_m = 0.3;
+  const double psi = 0.6;
+  const Eigen::Vector2d along(std::cos(psi), std::sin(psi));
+  const Eigen::Vector2d across(-along.y(), along.x());
+  MotionModel weak;
+  weak.initialise({0.0, 0.0}, psi, 2.7, 0.0, noise, 10.0);
+  const Eigen::Matrix2d c = weak.centreCovariance();
+  EXPECT_NEAR(along.dot(c * along), 100.0 * 0.09, 1e-9);
+  EXPECT_NEAR(across.dot(c * across), 0.09, 1e-9);
+
+  MotionModel plain;
+  plain.initialise({0.0, 0.0}, psi, 2.7, 0.0, noise);
+  weak = plain;
+  const Eigen::Vector2d z = 0.5 * along + 0.5 * across;
+  ASSERT_TRUE(plain.update(z, psi, true, noise));
+  ASSERT_TRUE(weak.update(z, psi, true, noise, 10.0));
+  EXPECT_NEAR(across.dot(weak.centre()), across.dot(plain.centre()), 1e-9);
+  EXPECT_GT(along.dot(plain.centre()), 0.2);
+  EXPECT_LT(along.dot(weak.centre()), 0.01);
+  EXPECT_FALSE(weak.update(z, psi, true, noise, 0.5));
+  EXPECT_FALSE(weak.update(z, psi, true, noise, std::nan("")));
+}
+
 TEST(MotionModel, RejectsBadInput) {
   MotionNoise noise;
   MotionModel m;

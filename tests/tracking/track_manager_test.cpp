@@ -107,38 +107,96 @@ TEST(TrackManager, LifecycleTentativeConfirmedLostReacquiredDeleted) {
   EXPECT_TRUE(m.tracks().empty());
 }
 
-// A detection cut by the image border (a vehicle driving into the frame: its visible part's
-// centre lags behind, its length is short) pulls the track less than a whole one.
-TEST(TrackManager, DetectionsAtTheFrameEdgeMoveTheTrackLess) {
-  const auto run = [](bool atEdge) {
+// A partial detection (a vehicle driving into the frame: the detector places it too far
+// inside) tells where the vehicle is across its axis, hardly where along it.
+TEST(TrackManager, PartialDetectionsMoveTheTrackAcrossNotAlong) {
+  const auto run = [](double insideShare) {
     TrackerConfig config = smallConfig();
     config.noise.measurementPosition_m = 0.3;  // the app's (docs/tracking.md)
-    config.frameEdgeNoiseFactor = 3.0;
     TrackManager m;
     EXPECT_TRUE(m.init(config));
     std::int64_t t = 0;
     for (int k = 0; k < 10; ++k, t += kFrameNs) {
       EXPECT_TRUE(m.step(t, std::vector<WorldDetection>{car(0.0, 0.0, 0.0, t)}).hasValue());
     }
-    WorldDetection cut = car(-0.5, 0.0, 0.0, t);  // centre 0.5 m behind, 3.5 m seen
+    WorldDetection cut = car(-0.5, 0.2, 0.0, t);  // 0.5 m behind along the axis, 0.2 m aside
     cut.lengthM = 3.5;
-    cut.atFrameEdge = atEdge;
+    cut.atFrameEdge = true;
+    cut.insideShare = insideShare;
     EXPECT_TRUE(m.step(t, std::vector<WorldDetection>{cut}).hasValue());
     EXPECT_EQ(m.tracks().size(), 1u);
     return m.tracks()[0];
   };
-  const TrackState whole = run(false);
-  const TrackState edge = run(true);
-  EXPECT_LT(std::abs(edge.centreEnu.x()), 0.5 * std::abs(whole.centreEnu.x()));
-  EXPECT_LT(std::abs(edge.lengthM - 4.5), 0.2 * std::abs(whole.lengthM - 4.5));
-  EXPECT_GT(std::abs(whole.lengthM - 4.5), 0.05);
+  const TrackState nearEdge = run(0.95);  // at the edge but whole: a full update
+  const TrackState partial = run(0.6);
+  EXPECT_LT(std::abs(partial.centreEnu.x()), 0.05 * std::abs(nearEdge.centreEnu.x()));
+  EXPECT_GT(std::abs(nearEdge.centreEnu.x()), 0.05);
+  EXPECT_NEAR(partial.centreEnu.y(), nearEdge.centreEnu.y(), 0.02);
+  EXPECT_GT(partial.centreEnu.y(), 0.01);
+  // Both touch the border: their short length hardly changes the fused one.
+  EXPECT_LT(std::abs(partial.lengthM - 4.5), 0.1);
+  EXPECT_LT(std::abs(nearEdge.lengthM - 4.5), 0.1);
 
-  TrackerConfig bad = smallConfig();
-  bad.frameEdgeNoiseFactor = 0.5;
+  for (const auto& [field, value] : {std::pair<const char*, double>{"partialAlongNoiseFactor", 0.5},
+                                     {"partialInsideShare", 1.5}}) {
+    TrackerConfig bad = smallConfig();
+    (std::string(field) == "partialInsideShare" ? bad.partialInsideShare
+                                                : bad.partialAlongNoiseFactor) = value;
+    TrackManager m;
+    std::string why;
+    EXPECT_FALSE(m.init(bad, &why)) << field;
+    EXPECT_NE(why.find(field), std::string::npos) << why;
+  }
+}
+
+// A car driving into view at 10 m/s whose partial boxes lag (their centre moves at half its
+// speed, then catches up): its track is confirmed only after two whole detections, and then with
+// the car's speed, not the half speed of the partial boxes.
+TEST(TrackManager, VehicleDrivingIntoViewIsConfirmedWithItsSpeed) {
+  TrackerConfig config = smallConfig();
+  config.noise.measurementPosition_m = 0.3;
   TrackManager m;
-  std::string why;
-  EXPECT_FALSE(m.init(bad, &why));
-  EXPECT_NE(why.find("frameEdgeNoiseFactor"), std::string::npos) << why;
+  ASSERT_TRUE(m.init(config));
+  constexpr double kSpeed = 10.0;
+  std::int64_t t = 0;
+  for (int k = 0; k < 12; ++k, t += kFrameNs) {
+    const double x = kSpeed * 0.1 * k;  // true centre
+    WorldDetection d = car(x, 0.0, 0.0, t);
+    if (k < 2) {  // entering: 40 and 70 % of the box inside, centre 1.5 and 1.0 m inside
+      d.insideShare = 0.4 + 0.3 * k;
+      d.atFrameEdge = true;
+      d.centreEnu.x() = x + 1.5 - 0.5 * k;
+    }
+    ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{d}).hasValue());
+    ASSERT_EQ(m.tracks().size(), 1u);
+    const TrackState& track = m.tracks()[0];
+    if (k < 3) {  // three matches, but only one whole
+      EXPECT_EQ(track.status, TrackStatus::Tentative) << "frame " << k;
+    } else {
+      EXPECT_EQ(track.status, TrackStatus::Confirmed) << "frame " << k;
+      EXPECT_NEAR(track.speedMps, kSpeed, 2.0) << "frame " << k;
+    }
+  }
+}
+
+// A car parked at the frame's border is only ever seen in part: it is confirmed after
+// confirmHitsAnyway matches, standing still.
+TEST(TrackManager, VehicleSeenOnlyInPartIsConfirmedAfterMoreMatches) {
+  TrackerConfig config = smallConfig();
+  TrackManager m;
+  ASSERT_TRUE(m.init(config));
+  std::int64_t t = 0;
+  for (int k = 0; k < config.confirmHitsAnyway; ++k, t += kFrameNs) {
+    WorldDetection d = car(5.0, 3.0, 1.0, t);
+    d.insideShare = 0.5;
+    d.atFrameEdge = true;
+    ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{d}).hasValue());
+    ASSERT_EQ(m.tracks().size(), 1u);
+    EXPECT_EQ(m.tracks()[0].status,
+              k + 1 < config.confirmHitsAnyway ? TrackStatus::Tentative : TrackStatus::Confirmed)
+        << "match " << k + 1;
+  }
+  EXPECT_LT(std::abs(m.tracks()[0].speedMps), 0.5);
 }
 
 TEST(TrackManager, ConfirmedTrackCoastsThroughShortMissesThenTurnsLost) {
@@ -298,12 +356,14 @@ TEST(TrackManager, TypeIsFusedFromProbabilities) {
 TEST(TrackManager, BadInputIsCountedNotUsed) {
   TrackManager m;
   ASSERT_TRUE(m.init(smallConfig()));
-  std::vector<WorldDetection> d = {car(0, 0, 0, 0), car(5, 0, 0, 0), car(10, 0, 0, 0)};
+  std::vector<WorldDetection> d = {car(0, 0, 0, 0), car(5, 0, 0, 0), car(10, 0, 0, 0),
+                                   car(15, 0, 0, 0)};
   d[1].centreEnu.x() = std::nan("");
   d[2].lengthM = 0.0;
+  d[3].insideShare = std::nan("");
   auto r = m.step(0, d);
   ASSERT_TRUE(r.hasValue());
-  EXPECT_EQ(r->rejectedDetections, 2);
+  EXPECT_EQ(r->rejectedDetections, 3);
   EXPECT_EQ(m.tracks().size(), 1u);
   EXPECT_EQ(m.step(-1, {}).error(), TrackError::TimeWentBackwards);
   // Over capacity: counted.
