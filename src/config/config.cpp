@@ -805,6 +805,7 @@ PerceptionConfig readPerception(MapReader section, const std::string& baseDir) {
   p.maxCrops = section.integer("max_crops", kMaxCropsRange, d.maxCrops);
   p.applyFlip = section.boolean("apply_flip", d.applyFlip);
   p.applyRefine = section.boolean("apply_refine", d.applyRefine);
+  p.cropMirrorAverage = section.boolean("crop_mirror_average", d.cropMirrorAverage);
   p.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRangeM, d.fixedGsd_m);
   p.nominalCarLength_m =
       section.number("nominal_car_length_m", kCarLengthRangeM, d.nominalCarLength_m);

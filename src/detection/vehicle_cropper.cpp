@@ -248,6 +248,7 @@ bool VehicleCropper::init(const std::string& cropModelPath,
   options_ = options;
   crop_.create(kCropHeightPx, kCropWidthPx, CV_8UC3);
   crop_.setTo(cv::Scalar::all(0));
+  mirrored_.create(kCropHeightPx, kCropWidthPx, CV_8UC3);
   return true;
 }
 
@@ -276,6 +277,32 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
   outputs.shape = values(shapeIndex_);
   outputs.flipLogit = values(flipIndex_)[0];
   outputs.refine = values(refineIndex_);
+  if (!options_.mirrorAverage) {
+    return applyCropOutputs(outputs, gsd_m, options_, detection);
+  }
+  // The engine reuses its output buffers: keep the first run's values (sizes checked at init).
+  std::copy(outputs.typeLogits.begin(), outputs.typeLogits.end(), typeLogits_.begin());
+  std::copy(outputs.refine.begin(), outputs.refine.end(), refine_.begin());
+  std::copy(outputs.shape.begin(), outputs.shape.end(), shape_.begin());
+  cv::flip(crop_, mirrored_, 0);
+  const inference::ImageView mirroredView{mirrored_.data, mirrored_.cols, mirrored_.rows,
+                                          mirrored_.step[0]};
+  if (engine_.run(mirroredView) != inference::RunStatus::Ok) {
+    return SecondStageStatus::EngineFailed;
+  }
+  const std::span<const float> typeLogits = values(typeIndex_);
+  const std::span<const float> refine = values(refineIndex_);
+  for (std::size_t t = 0; t < typeLogits_.size(); ++t) {
+    typeLogits_[t] = 0.5F * (typeLogits_[t] + typeLogits[t]);
+  }
+  // Mirrored: the offset across the axis (dv) and the angle change turn sign.
+  constexpr std::array<float, kRefineCount> kMirrorSign = {1.0F, -1.0F, -1.0F, 1.0F, 1.0F};
+  for (std::size_t i = 0; i < refine_.size(); ++i) {
+    refine_[i] = 0.5F * (refine_[i] + kMirrorSign[i] * refine[i]);
+  }
+  outputs.typeLogits = typeLogits_;
+  outputs.refine = refine_;
+  outputs.shape = std::span<const float>(shape_.data(), outputs.shape.size());
   return applyCropOutputs(outputs, gsd_m, options_, detection);
 }
 

@@ -19,7 +19,12 @@
 //    width = metres / gsd - the inverse of crops.refine_target (the Python Predictor returns
 //    refine without applying it). Non-finite or non-positive refined sizes keep the
 //    first-stage values.
-//  - VehicleCropper owns the crop engine and one crop buffer; classify() runs one detection
+//  - With mirrorAverage, classify() runs the network a second time on the crop mirrored across
+//    the vehicle's axis (rows reversed: left and right swapped, front stays front) and averages
+//    the two runs' type logits and refinements (du, length, width as they are; dv and d_angle
+//    negated back); flip logit and shape come from the crop as cut (an ASM component need not
+//    be mirror-symmetric). A cheap test-time augmentation: one more crop-network run.
+//  - VehicleCropper owns the crop engine and two crop buffers; classify() runs one detection
 //    (the engine is batch 1) with no heap allocation.
 #pragma once
 
@@ -65,6 +70,7 @@ struct SecondStageOptions {
   bool applyFlip = true;               // turn the heading by 180 deg when flip prob > 0.5
   bool applyRefine = true;             // centre/axis/size refinement (see the contract)
   bool shapeForLargeVehicles = false;  // keep gamma when the top type is Large
+  bool mirrorAverage = false;          // average with the mirrored crop (see the contract)
 };
 
 enum class SecondStageStatus {
@@ -104,6 +110,10 @@ class VehicleCropper {
   inference::Engine engine_;
   SecondStageOptions options_{};
   cv::Mat crop_;
+  cv::Mat mirrored_;
+  std::array<float, shape::kVehicleTypeCount> typeLogits_{};  // first run, kept for the mean
+  std::array<float, kRefineCount> refine_{};
+  std::array<float, shape::kMaxShapeComponents> shape_{};
   std::size_t typeIndex_ = 0;
   std::size_t shapeIndex_ = 0;
   std::size_t flipIndex_ = 0;

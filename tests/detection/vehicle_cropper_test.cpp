@@ -206,6 +206,77 @@ TEST(VehicleCropper, TypesShapeAndFlipOnly) {
   EXPECT_EQ(untouched.box.angle, large.box.angle);
 }
 
+// mirrorAverage: the second run sees the crop mirrored across the vehicle's axis. A frame
+// mirrored about the box's axis (a horizontal box on the middle row, 1 crop px = 1 frame px,
+// so the crops are exact mirror images) gives the second run's outputs by itself: the averaged
+// type is the normalised geometric mean of the two runs' probabilities, the averaged
+// refinement the mean with the across-axis offset and angle turned back; front/back and shape
+// come from the crop as cut.
+TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
+  cv::Mat frame(240, 320, CV_8UC3);
+  cv::RNG rng(7);
+  rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(frame, frame, cv::Size(9, 9), 2.0);
+  cv::rectangle(frame, cv::Rect(130, 112, 60, 20), cv::Scalar(40, 60, 200), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(150, 104, 20, 10), cv::Scalar(220, 220, 220), cv::FILLED);
+  cv::Mat mirrored;
+  cv::flip(frame, mirrored, 0);
+  constexpr double kGsd = kCropGsd_m;  // 1 crop px = 1 frame px
+  auto box = [] {
+    Detection d;
+    d.box = {159.5, 119.5, 75.0, 30.0, 0.0};  // on the middle row (240 rows: 119.5)
+    return d;
+  };
+  const std::string model = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
+  SecondStageOptions single;
+  single.applyFlip = false;
+  SecondStageOptions averaged = single;
+  averaged.mirrorAverage = true;
+  VehicleCropper one;
+  VehicleCropper both;
+  ASSERT_TRUE(one.init(model, {}, single));
+  ASSERT_TRUE(both.init(model, {}, averaged));
+
+  Detection a = box(), b = box(), c = box();
+  ASSERT_EQ(one.classify(frame, kGsd, &a), SecondStageStatus::Ok);
+  ASSERT_EQ(one.classify(mirrored, kGsd, &b), SecondStageStatus::Ok);
+  ASSERT_EQ(both.classify(frame, kGsd, &c), SecondStageStatus::Ok);
+  // one's last crop is the mirrored frame's: mirrored back it is the crop both cut.
+  cv::Mat flippedCrop;
+  cv::flip(one.lastCrop(), flippedCrop, 0);
+  ASSERT_EQ(cv::norm(flippedCrop, both.lastCrop(), cv::NORM_INF), 0.0) << "crops not mirrored";
+
+  double total = 0.0;
+  std::array<double, shape::kVehicleTypeCount> geometric{};
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    geometric[t] = std::sqrt(static_cast<double>(a.typeProbabilities[t]) *
+                             static_cast<double>(b.typeProbabilities[t]));
+    total += geometric[t];
+  }
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    EXPECT_NEAR(c.typeProbabilities[t], geometric[t] / total, 1e-5) << "type " << t;
+  }
+  // Refinement: along-axis offset, length, width averaged; across-axis offset and angle
+  // averaged with the mirrored run's turned back (about the frame's middle row).
+  EXPECT_NEAR(c.box.cx, 0.5 * (a.box.cx + b.box.cx), 1e-4);
+  EXPECT_NEAR(c.box.cy - 119.5, 0.5 * ((a.box.cy - 119.5) - (b.box.cy - 119.5)), 1e-4);
+  EXPECT_NEAR(c.box.length, 0.5 * (a.box.length + b.box.length), 1e-4);
+  EXPECT_NEAR(c.box.width, 0.5 * (a.box.width + b.box.width), 1e-4);
+  EXPECT_NEAR(geometry::angleDifference(c.box.angle, 0.0),
+              0.5 * (geometry::angleDifference(a.box.angle, 0.0) -
+                     geometry::angleDifference(b.box.angle, 0.0)),
+              1e-5);
+  // Front/back and shape: the crop as cut.
+  EXPECT_EQ(c.flipProbability, a.flipProbability);
+  ASSERT_EQ(c.gamma.count, a.gamma.count);
+  for (int s = 0; s < a.gamma.count; ++s) {
+    EXPECT_EQ(c.gamma.gamma[static_cast<std::size_t>(s)],
+              a.gamma.gamma[static_cast<std::size_t>(s)]);
+  }
+  // The two runs differ, or the test would show nothing.
+  EXPECT_GT(std::abs(a.box.cy - 119.5) + std::abs(b.box.cy - 119.5), 1e-3);
+}
+
 TEST(GroundSampleDistance, MedianBoxIsANominalCar) {
   std::array<Detection, 5> detections{};
   const double lengths[] = {150.0, 160.0, 400.0, 140.0, 155.0};  // a bus among cars

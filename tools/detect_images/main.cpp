@@ -58,6 +58,8 @@ options:
   --threads N           detector threads (default 1)
   --no-flip             keep the detector's front/back (the second stage's flip is not applied)
   --no-refine           keep the detector's box (the second stage's refinement is not applied)
+  --no-mirror           one crop-network run per vehicle (default: also the mirrored crop, type
+                        and refinement averaged, as the app's perception.crop_mirror_average)
   --help                this text
 )";
 
@@ -77,6 +79,7 @@ struct Options {
   int threads = 1;
   bool applyFlip = true;
   bool applyRefine = true;
+  bool mirrorAverage = true;
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -115,6 +118,10 @@ Options parseArguments(int argc, char** argv) {
     }
     if (arg == "--no-refine") {
       o.applyRefine = false;
+      continue;
+    }
+    if (arg == "--no-mirror") {
+      o.mirrorAverage = false;
       continue;
     }
     if (i + 1 >= argc)
@@ -202,6 +209,7 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
   stageOptions.gsd.fixedGsd_m = options.gsd;
   stageOptions.secondStage.applyFlip = options.applyFlip;
   stageOptions.secondStage.applyRefine = options.applyRefine;
+  stageOptions.secondStage.mirrorAverage = options.mirrorAverage;
   return stage.init(stageOptions, vp::preprocess::kMaxTiles, why);
 }
 
