@@ -43,6 +43,7 @@ perception::PipelineOptions pipelineOptions(const config::PerceptionConfig& conf
   det.secondStage.applyFlip = config.applyFlip;
   det.secondStage.applyRefine = config.applyRefine;
   det.secondStage.mirrorAverage = config.cropMirrorAverage;
+  det.secondStage.mirrorRefine = config.cropMirrorRefine;
   det.gsd.fixedGsd_m = config.fixedGsd_m;
   det.gsd.nominalCarLength_m = config.nominalCarLength_m;
   options.lift.boxHeightShare = config.liftHeightShare;

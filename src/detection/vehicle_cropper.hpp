@@ -21,9 +21,10 @@
 //    first-stage values.
 //  - With mirrorAverage, classify() runs the network a second time on the crop mirrored across
 //    the vehicle's axis (rows reversed: left and right swapped, front stays front) and averages
-//    the two runs' type logits and refinements (du, length, width as they are; dv and d_angle
-//    negated back); flip logit and shape come from the crop as cut (an ASM component need not
-//    be mirror-symmetric). A cheap test-time augmentation: one more crop-network run.
+//    the two runs' type logits, with mirrorRefine also their refinements (du, length, width as
+//    they are; dv and d_angle negated back); flip logit and shape come from the crop as cut (an
+//    ASM component need not be mirror-symmetric). A test-time augmentation: one more
+//    crop-network run.
 //  - VehicleCropper owns the crop engine and two crop buffers; classify() runs one detection
 //    (the engine is batch 1) with no heap allocation.
 #pragma once
@@ -70,7 +71,8 @@ struct SecondStageOptions {
   bool applyFlip = true;               // turn the heading by 180 deg when flip prob > 0.5
   bool applyRefine = true;             // centre/axis/size refinement (see the contract)
   bool shapeForLargeVehicles = false;  // keep gamma when the top type is Large
-  bool mirrorAverage = false;          // average with the mirrored crop (see the contract)
+  bool mirrorAverage = false;          // type averaged with the mirrored crop's (see contract)
+  bool mirrorRefine = false;           // ... and the refinement (needs mirrorAverage)
 };
 
 enum class SecondStageStatus {

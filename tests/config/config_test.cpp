@@ -127,6 +127,8 @@ perception:
   max_crops: 64
   apply_flip: false
   apply_refine: false
+  crop_mirror_average: false
+  crop_mirror_refine: true
   fixed_gsd_m: 0.03
   nominal_car_length_m: 4.4
   lift_height_share: 0.4
@@ -661,6 +663,10 @@ const MalformedCase kMalformedCases[] = {
     {"max_crops: 64", "max_crops: 513", "perception.max_crops", "must be in [0, 512], got 513"},
     {"apply_flip: false", "apply_flip: no", "perception.apply_flip",
      "expected true or false, got 'no'"},
+    {"crop_mirror_average: false", "crop_mirror_average: 1", "perception.crop_mirror_average",
+     "expected true or false, got '1'"},
+    {"crop_mirror_refine: true", "crop_mirror_refine: yes please", "perception.crop_mirror_refine",
+     "expected true or false, got 'yes please'"},
     {"apply_refine: false", "apply_refine: []", "perception.apply_refine",
      "expected true or false, got a sequence of 0 element(s)"},
     {"fixed_gsd_m: 0.03", "fixed_gsd_m: -0.1", "perception.fixed_gsd_m",
@@ -874,6 +880,8 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "perception.max_crops",
                                                "perception.apply_flip",
                                                "perception.apply_refine",
+                                               "perception.crop_mirror_average",
+                                               "perception.crop_mirror_refine",
                                                "perception.fixed_gsd_m",
                                                "perception.nominal_car_length_m",
                                                "perception.lift_height_share",
@@ -1236,6 +1244,8 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(p.maxCrops, 64);
   EXPECT_FALSE(p.applyFlip);
   EXPECT_FALSE(p.applyRefine);
+  EXPECT_FALSE(p.cropMirrorAverage);
+  EXPECT_TRUE(p.cropMirrorRefine);
   EXPECT_DOUBLE_EQ(p.fixedGsd_m, 0.03);
   EXPECT_DOUBLE_EQ(p.nominalCarLength_m, 4.4);
   EXPECT_DOUBLE_EQ(p.liftHeightShare, 0.4);

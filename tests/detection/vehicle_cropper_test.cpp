@@ -206,9 +206,9 @@ TEST(VehicleCropper, TypesShapeAndFlipOnly) {
   EXPECT_EQ(untouched.box.angle, large.box.angle);
 }
 
-// mirrorAverage: the second run sees the crop mirrored across the vehicle's axis. A frame
-// mirrored about the box's axis (a horizontal box on the middle row, 1 crop px = 1 frame px,
-// so the crops are exact mirror images) gives the second run's outputs by itself: the averaged
+// mirrorAverage (+ mirrorRefine): the second run sees the crop mirrored across the vehicle's axis.
+// A frame mirrored about the box's axis (a horizontal box on the middle row, 1 crop px = 1 frame
+// px, so the crops are exact mirror images) gives the second run's outputs by itself: the averaged
 // type is the normalised geometric mean of the two runs' probabilities, the averaged
 // refinement the mean with the across-axis offset and angle turned back; front/back and shape
 // come from the crop as cut.
@@ -232,6 +232,7 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
   single.applyFlip = false;
   SecondStageOptions averaged = single;
   averaged.mirrorAverage = true;
+  averaged.mirrorRefine = true;
   VehicleCropper one;
   VehicleCropper both;
   ASSERT_TRUE(one.init(model, {}, single));
@@ -272,6 +273,20 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
   for (int s = 0; s < a.gamma.count; ++s) {
     EXPECT_EQ(c.gamma.gamma[static_cast<std::size_t>(s)],
               a.gamma.gamma[static_cast<std::size_t>(s)]);
+  }
+  // Without mirrorRefine only the type is averaged: the box is the single run's.
+  SecondStageOptions typeOnly = single;
+  typeOnly.mirrorAverage = true;
+  VehicleCropper typed;
+  ASSERT_TRUE(typed.init(model, {}, typeOnly));
+  Detection e = box();
+  ASSERT_EQ(typed.classify(frame, kGsd, &e), SecondStageStatus::Ok);
+  EXPECT_EQ(e.box.cx, a.box.cx);
+  EXPECT_EQ(e.box.cy, a.box.cy);
+  EXPECT_EQ(e.box.angle, a.box.angle);
+  EXPECT_EQ(e.box.length, a.box.length);
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    EXPECT_EQ(e.typeProbabilities[t], c.typeProbabilities[t]) << "type " << t;
   }
   // The two runs differ, or the test would show nothing.
   EXPECT_GT(std::abs(a.box.cy - 119.5) + std::abs(b.box.cy - 119.5), 1e-3);

@@ -59,7 +59,8 @@ options:
   --no-flip             keep the detector's front/back (the second stage's flip is not applied)
   --no-refine           keep the detector's box (the second stage's refinement is not applied)
   --no-mirror           one crop-network run per vehicle (default: also the mirrored crop, type
-                        and refinement averaged, as the app's perception.crop_mirror_average)
+                        averaged, as the app's perception.crop_mirror_average)
+  --mirror-refine       average the mirrored crop's box refinement too (perception.crop_mirror_refine)
   --help                this text
 )";
 
@@ -80,6 +81,7 @@ struct Options {
   bool applyFlip = true;
   bool applyRefine = true;
   bool mirrorAverage = true;
+  bool mirrorRefine = false;
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -122,6 +124,10 @@ Options parseArguments(int argc, char** argv) {
     }
     if (arg == "--no-mirror") {
       o.mirrorAverage = false;
+      continue;
+    }
+    if (arg == "--mirror-refine") {
+      o.mirrorRefine = true;
       continue;
     }
     if (i + 1 >= argc)
@@ -210,6 +216,7 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
   stageOptions.secondStage.applyFlip = options.applyFlip;
   stageOptions.secondStage.applyRefine = options.applyRefine;
   stageOptions.secondStage.mirrorAverage = options.mirrorAverage;
+  stageOptions.secondStage.mirrorRefine = options.mirrorRefine && options.mirrorAverage;
   return stage.init(stageOptions, vp::preprocess::kMaxTiles, why);
 }
 
