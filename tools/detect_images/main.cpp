@@ -114,20 +114,23 @@ Options parseArguments(int argc, char** argv) {
       std::fputs(kUsage, stdout);
       std::exit(0);
     }
-    if (arg == "--no-flip") {
-      o.applyFlip = false;
-      continue;
+    // Switches without a value: each sets one flag.
+    const struct {
+      const char* name;
+      bool* flag;
+      bool value;
+    } switches[] = {{"--no-flip", &o.applyFlip, false},
+                    {"--no-refine", &o.applyRefine, false},
+                    {"--no-mirror", &o.mirrorAverage, false},
+                    {"--mirror-refine", &o.mirrorRefine, true}};
+    bool isSwitch = false;
+    for (const auto& s : switches) {
+      if (arg == s.name) {
+        *s.flag = s.value;
+        isSwitch = true;
+      }
     }
-    if (arg == "--no-refine") {
-      o.applyRefine = false;
-      continue;
-    }
-    if (arg == "--no-mirror") {
-      o.mirrorAverage = false;
-      continue;
-    }
-    if (arg == "--mirror-refine") {
-      o.mirrorRefine = true;
+    if (isSwitch) {
       continue;
     }
     if (i + 1 >= argc)
