@@ -51,6 +51,15 @@ bool kalmanUpdate(StateVector& x, StateMatrix& p, const Eigen::Matrix<double, M,
   return true;
 }
 
+// Covariance of a detected centre: sigma per axis, k sigma along the axis at heading psi,
+// sigma^2 (I + (k^2 - 1) u u^T) with u = (cos psi, sin psi).
+Eigen::Matrix2d centreNoise(double sigma, double psi, double alongAxisFactor) {
+  const Eigen::Vector2d u(std::cos(psi), std::sin(psi));
+  return sigma * sigma *
+         (Eigen::Matrix2d::Identity() +
+          (alongAxisFactor * alongAxisFactor - 1.0) * u * u.transpose());
+}
+
 }  // namespace
 
 void MotionModel::initialise(const Eigen::Vector2d& centre, double headingRad, double wheelbaseM,
@@ -65,10 +74,11 @@ void MotionModel::initialise(const Eigen::Vector2d& centre, double headingRad, d
   x_[kPsi] = psi;
   p_ = StateMatrix::Zero();
   const double sp = noise.measurementPosition_m;
-  p_(kX, kX) = p_(kY, kY) = sp * sp + std::pow(rearToCentreM * noise.measurementHeading_rad, 2);
+  // A bad factor (not finite, < 1) counts as 1: initialise() cannot fail.
   const double k = std::isfinite(alongAxisFactor) ? std::max(1.0, alongAxisFactor) : 1.0;
-  const Eigen::Vector2d u(std::cos(psi), std::sin(psi));
-  p_.topLeftCorner<2, 2>() += (k * k - 1.0) * sp * sp * u * u.transpose();
+  p_.topLeftCorner<2, 2>() =
+      centreNoise(sp, psi, k) +
+      Eigen::Matrix2d::Identity() * std::pow(rearToCentreM * noise.measurementHeading_rad, 2);
   p_(kPsi, kPsi) = noise.measurementHeading_rad * noise.measurementHeading_rad;
   p_(kV, kV) = noise.initialSpeed_mps * noise.initialSpeed_mps;
   p_(kA, kA) = noise.initialAcceleration_mps2 * noise.initialAcceleration_mps2;
@@ -178,12 +188,9 @@ bool MotionModel::update(const Eigen::Vector2d& centre, double headingRad, bool 
   }
   const Eigen::Matrix<double, 3, kStateSize> h = measurementJacobian(x_, rearToCentre_);
   const Eigen::Vector2d predicted = this->centre();
-  const double rp = noise.measurementPosition_m * noise.measurementPosition_m;
-  // R_pos = rp (I + (k^2 - 1) u u^T), u the track's axis: k times the sigma along it.
-  const Eigen::Vector2d u(std::cos(x_[kPsi]), std::sin(x_[kPsi]));
+  // Along the track's axis k times the sigma.
   const Eigen::Matrix2d rPosition =
-      rp *
-      (Eigen::Matrix2d::Identity() + (alongAxisFactor * alongAxisFactor - 1.0) * u * u.transpose());
+      centreNoise(noise.measurementPosition_m, x_[kPsi], alongAxisFactor);
   bool ok = false;
   if (hasHeading) {
     Eigen::Vector3d residual;
