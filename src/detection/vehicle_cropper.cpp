@@ -172,6 +172,11 @@ SecondStageStatus applyCropOutputs(const CropNetOutputs& outputs, double gsd_m,
     for (int i = 0; i < kRefineCount; ++i) {
       r[i] = static_cast<double>(outputs.refine[i]) * kRefineScale[i] + kRefineOffset[i];
     }
+    const bool keepLength = large && !options.refineLargeVehicleLength;
+    if (keepLength) {
+      r[0] = 0.0;                   // along-axis centre: the first stage's
+      r[3] = d.box.length * gsd_m;  // length: the first stage's
+    }
     const double c = std::cos(angle0);
     const double s = std::sin(angle0);
     d.box.cx += (c * r[0] - s * r[1]) / gsd_m;

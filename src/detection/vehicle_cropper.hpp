@@ -18,7 +18,10 @@
 //    (x forward, y right): centre += R(angle0) (du, dv) / gsd, angle += d_angle, length and
 //    width = metres / gsd - the inverse of crops.refine_target (the Python Predictor returns
 //    refine without applying it). Non-finite or non-positive refined sizes keep the
-//    first-stage values.
+//    first-stage values. A vehicle most likely Large keeps its first-stage length and its
+//    centre along the axis (du not applied) unless refineLargeVehicleLength: the 5.76 m crop
+//    window shows only part of a bus or truck, so the crop network's length for it is a guess,
+//    while the first stage saw the whole vehicle.
 //  - With mirrorAverage, classify() runs the network a second time on the crop mirrored across
 //    the vehicle's axis (rows reversed: left and right swapped, front stays front) and averages
 //    the two runs' type logits, with mirrorRefine also their refinements (du, length, width as
@@ -68,11 +71,12 @@ struct CropNetOutputs {
 };
 
 struct SecondStageOptions {
-  bool applyFlip = true;               // turn the heading by 180 deg when flip prob > 0.5
-  bool applyRefine = true;             // centre/axis/size refinement (see the contract)
-  bool shapeForLargeVehicles = false;  // keep gamma when the top type is Large
-  bool mirrorAverage = false;          // type averaged with the mirrored crop's (see contract)
-  bool mirrorRefine = false;           // ... and the refinement (needs mirrorAverage)
+  bool applyFlip = true;                  // turn the heading by 180 deg when flip prob > 0.5
+  bool applyRefine = true;                // centre/axis/size refinement (see the contract)
+  bool shapeForLargeVehicles = false;     // keep gamma when the top type is Large
+  bool refineLargeVehicleLength = false;  // apply length and du when the top type is Large
+  bool mirrorAverage = false;             // type averaged with the mirrored crop's (see contract)
+  bool mirrorRefine = false;              // ... and the refinement (needs mirrorAverage)
 };
 
 enum class SecondStageStatus {

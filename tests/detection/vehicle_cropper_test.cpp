@@ -206,6 +206,44 @@ TEST(VehicleCropper, TypesShapeAndFlipOnly) {
   EXPECT_EQ(untouched.box.angle, large.box.angle);
 }
 
+// A vehicle most likely Large keeps the first stage's length and along-axis centre: the crop
+// window shows only part of it. Across the axis (offset, angle, width) it is refined as any other.
+TEST(VehicleCropper, LargeVehicleKeepsTheFirstStageLength) {
+  std::array<float, 7> largeLogits{};
+  largeLogits[6] = 5.0F;
+  const std::array<float, 3> gamma{};
+  // raw refine: du 0.5 m, dv 0.25 m, d_angle 0.02 rad, length 4.5 + 1 m, width 1.8 + 0.2 m
+  const std::array<float, 5> raw{1.0F, 0.5F, 0.1F, 1.0F, 0.2F};
+  const double gsd = 0.05;
+  Detection large;
+  large.box = {500.0, 300.0, 200.0, 50.0, 0.0};  // a 10 m x 2.5 m bus along +u
+  CropNetOutputs outputs{largeLogits, gamma, -3.0F, raw};
+  ASSERT_EQ(applyCropOutputs(outputs, gsd, SecondStageOptions{}, &large), SecondStageStatus::Ok);
+  EXPECT_NEAR(large.box.cx, 500.0, 1e-9);        // du not applied
+  EXPECT_NEAR(large.box.cy, 300.0 + 5.0, 1e-9);  // dv 0.25 m = 5 px
+  EXPECT_NEAR(large.box.length, 200.0, 1e-9);
+  EXPECT_NEAR(large.box.width, 2.0 / gsd, 1e-4);
+  EXPECT_NEAR(large.box.angle, 0.02, 1e-6);
+
+  SecondStageOptions options;
+  options.refineLargeVehicleLength = true;  // the crop's length after all
+  Detection refined;
+  refined.box = {500.0, 300.0, 200.0, 50.0, 0.0};
+  ASSERT_EQ(applyCropOutputs(outputs, gsd, options, &refined), SecondStageStatus::Ok);
+  EXPECT_NEAR(refined.box.cx, 510.0, 1e-9);
+  EXPECT_NEAR(refined.box.length, 5.5 / gsd, 1e-4);
+
+  // A car is refined along its axis as before.
+  std::array<float, 7> carLogits{};
+  carLogits[3] = 5.0F;
+  Detection car;
+  car.box = {500.0, 300.0, 90.0, 36.0, 0.0};
+  outputs.typeLogits = carLogits;
+  ASSERT_EQ(applyCropOutputs(outputs, gsd, SecondStageOptions{}, &car), SecondStageStatus::Ok);
+  EXPECT_NEAR(car.box.cx, 510.0, 1e-9);
+  EXPECT_NEAR(car.box.length, 5.5 / gsd, 1e-4);
+}
+
 // mirrorAverage (+ mirrorRefine): the second run sees the crop mirrored across the vehicle's axis.
 // A frame mirrored about the box's axis (a horizontal box on the middle row, 1 crop px = 1 frame
 // px, so the crops are exact mirror images) gives the second run's outputs by itself: the averaged

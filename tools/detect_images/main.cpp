@@ -61,6 +61,8 @@ options:
   --no-mirror           one crop-network run per vehicle (default: also the mirrored crop, type
                         averaged, as the app's perception.crop_mirror_average)
   --mirror-refine       average the mirrored crop's box refinement too (perception.crop_mirror_refine)
+  --refine-large-length apply the second stage's length to vehicles most likely large too
+                        (default: they keep the first stage's length; the crop shows a part)
   --help                this text
 )";
 
@@ -82,6 +84,7 @@ struct Options {
   bool applyRefine = true;
   bool mirrorAverage = true;
   bool mirrorRefine = false;
+  bool refineLargeLength = false;
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -122,7 +125,8 @@ Options parseArguments(int argc, char** argv) {
     } switches[] = {{"--no-flip", &o.applyFlip, false},
                     {"--no-refine", &o.applyRefine, false},
                     {"--no-mirror", &o.mirrorAverage, false},
-                    {"--mirror-refine", &o.mirrorRefine, true}};
+                    {"--mirror-refine", &o.mirrorRefine, true},
+                    {"--refine-large-length", &o.refineLargeLength, true}};
     bool isSwitch = false;
     for (const auto& s : switches) {
       if (arg == s.name) {
@@ -220,6 +224,7 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
   stageOptions.secondStage.applyRefine = options.applyRefine;
   stageOptions.secondStage.mirrorAverage = options.mirrorAverage;
   stageOptions.secondStage.mirrorRefine = options.mirrorRefine && options.mirrorAverage;
+  stageOptions.secondStage.refineLargeVehicleLength = options.refineLargeLength;
   return stage.init(stageOptions, vp::preprocess::kMaxTiles, why);
 }
 

@@ -524,5 +524,41 @@ def split_near_duplicate_free(samples: Sequence[Sample], val_fraction: float = 0
         # file stems, so other tools (vp_evaluate --val-list) evaluate exactly this split
         "val_stems": sorted(os.path.splitext(os.path.basename(samples[i].image_path))[0]
                              for i in final_val if samples[i].image_path),
+        # the images dropped from validation (gap, hash) are in neither list: they are too
+        # close to a training frame to validate and may be too close to a validation frame to train
+        "train_stems": sorted(os.path.splitext(os.path.basename(samples[i].image_path))[0]
+                               for i in train_idx if samples[i].image_path),
     }
     return [samples[i] for i in train_idx], [samples[i] for i in final_val], report
+
+
+def split_from_file(samples: Sequence[Sample], path: str):
+    """The split written by split_near_duplicate_free (split_real.py, a run's split.json):
+    images whose file stem is in its ``val_stems`` validate; those in ``train_stems`` train
+    (a file without that list: all other images). Lets a run use the evaluation's split
+    exactly, also on a copy of the folder that holds only the training images."""
+    import json
+
+    try:
+        with open(path) as f:
+            doc = json.load(f)
+        val_stems = set(doc["val_stems"])
+        train_stems = set(doc["train_stems"]) if "train_stems" in doc else None
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise SystemExit(f"--real-split {path}: not a split file with val_stems ({e})")
+    train, val = [], []
+    for s in samples:
+        stem = os.path.splitext(os.path.basename(s.image_path or ""))[0]
+        if stem in val_stems:
+            val.append(s)
+        elif train_stems is None or stem in train_stems:
+            train.append(s)
+    report = {
+        "total": len(samples), "train": len(train), "val": len(val), "from_file": path,
+        "val_stems_missing": len(val_stems) - len(val),
+        "train_boxes": int(sum(len(s) for s in train)),
+        "val_boxes": int(sum(len(s) for s in val)),
+        "val_stems": sorted(val_stems),
+        "train_stems": sorted(train_stems) if train_stems is not None else None,
+    }
+    return train, val, report

@@ -127,6 +127,10 @@ def calibration_images(args, hw, n_s: int, rng) -> (np.ndarray, np.ndarray):
     for d in args.calib_data or []:
         seq.extend(read_sequence(d, n_s=n_s))
     real = read_yolo(args.calib_real, n_s=n_s) if args.calib_real else []
+    if real and args.calib_real_split:  # calibrate on training images only
+        from detector.datasets import split_from_file
+
+        real = split_from_file(real, args.calib_real_split)[0]
     n = args.calib_count
     pick_seq = [seq[i] for i in rng.permutation(len(seq))[:max(0, n - min(len(real), n // 3))]]
     pick_real = [real[i] for i in rng.permutation(len(real))[:n - len(pick_seq)]] if real else []
@@ -270,6 +274,8 @@ def parse_args(argv=None):
                    help="width the camera frame is resized to before padding")
     p.add_argument("--calib-data", nargs="*", default=[])
     p.add_argument("--calib-real", default=None)
+    p.add_argument("--calib-real-split", default=None,
+                   help="split JSON (split_real.py): calibrate only on its training images")
     p.add_argument("--calib-count", type=int, default=32)
     p.add_argument("--method", choices=["minmax", "percentile", "mse"], default="minmax")
     p.add_argument("--eval-data", nargs="*", default=[])

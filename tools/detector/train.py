@@ -25,9 +25,13 @@ Contract
   ``--checkpoint-minutes`` and at the end; atomic replace), RUNDIR/train_log.jsonl (losses),
   RUNDIR/split.json, RUNDIR/metrics.json (validation at the end), RUNDIR/args.json.
 * ``--resume`` continues from RUNDIR/checkpoint.pt: models, optimisers, step, RNG states and
-  the elapsed training time (``--budget-minutes`` is the total over all runs). Runs are
-  deterministic for a seed on one device and thread count (data sampling happens in the main
-  process from one numpy Generator).
+  the elapsed training time (``--budget-minutes`` is the total over all runs;
+  ``--session-minutes`` ends one run earlier, checkpointed, for machines lent by the hour).
+  Runs are deterministic for a seed on one device and thread count (data sampling happens in
+  the main process from one numpy Generator). ``--workers N`` makes the batches in N worker
+  processes instead (for a GPU, which the main process alone cannot feed): each worker draws
+  from its own Generator seeded by (seed, worker, step at start), so such runs are
+  reproducible from their start but not batch-for-batch across a resume.
 * CUDA is used when available (``--device auto``), else the CPU.
 """
 
@@ -44,13 +48,19 @@ from typing import Dict, List, Optional
 if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
+# OpenCV single-threaded, set before cv2 is first imported: the --workers processes are forked
+# from this one, and pip's OpenCV (the GPU machine's) keeps a thread pool that does not survive
+# a fork: the workers hung in their first cv2 call until this was set (round 5). The batches are
+# made by the workers in parallel anyway.
+os.environ.setdefault("OPENCV_FOR_THREADS_NUM", "1")
+
 import numpy as np
 import torch
 
 from detector import augment, crops, targets
 from detector.asm import DEFAULT_ASM_PATH, REPO_ROOT, load_asm
 from detector.datasets import (LARGE, Sample, read_dota, read_sequence, read_yolo,
-                               split_near_duplicate_free)
+                               split_from_file, split_near_duplicate_free)
 from detector.losses import crop_loss, detector_loss, make_shape_loss
 from detector.model import CropNet, Detector, normalize
 
@@ -62,6 +72,12 @@ def parse_args(argv=None):
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--data", nargs="*", default=[], help="recorded sequence directories")
     p.add_argument("--real", default=None, help="YOLO folder (images/, labels/) of real images")
+    p.add_argument("--split-seed", type=int, default=0,
+                   help="seed of the near-duplicate-free real split (kept apart from --seed so that "
+                        "every run holds out the same images; 0 is the model card's split)")
+    p.add_argument("--real-split", default=None,
+                   help="split JSON (split_real.py or a run's split.json): its val_stems are the "
+                        "validation images, every other image in --real trains")
     p.add_argument("--real-max", type=int, default=0, help="use at most N real training images (0: all)")
     p.add_argument("--real-val-max", type=int, default=0, help="evaluate at most N real validation images (0: all)")
     p.add_argument("--real-share", type=float, default=0.3, help="share of tiles from real images")
@@ -104,6 +120,14 @@ def parse_args(argv=None):
     p.add_argument("--cache-frames", type=int, default=256)
     p.add_argument("--log-every", type=int, default=10)
     p.add_argument("--max-steps", type=int, default=0, help="stop after N steps (tests)")
+    p.add_argument("--session-minutes", type=float, default=0.0,
+                   help="end this run after M minutes of wall time with a checkpoint (the schedule "
+                        "still spans --budget-minutes; continue with --resume); 0: no limit")
+    p.add_argument("--preload", action="store_true",
+                   help="read every training frame into memory at start (cache without eviction; "
+                        "shared with --workers); needs about 4 MiB per 1296 x 1024 frame")
+    p.add_argument("--workers", type=int, default=0,
+                   help="batch-making worker processes (0: the main process, deterministic)")
     p.add_argument("--no-eval", action="store_true")
     return p.parse_args(argv)
 
@@ -170,8 +194,12 @@ class Data:
         self.split_report = None
         if args.real:
             all_real = read_yolo(args.real, n_s=n_s)
-            self.real, self.real_val, self.split_report = split_near_duplicate_free(
-                all_real, seed=args.seed)
+            if args.real_split:
+                self.real, self.real_val, self.split_report = split_from_file(
+                    all_real, args.real_split)
+            else:
+                self.real, self.real_val, self.split_report = split_near_duplicate_free(
+                    all_real, seed=args.split_seed)
             if args.real_max:
                 sel = np.random.default_rng(args.seed).permutation(len(self.real))[:args.real_max]
                 self.real = [self.real[i] for i in sorted(sel)]
@@ -187,6 +215,21 @@ class Data:
         log(f"data: {len(self.seq)} sequence/DOTA frames ({sum(len(s) for s in self.seq)} objects), "
             f"{len(self.real)} real training images, {len(self.real_val)} real validation images, "
             f"{len(self.val_seq)} validation frames, {len(self.crop_pool)} typed objects for crops")
+
+    def preload(self, threads: int = 8, log=print) -> None:
+        """Every training frame into the cache (no eviction): read once, then shared by the
+        --workers processes, which fork after it (copy-on-write: the pixels are never written)."""
+        from concurrent.futures import ThreadPoolExecutor
+
+        keys = [("seq", i) for i in range(len(self.seq))] + [("real", i) for i in range(len(self.real))]
+        self.cache.capacity = max(self.cache.capacity, len(keys))
+        t0 = time.monotonic()
+        with ThreadPoolExecutor(max(1, threads)) as pool:  # cv2.imread releases the GIL
+            loaded = list(pool.map(lambda k: (self.seq if k[0] == "seq" else self.real)[k[1]].loaded(), keys))
+        for (pool_name, i), s in zip(keys, loaded):
+            self.cache.items[i if pool_name == "seq" else -1 - i] = s
+        mb = sum(s.image.nbytes for s in loaded) / 2**20
+        log(f"preloaded {len(keys)} frames ({mb:.0f} MiB) in {time.monotonic() - t0:.1f} s")
 
     def frames_per_epoch(self) -> int:
         return len(self.seq) + len(self.real)
@@ -216,18 +259,19 @@ class Data:
         s = augment.random_geometric(s, rng)
         return augment.photometric(s, rng)
 
-    def detector_batch(self, rng, device) -> Dict[str, torch.Tensor]:
+    def detector_arrays(self, rng) -> Dict[str, np.ndarray]:
+        """One batch of training tiles and their targets, as numpy arrays (``image``: NHWC)."""
         items, imgs = [], []
         for _ in range(self.args.batch):
             s = self.tile(rng)
             items.append(targets.encode(s, n_s=self.n_s))
             imgs.append(s.image)
-        batch = {k: torch.from_numpy(v).to(device) for k, v in targets.collate(items).items()}
-        x = torch.from_numpy(np.stack(imgs)).permute(0, 3, 1, 2).to(device)
-        batch["input"] = normalize(x)
+        batch = dict(targets.collate(items))
+        batch["image"] = np.stack(imgs)
         return batch
 
-    def crop_batch(self, rng, device) -> Optional[Dict[str, torch.Tensor]]:
+    def crop_arrays(self, rng) -> Optional[Dict[str, np.ndarray]]:
+        """One batch of jittered ground-truth crops and their targets (None: no typed objects)."""
         if not self.crop_pool:
             return None
         imgs, types, gammas, flips, refines = [], [], [], [], []
@@ -249,11 +293,49 @@ class Data:
             gammas.append(s.gammas[j])
             flips.append(flip)
             refines.append(refine)
-        x = torch.from_numpy(np.stack(imgs)).permute(0, 3, 1, 2).to(device)
-        return {"input": normalize(x), "type": torch.tensor(np.array(types), device=device),
-                "gamma": torch.tensor(np.stack(gammas), device=device),
-                "flip": torch.tensor(np.array(flips), device=device),
-                "refine": torch.tensor(np.stack(refines), device=device)}
+        return {"image": np.stack(imgs), "type": np.array(types), "gamma": np.stack(gammas),
+                "flip": np.array(flips), "refine": np.stack(refines)}
+
+    def detector_batch(self, rng, device) -> Dict[str, torch.Tensor]:
+        return to_device(self.detector_arrays(rng), device)
+
+    def crop_batch(self, rng, device) -> Optional[Dict[str, torch.Tensor]]:
+        arrays = self.crop_arrays(rng)
+        return None if arrays is None else to_device(arrays, device)
+
+
+def to_device(arrays, device) -> Dict[str, torch.Tensor]:
+    """numpy arrays (or the tensors a DataLoader made of them) on ``device``; ``image`` (NHWC
+    uint8) becomes the normalised NCHW ``input``."""
+    out = {k: torch.as_tensor(v).to(device, non_blocking=True) for k, v in arrays.items()
+           if k != "image"}
+    x = torch.as_tensor(arrays["image"]).to(device, non_blocking=True).permute(0, 3, 1, 2)
+    out["input"] = normalize(x)
+    return out
+
+
+class BatchStream(torch.utils.data.IterableDataset):
+    """Endless (detector arrays, crop arrays) pairs for --workers: worker k draws from a numpy
+    Generator seeded by (seed, k, start step), so a run is reproducible from its start."""
+
+    def __init__(self, data: "Data", seed: int, start_step: int, detector: bool, crop: bool):
+        super().__init__()
+        self.data, self.seed, self.start_step = data, seed, start_step
+        self.detector, self.crop = detector, crop
+
+    def __iter__(self):
+        info = torch.utils.data.get_worker_info()
+        rng = np.random.default_rng([self.seed, info.id if info else 0, self.start_step])
+        while True:
+            yield (self.data.detector_arrays(rng) if self.detector else None,
+                   self.data.crop_arrays(rng) if self.crop else None)
+
+
+def _worker_init(_):
+    import cv2
+
+    torch.set_num_threads(1)  # the workers together use the cores; one thread each
+    cv2.setNumThreads(1)
 
 
 def _empty(n_s):
@@ -286,6 +368,9 @@ def _check_out_dir(out: str) -> None:
 
 def train(args) -> dict:
     _check_out_dir(args.out)
+    if args.workers < 0 or args.session_minutes < 0:
+        raise SystemExit(f"--workers and --session-minutes must be >= 0 (got {args.workers}, "
+                         f"{args.session_minutes})")
     if not args.hard_weight > 0 or not 0.0 <= args.hard_occlusion <= 1.0:
         raise SystemExit(f"--hard-weight must be > 0 (got {args.hard_weight}) and --hard-occlusion "
                          f"in [0, 1] (got {args.hard_occlusion})")
@@ -303,14 +388,21 @@ def train(args) -> dict:
         torch.backends.cudnn.deterministic = True
     asm = load_asm(args.asm)
     data = Data(args, asm.n_s, log)
+    if args.preload:
+        data.preload(threads=max(1, args.workers), log=log)
     if data.split_report:
         with open(os.path.join(args.out, "split.json"), "w") as f:
             json.dump(data.split_report, f, indent=1)
         r = data.split_report
-        log(f"real split: {r['train']} train / {r['val']} val images ({r['train_boxes']} / "
-            f"{r['val_boxes']} boxes); dropped from val: {r['val_dropped_gap']} (frame gap), "
-            f"{r['val_dropped_hash']} (dHash <= {r['hash_threshold_bits']} bits); min val-train "
-            f"hash distance {r['min_val_train_hash_distance']}")
+        if "from_file" in r:
+            log(f"real split from {r['from_file']}: {r['train']} train / {r['val']} val images "
+                f"({r['train_boxes']} / {r['val_boxes']} boxes; {r['val_stems_missing']} listed "
+                f"validation images not in the folder)")
+        else:
+            log(f"real split: {r['train']} train / {r['val']} val images ({r['train_boxes']} / "
+                f"{r['val_boxes']} boxes); dropped from val: {r['val_dropped_gap']} (frame gap), "
+                f"{r['val_dropped_hash']} (dHash <= {r['hash_threshold_bits']} bits); min val-train "
+                f"hash distance {r['min_val_train_hash_distance']}")
     det = Detector(n_s=asm.n_s, single_stage=args.single_stage).to(device)
     if args.crop_only and args.no_crop:
         raise SystemExit("--crop-only and --no-crop exclude each other")
@@ -349,7 +441,7 @@ def train(args) -> dict:
             opt_c.load_state_dict(ck["opt_crop"])
         step, elapsed = ck["step"], ck["elapsed_s"]
         rng.bit_generator.state = ck["numpy_rng"]
-        torch.set_rng_state(ck["torch_rng"])
+        torch.set_rng_state(ck["torch_rng"].cpu())  # map_location moved it to the device
         log(f"resumed at step {step} ({elapsed / 60:.1f} min trained)")
     elif args.resume:
         log(f"--resume: no {ckpt_path}, starting fresh")
@@ -378,9 +470,17 @@ def train(args) -> dict:
     t_run = time.monotonic()
     elapsed0 = elapsed
     history = []
+    stream = None
+    if args.workers > 0:
+        stream = iter(torch.utils.data.DataLoader(
+            BatchStream(data, args.seed, step, not args.crop_only, crop_net is not None),
+            batch_size=None, num_workers=args.workers, prefetch_factor=4,
+            worker_init_fn=_worker_init, pin_memory=device.type == "cuda"))
+    session_s = args.session_minutes * 60 if args.session_minutes > 0 else math.inf
     with open(log_path, "a") as logf:
-        while step < total_steps and elapsed < budget_s:
+        while step < total_steps and elapsed < budget_s and time.monotonic() - t_run < session_s:
             t0 = time.monotonic()
+            arrays_d, arrays_c = next(stream) if stream is not None else (None, None)
             if args.schedule == "time":
                 lr = lr_at(step, total_steps, args.lr, args.warmup_steps, progress=elapsed / budget_s)
             else:
@@ -390,7 +490,8 @@ def train(args) -> dict:
             if not args.crop_only:
                 for g in opt_d.param_groups:
                     g["lr"] = lr
-                batch = data.detector_batch(rng, device)
+                batch = (to_device(arrays_d, device) if stream is not None
+                         else data.detector_batch(rng, device))
                 t_data = time.monotonic() - t0
                 out = det(batch["input"])
                 loss_d, terms_d = detector_loss(out, batch, shape_loss)
@@ -401,7 +502,10 @@ def train(args) -> dict:
                 rec.update({"det_loss": float(loss_d.detach()),
                             **{f"det_{k}": v for k, v in terms_d.items()}})
             if crop_net is not None:
-                cb = data.crop_batch(rng, device)
+                if stream is not None:
+                    cb = None if arrays_c is None else to_device(arrays_c, device)
+                else:
+                    cb = data.crop_batch(rng, device)
                 if cb is not None:
                     for g in opt_c.param_groups:
                         g["lr"] = lr

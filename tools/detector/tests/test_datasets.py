@@ -1,6 +1,7 @@
 """Readers of the recorded-sequence, YOLO and DOTA formats and the near-duplicate-free split."""
 
 import math
+import json
 import os
 import shutil
 import subprocess
@@ -131,6 +132,29 @@ class YoloReaderAndSplit(unittest.TestCase):
                     self.assertGreater(min(abs(v.frame_index - f) for f in tf), 10)
             else:
                 self.assertNotIn(v.group, {t.group for t in train})
+
+
+    def test_split_from_file_holds_out_the_listed_stems(self):
+        with tempfile.TemporaryDirectory() as d:
+            self.make_yolo(d, ["0_13", "0_14", "Drone2_(363)"])
+            s = datasets.read_yolo(d)
+            split = os.path.join(d, "split.json")
+            with open(split, "w") as f:
+                json.dump({"val_stems": ["0_14", "9_1"]}, f)
+            train, val, rep = datasets.split_from_file(s, split)
+            self.assertEqual(sorted(os.path.basename(x.image_path) for x in val), ["0_14.jpg"])
+            self.assertEqual(len(train), 2)
+            self.assertEqual(rep["val_stems_missing"], 1)  # 9_1 is not in this folder
+            with open(split, "w") as f:  # a train list: images in neither list are left out
+                json.dump({"val_stems": ["0_14"], "train_stems": ["0_13"]}, f)
+            train, val, _ = datasets.split_from_file(s, split)
+            self.assertEqual([os.path.basename(x.image_path) for x in train], ["0_13.jpg"])
+            self.assertEqual(len(val), 1)
+            with open(split, "w") as f:
+                f.write("{}")
+            with self.assertRaises(SystemExit) as e:
+                datasets.split_from_file(s, split)
+            self.assertIn("val_stems", str(e.exception))
 
 
 class DotaReader(unittest.TestCase):

@@ -74,6 +74,33 @@ class SmokeTraining(unittest.TestCase):
             with open(os.path.join(run, "train_log.jsonl")) as fh:
                 self.assertEqual(len(fh.readlines()), 22)
 
+    def test_workers_and_session_limit(self):
+        """Batches made by worker processes train too; --session-minutes ends a run early with
+        a checkpoint that --resume continues."""
+        with tempfile.TemporaryDirectory() as d:
+            seq = os.path.join(d, "seq")
+            write_synthetic_sequence(seq)
+            run = os.path.join(d, "run")
+            common = ["--data", seq, "--out", run, "--batch", "4", "--tile", "64",
+                      "--crop-batch", "4", "--working-width", "128", "--warmup-steps", "2",
+                      "--lr", "3e-3", "--threads", "1", "--device", "cpu", "--log-every", "100",
+                      "--no-eval", "--workers", "2", "--preload"]
+            res = train.train(train.parse_args(common + ["--max-steps", "20"]))
+            h = res["history"]
+            self.assertEqual(len(h), 20)
+            self.assertLess(np.mean([r["det_loss"] for r in h[-5:]]),
+                            np.mean([r["det_loss"] for r in h[:5]]))
+            self.assertTrue(all(math.isfinite(r["crop_loss"]) for r in h))
+            # a session of ~0 minutes (over before the workers start): no step, checkpointed
+            res2 = train.train(train.parse_args(common + ["--max-steps", "40", "--resume",
+                                                          "--session-minutes", "1e-6"]))
+            self.assertEqual(res2["steps"], 20)
+            self.assertEqual(res2["history"], [])
+
+    def test_real_split_does_not_follow_the_training_seed(self):
+        a = train.parse_args(["--out", "/tmp/x", "--seed", "4"])
+        self.assertEqual(a.split_seed, 0)
+
     def test_refuses_run_dir_inside_repo(self):
         with self.assertRaises(SystemExit):
             train._check_out_dir(os.path.join(_common.REPO, "runs", "x"))
