@@ -51,7 +51,7 @@ struct PerceptionConfig {
   bool applyFlip = true;
   bool applyRefine = true;
   bool cropMirrorAverage = true;  // second crop-network run on the mirrored crop, type averaged
-  bool cropMirrorRefine = false;  // ... and the box refinement
+  bool cropMirrorRefine = true;   // ... and the box refinement
   double fixedGsd_m = 0.0;        // m per frame px; 0 = from the pose and DTM / estimated
   double nominalCarLength_m = 4.5;
   double liftHeightShare = 0.5;  // boxes lifted at this share of the vehicle's height, [0, 1]

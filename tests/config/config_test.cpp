@@ -128,7 +128,7 @@ perception:
   apply_flip: false
   apply_refine: false
   crop_mirror_average: false
-  crop_mirror_refine: true
+  crop_mirror_refine: false
   fixed_gsd_m: 0.03
   nominal_car_length_m: 4.4
   lift_height_share: 0.4
@@ -665,7 +665,7 @@ const MalformedCase kMalformedCases[] = {
      "expected true or false, got 'no'"},
     {"crop_mirror_average: false", "crop_mirror_average: 1", "perception.crop_mirror_average",
      "expected true or false, got '1'"},
-    {"crop_mirror_refine: true", "crop_mirror_refine: yes please", "perception.crop_mirror_refine",
+    {"crop_mirror_refine: false", "crop_mirror_refine: yes please", "perception.crop_mirror_refine",
      "expected true or false, got 'yes please'"},
     {"apply_refine: false", "apply_refine: []", "perception.apply_refine",
      "expected true or false, got a sequence of 0 element(s)"},
@@ -1245,7 +1245,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_FALSE(p.applyFlip);
   EXPECT_FALSE(p.applyRefine);
   EXPECT_FALSE(p.cropMirrorAverage);
-  EXPECT_TRUE(p.cropMirrorRefine);
+  EXPECT_FALSE(p.cropMirrorRefine);
   EXPECT_DOUBLE_EQ(p.fixedGsd_m, 0.03);
   EXPECT_DOUBLE_EQ(p.nominalCarLength_m, 4.4);
   EXPECT_DOUBLE_EQ(p.liftHeightShare, 0.4);

@@ -60,7 +60,8 @@ options:
   --no-refine           keep the detector's box (the second stage's refinement is not applied)
   --no-mirror           one crop-network run per vehicle (default: also the mirrored crop, type
                         averaged, as the app's perception.crop_mirror_average)
-  --mirror-refine       average the mirrored crop's box refinement too (perception.crop_mirror_refine)
+  --no-mirror-refine    average only the type over the crop and its mirror image, not the box
+                        refinement (default: both, as the app's perception.crop_mirror_refine)
   --refine-large-length apply the second stage's length to vehicles most likely large too
                         (default: they keep the first stage's length; the crop shows a part)
   --help                this text
@@ -83,7 +84,7 @@ struct Options {
   bool applyFlip = true;
   bool applyRefine = true;
   bool mirrorAverage = true;
-  bool mirrorRefine = false;
+  bool mirrorRefine = true;
   bool refineLargeLength = false;
 };
 
@@ -125,7 +126,7 @@ Options parseArguments(int argc, char** argv) {
     } switches[] = {{"--no-flip", &o.applyFlip, false},
                     {"--no-refine", &o.applyRefine, false},
                     {"--no-mirror", &o.mirrorAverage, false},
-                    {"--mirror-refine", &o.mirrorRefine, true},
+                    {"--no-mirror-refine", &o.mirrorRefine, false},
                     {"--refine-large-length", &o.refineLargeLength, true}};
     bool isSwitch = false;
     for (const auto& s : switches) {
