@@ -1,0 +1,63 @@
+#!/usr/bin/python3
+"""Copies the training side of a real-image split (YOLO folder) with its split file, to carry
+to a machine that must not see the validation images (e.g. a lent GPU machine).
+
+    tools/detector/device/pack_real_split.py --real ../shared/data/real/cats-madison \\
+        --split split.json --out DIR [--max-mib 56]
+
+The split file is split_real.py's (``train_stems``, ``val_stems``). ``--max-mib`` leaves out
+every k-th training image, evenly, until the images fit (a transfer limit); train.py then reads
+DIR with ``--real DIR --real-split DIR/split.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import sys
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--real", required=True, help="YOLO folder (images/, labels/)")
+    p.add_argument("--split", required=True, help="split_real.py's JSON (with train_stems)")
+    p.add_argument("--out", required=True, help="folder to create")
+    p.add_argument("--max-mib", type=float, default=0.0, help="size limit of the images (0: none)")
+    a = p.parse_args(argv)
+    with open(a.split) as f:
+        split = json.load(f)
+    if "train_stems" not in split:
+        raise SystemExit(f"{a.split}: no train_stems (write it with tools/detector/split_real.py)")
+    train = set(split["train_stems"])
+    images = sorted(f for f in os.listdir(os.path.join(a.real, "images"))
+                    if os.path.splitext(f)[0] in train)
+    sizes = [os.path.getsize(os.path.join(a.real, "images", f)) for f in images]
+    limit = a.max_mib * 2**20 if a.max_mib > 0 else float("inf")
+
+    def kept(k):  # every k-th image left out (k = 0: none)
+        return [i for i in range(len(images)) if k == 0 or (i + 1) % k != 0]
+
+    for k in [0] + list(range(len(images), 1, -1)):
+        keep = kept(k)
+        if sum(sizes[i] for i in keep) <= limit:
+            break
+    else:
+        raise SystemExit(f"--max-mib {a.max_mib}: even half of the images do not fit")
+    os.makedirs(os.path.join(a.out, "images"))
+    os.makedirs(os.path.join(a.out, "labels"))
+    for i in keep:
+        f = images[i]
+        shutil.copy(os.path.join(a.real, "images", f), os.path.join(a.out, "images", f))
+        label = os.path.join(a.real, "labels", os.path.splitext(f)[0] + ".txt")
+        if os.path.isfile(label):
+            shutil.copy(label, os.path.join(a.out, "labels"))
+    shutil.copy(a.split, os.path.join(a.out, "split.json"))
+    mib = sum(sizes[i] for i in keep) / 2**20
+    print(f"{a.out}: {len(keep)} of {len(images)} training images ({mib:.1f} MiB)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
