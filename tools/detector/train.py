@@ -77,7 +77,8 @@ def parse_args(argv=None):
                         "every run holds out the same images; 0 is the model card's split)")
     p.add_argument("--real-split", default=None,
                    help="split JSON (split_real.py or a run's split.json): its val_stems are the "
-                        "validation images, every other image in --real trains")
+                        "validation images, its train_stems the training images (without that "
+                        "list: every other image in --real)")
     p.add_argument("--real-max", type=int, default=0, help="use at most N real training images (0: all)")
     p.add_argument("--real-val-max", type=int, default=0, help="evaluate at most N real validation images (0: all)")
     p.add_argument("--real-share", type=float, default=0.3, help="share of tiles from real images")
