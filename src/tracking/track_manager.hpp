@@ -81,7 +81,7 @@ struct TrackerConfig {
   // the track's axis is scaled by partialAlongNoiseFactor (across the axis it is as good as
   // any), at birth as in updates. A detection touching the border (atFrameEdge) weighs
   // frameEdgeShapeWeight in the size and shape means (its length may be short).
-  double partialInsideShare = 0.9;
+  double partialInsideShare = 0.97;
   double partialAlongNoiseFactor = 10.0;
   double frameEdgeShapeWeight = 0.05;
   const shape::ActiveShapeModel* asmModel = nullptr;  // borrowed; wheelbase from gamma

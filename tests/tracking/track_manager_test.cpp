@@ -127,7 +127,7 @@ TEST(TrackManager, PartialDetectionsMoveTheTrackAcrossNotAlong) {
     EXPECT_EQ(m.tracks().size(), 1u);
     return m.tracks()[0];
   };
-  const TrackState nearEdge = run(0.95);  // at the edge but whole: a full update
+  const TrackState nearEdge = run(0.99);  // at the edge but whole: a full update
   const TrackState partial = run(0.6);
   EXPECT_LT(std::abs(partial.centreEnu.x()), 0.05 * std::abs(nearEdge.centreEnu.x()));
   EXPECT_GT(std::abs(nearEdge.centreEnu.x()), 0.05);
