@@ -47,16 +47,20 @@ def write_synthetic_sequence(root, frames=3, size=128, seed=0):
         fh.write("\n".join(ob) + "\n")
 
 
+def tiny_run_args(seq, run, threads):
+    """A run small enough for a test: 64 px tiles, 4 tiles and 4 crops per step, on the CPU."""
+    return ["--data", seq, "--out", run, "--batch", "4", "--tile", "64", "--crop-batch", "4",
+            "--working-width", "128", "--warmup-steps", "2", "--lr", "3e-3",
+            "--threads", str(threads), "--device", "cpu", "--log-every", "100", "--no-eval"]
+
+
 class SmokeTraining(unittest.TestCase):
     def test_loss_decreases_and_resume(self):
         with tempfile.TemporaryDirectory() as d:
             seq = os.path.join(d, "seq")
             write_synthetic_sequence(seq)
             run = os.path.join(d, "run")
-            common = ["--data", seq, "--out", run, "--batch", "4", "--tile", "64",
-                      "--crop-batch", "4", "--working-width", "128", "--warmup-steps", "2",
-                      "--lr", "3e-3", "--threads", "2", "--device", "cpu", "--log-every", "100",
-                      "--no-eval", "--shape-loss", "l2", "--single-stage"]
+            common = tiny_run_args(seq, run, 2) + ["--shape-loss", "l2", "--single-stage"]
             res = train.train(train.parse_args(common + ["--max-steps", "20"]))
             h = res["history"]
             self.assertEqual(len(h), 20)
@@ -81,10 +85,7 @@ class SmokeTraining(unittest.TestCase):
             seq = os.path.join(d, "seq")
             write_synthetic_sequence(seq)
             run = os.path.join(d, "run")
-            common = ["--data", seq, "--out", run, "--batch", "4", "--tile", "64",
-                      "--crop-batch", "4", "--working-width", "128", "--warmup-steps", "2",
-                      "--lr", "3e-3", "--threads", "1", "--device", "cpu", "--log-every", "100",
-                      "--no-eval", "--workers", "2", "--preload"]
+            common = tiny_run_args(seq, run, 1) + ["--workers", "2", "--preload"]
             res = train.train(train.parse_args(common + ["--max-steps", "20"]))
             h = res["history"]
             self.assertEqual(len(h), 20)
