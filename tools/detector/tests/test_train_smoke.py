@@ -55,18 +55,21 @@ def tiny_run_args(seq, run, threads):
 
 
 class SmokeTraining(unittest.TestCase):
+    def train_20_steps(self, args):
+        """Trains 20 steps; the detector's loss must fall. Returns the step records."""
+        h = train.train(train.parse_args(args + ["--max-steps", "20"]))["history"]
+        self.assertEqual(len(h), 20)
+        self.assertLess(np.mean([r["det_loss"] for r in h[-5:]]),
+                        np.mean([r["det_loss"] for r in h[:5]]))
+        return h
+
     def test_loss_decreases_and_resume(self):
         with tempfile.TemporaryDirectory() as d:
             seq = os.path.join(d, "seq")
             write_synthetic_sequence(seq)
             run = os.path.join(d, "run")
             common = tiny_run_args(seq, run, 2) + ["--shape-loss", "l2", "--single-stage"]
-            res = train.train(train.parse_args(common + ["--max-steps", "20"]))
-            h = res["history"]
-            self.assertEqual(len(h), 20)
-            first = np.mean([r["det_loss"] for r in h[:5]])
-            last = np.mean([r["det_loss"] for r in h[-5:]])
-            self.assertLess(last, first)
+            h = self.train_20_steps(common)
             cfirst = np.mean([r["crop_loss"] for r in h[:5]])
             clast = np.mean([r["crop_loss"] for r in h[-5:]])
             self.assertLess(clast, cfirst)
@@ -86,11 +89,7 @@ class SmokeTraining(unittest.TestCase):
             write_synthetic_sequence(seq)
             run = os.path.join(d, "run")
             common = tiny_run_args(seq, run, 1) + ["--workers", "2", "--preload"]
-            res = train.train(train.parse_args(common + ["--max-steps", "20"]))
-            h = res["history"]
-            self.assertEqual(len(h), 20)
-            self.assertLess(np.mean([r["det_loss"] for r in h[-5:]]),
-                            np.mean([r["det_loss"] for r in h[:5]]))
+            h = self.train_20_steps(common)
             self.assertTrue(all(math.isfinite(r["crop_loss"]) for r in h))
             # a session of ~0 minutes (over before the workers start): no step, checkpointed
             res2 = train.train(train.parse_args(common + ["--max-steps", "40", "--resume",
