@@ -302,8 +302,10 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
   }
   // Mirrored: the offset across the axis (dv) and the angle change turn sign.
   constexpr std::array<float, kRefineCount> kMirrorSign = {1.0F, -1.0F, -1.0F, 1.0F, 1.0F};
-  for (std::size_t i = 0; options_.mirrorRefine && i < refine_.size(); ++i) {
-    refine_[i] = 0.5F * (refine_[i] + kMirrorSign[i] * refine[i]);
+  if (options_.mirrorRefine) {
+    for (std::size_t i = 0; i < refine_.size(); ++i) {
+      refine_[i] = 0.5F * (refine_[i] + kMirrorSign[i] * refine[i]);
+    }
   }
   outputs.typeLogits = typeLogits_;
   outputs.refine = refine_;

@@ -306,6 +306,11 @@ def _gsd_from_keypoints(kp: np.ndarray, world: np.ndarray) -> float:
 _CLIP_RE = re.compile(r"^(?P<clip>[^_]+)_\(?(?P<idx>\d+)\)?$")
 
 
+def file_stem(path: Optional[str]) -> str:
+    """'images/0_13.jpg' -> '0_13': how split files name images."""
+    return os.path.splitext(os.path.basename(path or ""))[0]
+
+
 def clip_and_index(stem: str) -> Tuple[str, int]:
     """'0_13' -> ('0', 13); 'Drone2_(363)' -> ('Drone2', 363); other names -> (stem, 0)."""
     m = _CLIP_RE.match(stem)
@@ -327,7 +332,7 @@ def read_yolo(root: str, n_s: int = 3, class_types: Optional[Dict[int, int]] = N
     class_types = {0: -1} if class_types is None else class_types
     out = []
     for img in _list_images(os.path.join(root, "images")):
-        stem = os.path.splitext(os.path.basename(img))[0]
+        stem = file_stem(img)
         lab = os.path.join(root, "labels", stem + ".txt")
         rows = []
         if os.path.isfile(lab):
@@ -380,7 +385,7 @@ def read_dota(root: str, n_s: int = 3, class_map: Optional[Dict[str, int]] = Non
     class_map = DEFAULT_DOTA_CLASSES if class_map is None else class_map
     out = []
     for img in _list_images(os.path.join(root, "images")):
-        stem = os.path.splitext(os.path.basename(img))[0]
+        stem = file_stem(img)
         lab = os.path.join(root, label_dir, stem + ".txt")
         rows, gsd = [], math.nan
         if os.path.isfile(lab):
@@ -522,12 +527,12 @@ def split_near_duplicate_free(samples: Sequence[Sample], val_fraction: float = 0
         "train_boxes": int(sum(len(samples[i]) for i in train_idx)),
         "val_boxes": int(sum(len(samples[i]) for i in final_val)),
         # file stems, so other tools (vp_evaluate --val-list) evaluate exactly this split
-        "val_stems": sorted(os.path.splitext(os.path.basename(samples[i].image_path))[0]
-                             for i in final_val if samples[i].image_path),
+        "val_stems": sorted(file_stem(samples[i].image_path) for i in final_val
+                            if samples[i].image_path),
         # the images dropped from validation (gap, hash) are in neither list: they are too
         # close to a training frame to validate and may be too close to a validation frame to train
-        "train_stems": sorted(os.path.splitext(os.path.basename(samples[i].image_path))[0]
-                               for i in train_idx if samples[i].image_path),
+        "train_stems": sorted(file_stem(samples[i].image_path) for i in train_idx
+                              if samples[i].image_path),
     }
     return [samples[i] for i in train_idx], [samples[i] for i in final_val], report
 
@@ -548,7 +553,7 @@ def split_from_file(samples: Sequence[Sample], path: str):
         raise SystemExit(f"--real-split {path}: not a split file with val_stems ({e})")
     train, val = [], []
     for s in samples:
-        stem = os.path.splitext(os.path.basename(s.image_path or ""))[0]
+        stem = file_stem(s.image_path)
         if stem in val_stems:
             val.append(s)
         elif train_stems is None or stem in train_stems:

@@ -119,7 +119,7 @@ def working_canvas(image: np.ndarray, hw, scale: float) -> np.ndarray:
 def calibration_images(args, hw, n_s: int, rng) -> (np.ndarray, np.ndarray):
     """(detector canvases [N, H, W, 3], crops [M, CROP_H, CROP_W, 3]) uint8 RGB."""
     from detector import crops as cropmod
-    from detector.datasets import read_sequence, read_yolo
+    from detector.datasets import read_sequence, read_yolo, split_from_file
     from detector.train import estimate_gsd
 
     dets, cps = [], []
@@ -128,8 +128,6 @@ def calibration_images(args, hw, n_s: int, rng) -> (np.ndarray, np.ndarray):
         seq.extend(read_sequence(d, n_s=n_s))
     real = read_yolo(args.calib_real, n_s=n_s) if args.calib_real else []
     if real and args.calib_real_split:  # calibrate on training images only
-        from detector.datasets import split_from_file
-
         real = split_from_file(real, args.calib_real_split)[0]
     n = args.calib_count
     pick_seq = [seq[i] for i in rng.permutation(len(seq))[:max(0, n - min(len(real), n // 3))]]

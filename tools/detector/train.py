@@ -228,17 +228,17 @@ class Data:
         with ThreadPoolExecutor(max(1, threads)) as pool:  # cv2.imread releases the GIL
             loaded = list(pool.map(lambda k: (self.seq if k[0] == "seq" else self.real)[k[1]].loaded(), keys))
         for (pool_name, i), s in zip(keys, loaded):
-            self.cache.items[i if pool_name == "seq" else -1 - i] = s
+            self._load(pool_name, i, s)  # already loaded: only cached
         mb = sum(s.image.nbytes for s in loaded) / 2**20
         log(f"preloaded {len(keys)} frames ({mb:.0f} MiB) in {time.monotonic() - t0:.1f} s")
 
     def frames_per_epoch(self) -> int:
         return len(self.seq) + len(self.real)
 
-    def _load(self, pool: str, i: int) -> Sample:
+    def _load(self, pool: str, i: int, sample: Optional[Sample] = None) -> Sample:
         src = self.seq if pool == "seq" else self.real
         key = i if pool == "seq" else -1 - i
-        return self.cache.get(key, src[i])
+        return self.cache.get(key, src[i] if sample is None else sample)
 
     def tile(self, rng: np.random.Generator) -> Sample:
         a = self.args

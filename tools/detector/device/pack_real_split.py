@@ -13,10 +13,14 @@ DIR with ``--real DIR --real-split DIR/split.json``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import shutil
 import sys
+
+if __package__ in (None, ""):
+    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+
+from detector.datasets import file_stem, read_yolo, split_from_file  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -26,14 +30,11 @@ def main(argv=None) -> int:
     p.add_argument("--out", required=True, help="folder to create")
     p.add_argument("--max-mib", type=float, default=0.0, help="size limit of the images (0: none)")
     a = p.parse_args(argv)
-    with open(a.split) as f:
-        split = json.load(f)
-    if "train_stems" not in split:
+    train, _, report = split_from_file(read_yolo(a.real), a.split)
+    if report["train_stems"] is None:
         raise SystemExit(f"{a.split}: no train_stems (write it with tools/detector/split_real.py)")
-    train = set(split["train_stems"])
-    images = sorted(f for f in os.listdir(os.path.join(a.real, "images"))
-                    if os.path.splitext(f)[0] in train)
-    sizes = [os.path.getsize(os.path.join(a.real, "images", f)) for f in images]
+    images = sorted(s.image_path for s in train)  # the training side, in file order
+    sizes = [os.path.getsize(f) for f in images]
     limit = a.max_mib * 2**20 if a.max_mib > 0 else float("inf")
 
     def kept(k):  # every k-th image left out (k = 0: none)
@@ -48,9 +49,8 @@ def main(argv=None) -> int:
     os.makedirs(os.path.join(a.out, "images"))
     os.makedirs(os.path.join(a.out, "labels"))
     for i in keep:
-        f = images[i]
-        shutil.copy(os.path.join(a.real, "images", f), os.path.join(a.out, "images", f))
-        label = os.path.join(a.real, "labels", os.path.splitext(f)[0] + ".txt")
+        shutil.copy(images[i], os.path.join(a.out, "images"))
+        label = os.path.join(a.real, "labels", file_stem(images[i]) + ".txt")
         if os.path.isfile(label):
             shutil.copy(label, os.path.join(a.out, "labels"))
     shutil.copy(a.split, os.path.join(a.out, "split.json"))

@@ -55,6 +55,14 @@ def tiny_run_args(seq, run, threads):
 
 
 class SmokeTraining(unittest.TestCase):
+    def setUp(self):
+        """A synthetic recorded sequence and a run directory, both in a fresh temp folder."""
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        self.seq = os.path.join(tmp.name, "seq")
+        self.run = os.path.join(tmp.name, "run")
+        write_synthetic_sequence(self.seq)
+
     def train_20_steps(self, args):
         """Trains 20 steps; the detector's loss must fall. Returns the step records."""
         h = train.train(train.parse_args(args + ["--max-steps", "20"]))["history"]
@@ -64,56 +72,45 @@ class SmokeTraining(unittest.TestCase):
         return h
 
     def test_loss_decreases_and_resume(self):
-        with tempfile.TemporaryDirectory() as d:
-            seq = os.path.join(d, "seq")
-            write_synthetic_sequence(seq)
-            run = os.path.join(d, "run")
-            common = tiny_run_args(seq, run, 2) + ["--shape-loss", "l2", "--single-stage"]
-            h = self.train_20_steps(common)
-            cfirst = np.mean([r["crop_loss"] for r in h[:5]])
-            clast = np.mean([r["crop_loss"] for r in h[-5:]])
-            self.assertLess(clast, cfirst)
-            self.assertTrue(os.path.isfile(os.path.join(run, "checkpoint.pt")))
-            # resume: continues at step 20 and runs 2 more
-            res2 = train.train(train.parse_args(common + ["--max-steps", "22", "--resume"]))
-            self.assertEqual(res2["steps"], 22)
-            self.assertEqual(len(res2["history"]), 2)
-            with open(os.path.join(run, "train_log.jsonl")) as fh:
-                self.assertEqual(len(fh.readlines()), 22)
+        common = tiny_run_args(self.seq, self.run, 2) + ["--shape-loss", "l2", "--single-stage"]
+        h = self.train_20_steps(common)
+        cfirst = np.mean([r["crop_loss"] for r in h[:5]])
+        clast = np.mean([r["crop_loss"] for r in h[-5:]])
+        self.assertLess(clast, cfirst)
+        self.assertTrue(os.path.isfile(os.path.join(self.run, "checkpoint.pt")))
+        # resume: continues at step 20 and runs 2 more
+        res2 = train.train(train.parse_args(common + ["--max-steps", "22", "--resume"]))
+        self.assertEqual(res2["steps"], 22)
+        self.assertEqual(len(res2["history"]), 2)
+        with open(os.path.join(self.run, "train_log.jsonl")) as fh:
+            self.assertEqual(len(fh.readlines()), 22)
 
     def test_workers_and_session_limit(self):
         """Batches made by worker processes train too; --session-minutes ends a run early with
         a checkpoint that --resume continues."""
-        with tempfile.TemporaryDirectory() as d:
-            seq = os.path.join(d, "seq")
-            write_synthetic_sequence(seq)
-            run = os.path.join(d, "run")
-            common = tiny_run_args(seq, run, 1) + ["--workers", "2", "--preload"]
-            h = self.train_20_steps(common)
-            self.assertTrue(all(math.isfinite(r["crop_loss"]) for r in h))
-            # a session of ~0 minutes (over before the workers start): no step, checkpointed
-            res2 = train.train(train.parse_args(common + ["--max-steps", "40", "--resume",
-                                                          "--session-minutes", "1e-6"]))
-            self.assertEqual(res2["steps"], 20)
-            self.assertEqual(res2["history"], [])
+        common = tiny_run_args(self.seq, self.run, 1) + ["--workers", "2", "--preload"]
+        h = self.train_20_steps(common)
+        self.assertTrue(all(math.isfinite(r["crop_loss"]) for r in h))
+        # a session of ~0 minutes (over before the workers start): no step, checkpointed
+        res2 = train.train(train.parse_args(common + ["--max-steps", "40", "--resume",
+                                                      "--session-minutes", "1e-6"]))
+        self.assertEqual(res2["steps"], 20)
+        self.assertEqual(res2["history"], [])
 
     def test_batch_stream_is_reproducible_from_its_start(self):
-        with tempfile.TemporaryDirectory() as d:
-            seq = os.path.join(d, "seq")
-            write_synthetic_sequence(seq)
-            args = train.parse_args(["--data", seq, "--out", os.path.join(d, "run"), "--batch", "2",
-                                     "--tile", "64", "--crop-batch", "3", "--working-width", "128"])
-            data = train.Data(args, 3, log=lambda *_: None)
+        args = train.parse_args(["--data", self.seq, "--out", self.run, "--batch", "2",
+                                 "--tile", "64", "--crop-batch", "3", "--working-width", "128"])
+        data = train.Data(args, 3, log=lambda *_: None)
 
-            def first(seed, step):
-                det, crop = next(iter(train.BatchStream(data, seed, step, True, True)))
-                return det["image"], crop["image"], crop["refine"]
+        def first(seed, step):
+            det, crop = next(iter(train.BatchStream(data, seed, step, True, True)))
+            return det["image"], crop["image"], crop["refine"]
 
-            a, b = first(7, 0), first(7, 0)
-            for x, y in zip(a, b):
-                np.testing.assert_array_equal(x, y)
-            c = first(7, 100)  # a resumed run draws other batches
-            self.assertFalse(np.array_equal(a[0], c[0]))
+        a, b = first(7, 0), first(7, 0)
+        for x, y in zip(a, b):
+            np.testing.assert_array_equal(x, y)
+        c = first(7, 100)  # a resumed run draws other batches
+        self.assertFalse(np.array_equal(a[0], c[0]))
 
     def test_real_split_does_not_follow_the_training_seed(self):
         a = train.parse_args(["--out", "/tmp/x", "--seed", "4"])
