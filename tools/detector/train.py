@@ -32,6 +32,8 @@ Contract
   processes instead (for a GPU, which the main process alone cannot feed): each worker draws
   from its own Generator seeded by (seed, worker, step at start), so such runs are
   reproducible from their start but not batch-for-batch across a resume.
+* ``--qat-from EXPORTDIR`` fine-tunes an export's first stage through int8 fake quantization
+  instead (qat.py; the checkpoint holds that graph's weights; export with qat.py).
 * CUDA is used when available (``--device auto``), else the CPU.
 """
 
@@ -115,6 +117,11 @@ def parse_args(argv=None):
     p.add_argument("--train-heads-only", action="store_true",
                    help="with --single-stage: train only the type/shape heads on a frozen detector "
                         "(the single- vs two-stage comparison of the model card)")
+    p.add_argument("--qat-from", default=None, metavar="EXPORTDIR",
+                   help="quantization-aware fine-tuning of an export.py folder's first stage "
+                        "(detector_fp32.onnx + detector_int8.onnx; qat.py): int8 fake quantization "
+                        "with the export's activation ranges; implies --no-crop; export the run "
+                        "with tools/detector/qat.py")
     p.add_argument("--crop-only", action="store_true",
                    help="train only the crop classifier (second stage; e.g. the V_L1/V_L2 comparison)")
     p.add_argument("--asm", default=DEFAULT_ASM_PATH)
@@ -404,7 +411,18 @@ def train(args) -> dict:
                 f"{r['val_boxes']} boxes); dropped from val: {r['val_dropped_gap']} (frame gap), "
                 f"{r['val_dropped_hash']} (dHash <= {r['hash_threshold_bits']} bits); min val-train "
                 f"hash distance {r['min_val_train_hash_distance']}")
-    det = Detector(n_s=asm.n_s, single_stage=args.single_stage).to(device)
+    if args.qat_from:
+        if args.init_from or args.single_stage or args.crop_only or args.train_heads_only:
+            raise SystemExit("--qat-from excludes --init-from, --single-stage, --crop-only and "
+                             "--train-heads-only (it fine-tunes the exported first stage as it is)")
+        from detector.qat import QatDetector
+
+        det = QatDetector.from_export(args.qat_from).to(device)
+        args.no_crop = True
+        log(f"quantization-aware fine-tuning of {args.qat_from}: {len(det.params)} weight "
+            f"tensors, {len(det.act_params)} fixed activation ranges")
+    else:
+        det = Detector(n_s=asm.n_s, single_stage=args.single_stage).to(device)
     if args.crop_only and args.no_crop:
         raise SystemExit("--crop-only and --no-crop exclude each other")
     crop_net = None if args.no_crop else CropNet(n_s=asm.n_s).to(device)
