@@ -118,6 +118,7 @@ bool DetectionStage::init(const DetectionStageOptions& options, int maxTiles, st
   }
   inference::EngineOptions cropEngine = options.engine;
   cropEngine.threads = options.cropEngineThreads;
+  cropEngine.backend = options.cropBackend.value_or(options.engine.backend);
   if (!options.cropModelPath.empty() &&
       !cropper_.init(options.cropModelPath, cropEngine, options.secondStage, &detail)) {
     return fail(why, detail);

@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -37,6 +38,9 @@ struct DetectionStageOptions {
   // The crop network is tiny (~6 MMAC): a thread pool costs more than it saves per crop
   // (measured: 2 threads made 30 crops 300x slower on a loaded 2-core machine).
   int cropEngineThreads = 1;  // [1, 16]
+  // Backend of the crop network when it should differ from engine.backend (diagnostics: which
+  // stage carries the int8 error); empty = engine.backend.
+  std::optional<inference::Backend> cropBackend{};
   DecoderOptions decoder{};
   SecondStageOptions secondStage{};
   GsdOptions gsd{};

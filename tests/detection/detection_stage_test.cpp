@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -109,6 +110,40 @@ TEST(DetectionStage, RunsTheShippedModelsOnAFullFrame) {
     EXPECT_EQ(again[i].box.angle, out[i].box.angle);
     EXPECT_EQ(again[i].typeProbabilities, out[i].typeProbabilities);
   }
+}
+
+// cropBackend changes the second stage's engine only: with the second stage's boxes not
+// applied, the first stage's boxes are those of the all-int8 run, the types are not.
+TEST(DetectionStage, CropBackendSwitchesOnlyTheSecondStage) {
+  preprocess::Preprocessor pre;
+  std::string why;
+  ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}, &why)) << why;
+  const cv::Mat frame = sceneFrame();
+  auto runWith = [&](std::optional<inference::Backend> cropBackend,
+                     std::array<Detection, kMaxDetectionsPerFrame>& out) {
+    DetectionStageOptions options = stageOptions(1);
+    options.secondStage.applyRefine = false;
+    options.secondStage.applyFlip = false;
+    options.cropBackend = cropBackend;
+    DetectionStage stage;
+    std::string error;
+    EXPECT_TRUE(stage.init(options, static_cast<int>(pre.tileCount()), &error)) << error;
+    EXPECT_EQ(pre.process(frame), preprocess::PreprocessStatus::Ok);
+    std::size_t count = 0;
+    EXPECT_EQ(stage.run(pre.output(), out, &count), DetectionStatus::Ok);
+    return count;
+  };
+  std::array<Detection, kMaxDetectionsPerFrame> int8{}, fp32Crops{};
+  const std::size_t count = runWith(std::nullopt, int8);
+  ASSERT_GT(count, 0U);
+  ASSERT_EQ(runWith(inference::Backend::XnnpackFp32, fp32Crops), count);
+  int typesDiffer = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    EXPECT_EQ(fp32Crops[i].box.cx, int8[i].box.cx);
+    EXPECT_EQ(fp32Crops[i].box.angle, int8[i].box.angle);
+    typesDiffer += fp32Crops[i].typeProbabilities != int8[i].typeProbabilities;
+  }
+  EXPECT_GT(typesDiffer, 0);
 }
 
 class FixedGsd : public GsdProvider {

@@ -50,6 +50,8 @@ options:
   --detector PATH       detector ONNX (default: models/detector/detector_int8.onnx)
   --crop PATH           second-stage ONNX (default: models/detector/crop_int8.onnx; "" = none)
   --backend B           int8 | fp32 | opencv (default int8)
+  --crop-backend B      the second stage's backend when it should differ from --backend
+                        (e.g. int8 detector + fp32 crops: which stage carries the int8 error)
   --working-scale S     working px per image px, (0, 1] (default 0.4: ~4.8 cm/px photos;
                         with --sequence: 648 / frame width, the training resolution)
   --gsd-m G             metres per image pixel for the second stage's crops (default: the
@@ -76,6 +78,7 @@ struct Options {
   std::string crop;
   bool cropGiven = false;
   std::string backend = "int8";
+  std::string cropBackend;  // empty: backend
   double workingScale = 0.4;
   bool workingScaleGiven = false;
   double gsd = 0.0;
@@ -155,6 +158,8 @@ Options parseArguments(int argc, char** argv) {
       o.crop = value;
     else if (arg == "--backend")
       o.backend = value;
+    else if (arg == "--crop-backend")
+      o.cropBackend = value;
     else if (arg == "--working-scale") {
       o.workingScale = parseDouble(arg, value, 1e-3, 1.0);
       o.workingScaleGiven = true;
@@ -218,6 +223,12 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
   if (!backend)
     usageError("--backend: expected int8, fp32 or opencv, got '" + options.backend + "'");
   stageOptions.engine.backend = *backend;
+  if (!options.cropBackend.empty()) {
+    stageOptions.cropBackend = vp::inference::backendFromString(options.cropBackend);
+    if (!stageOptions.cropBackend)
+      usageError("--crop-backend: expected int8, fp32 or opencv, got '" + options.cropBackend +
+                 "'");
+  }
   stageOptions.engine.threads = options.threads;
   stageOptions.decoder.scoreThreshold = static_cast<float>(options.scoreThreshold);
   stageOptions.gsd.fixedGsd_m = options.gsd;
@@ -233,7 +244,8 @@ std::string modelId(const Options& options) {
   return fs::path(options.detector).filename().string() + " + " +
          (options.crop.empty() ? std::string("no second stage")
                                : fs::path(options.crop).filename().string()) +
-         " (" + options.backend + ")";
+         " (" + options.backend +
+         (options.cropBackend.empty() ? std::string() : ", crops " + options.cropBackend) + ")";
 }
 
 // Image-space row of one detection (never lifted here).
