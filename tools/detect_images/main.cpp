@@ -107,6 +107,13 @@ double parseDouble(const std::string& option, const std::string& text, double lo
   return value;
 }
 
+vp::inference::Backend parseBackend(const std::string& option, const std::string& text) {
+  const auto backend = vp::inference::backendFromString(text);
+  if (!backend)
+    usageError(option + ": expected int8, fp32 or opencv, got '" + text + "'");
+  return *backend;
+}
+
 std::string repoPath(const char* relative) {
   return std::string(VP_SOURCE_DIR) + "/" + relative;
 }
@@ -219,16 +226,9 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
   vp::detection::DetectionStageOptions stageOptions;
   stageOptions.detectorModelPath = options.detector;
   stageOptions.cropModelPath = options.crop;
-  const auto backend = vp::inference::backendFromString(options.backend);
-  if (!backend)
-    usageError("--backend: expected int8, fp32 or opencv, got '" + options.backend + "'");
-  stageOptions.engine.backend = *backend;
-  if (!options.cropBackend.empty()) {
-    stageOptions.cropBackend = vp::inference::backendFromString(options.cropBackend);
-    if (!stageOptions.cropBackend)
-      usageError("--crop-backend: expected int8, fp32 or opencv, got '" + options.cropBackend +
-                 "'");
-  }
+  stageOptions.engine.backend = parseBackend("--backend", options.backend);
+  if (!options.cropBackend.empty())
+    stageOptions.cropBackend = parseBackend("--crop-backend", options.cropBackend);
   stageOptions.engine.threads = options.threads;
   stageOptions.decoder.scoreThreshold = static_cast<float>(options.scoreThreshold);
   stageOptions.gsd.fixedGsd_m = options.gsd;

@@ -35,6 +35,7 @@ Contract
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 from typing import Dict, List, Tuple
@@ -144,7 +145,7 @@ class QatDetector(nn.Module):
         env[self.input_name] = fake_quant_activation(x, s, zp)
         for node in self.float_model.graph.node:
             ins = [self._tensor(n, env) if n else None for n in node.input]
-            outs = self.evaluator._op(node, ins)
+            outs = self.evaluator.compute(node, ins)
             for name, value in zip(node.output, outs):
                 if name in self.act_params:
                     value = fake_quant_activation(value, *self.act_params[name])
@@ -168,14 +169,8 @@ class QatDetector(nn.Module):
         return {n: ((INT8_MIN - zp) * s, (INT8_MAX - zp) * s) for n, (s, zp) in self.act_params.items()}
 
     def export(self, out_dir: str, version_suffix: str = "") -> Tuple[str, str]:
-        meta = {p.key: p.value for p in self.qdq_model.metadata_props}
-        cfg = qdq.QuantConfig(
-            channel_order=meta["vp.input.channel_order"],
-            mean=tuple(float(v) for v in meta["vp.input.mean"].split(",")),
-            scale=tuple(float(v) for v in meta["vp.input.scale"].split(",")),
-            model_name=meta["vp.model.name"],
-            model_version=meta["vp.model.version"] + version_suffix,
-            method=meta.get("vp.quantize.method", "minmax"))
+        cfg = qdq.QuantConfig.from_model(self.qdq_model)
+        cfg = dataclasses.replace(cfg, model_version=cfg.model_version + version_suffix)
         fp32 = self.trained_float_model()
         qm = qdq.quantize_model(fp32, [], cfg, ranges=self.fixed_ranges())
         os.makedirs(out_dir, exist_ok=True)

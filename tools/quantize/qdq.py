@@ -104,6 +104,19 @@ class QuantConfig:
         if len(self.mean) != 3 or len(self.scale) != 3:
             raise ValueError("mean and scale need 3 values")
 
+    @classmethod
+    def from_model(cls, model: onnx.ModelProto) -> "QuantConfig":
+        """The configuration a QDQ model of ``quantize_model`` was made with (its metadata)."""
+        meta = {p.key: p.value for p in model.metadata_props}
+        try:
+            return cls(channel_order=meta["vp.input.channel_order"],
+                       mean=tuple(float(v) for v in meta["vp.input.mean"].split(",")),
+                       scale=tuple(float(v) for v in meta["vp.input.scale"].split(",")),
+                       model_name=meta["vp.model.name"], model_version=meta["vp.model.version"],
+                       method=meta.get("vp.quantize.method", "minmax"))
+        except KeyError as exc:
+            raise ValueError(f"model metadata lacks {exc} (not written by quantize_model)") from exc
+
 
 # ----------------------------------------------------------------------------------------------
 # model preparation, export and input preprocessing
@@ -296,7 +309,7 @@ class Evaluator:
                     continue
                 ins = [env[n] if n else None for n in node.input]
                 try:
-                    outs = self._op(node, ins)
+                    outs = self.compute(node, ins)
                 except KeyError:
                     raise
                 except Exception as exc:
@@ -308,7 +321,8 @@ class Evaluator:
         names = env.keys() if keep_all else [o.name for o in self.model.graph.output]
         return {n: env[n].numpy() for n in names}
 
-    def _op(self, node: onnx.NodeProto, ins: List[Optional["torch.Tensor"]]):
+    def compute(self, node: onnx.NodeProto, ins: List[Optional["torch.Tensor"]]):
+        """One node's outputs from its inputs (torch kernels; differentiable outside run())."""
         op = node.op_type
         a = _attrs(node)
         if op in ("Conv", "ConvTranspose"):

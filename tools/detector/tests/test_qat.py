@@ -36,12 +36,11 @@ def write_tiny_export(folder):
     onnx.save(qdq.quantize_model(fp32, calib, cfg), os.path.join(folder, "detector_int8.onnx"))
 
 
-def qdq_outputs(model, x):
-    """The QDQ graph's outputs, the heatmap before its Sigmoid (the training output)."""
-    qat_view = qat.QatDetector(onnx.load(model["fp32"]), onnx.load(model["int8"]))
-    env = qdq.Evaluator(onnx.load(model["int8"])).run({qat_view.input_name: x}, keep_all=True)
-    return {name: env[f"{qat_view.sigmoid_inputs[name]}_DequantizeLinear_Output"]
-            if name in qat_view.sigmoid_inputs else env[name] for name in qat_view.output_names}
+def qdq_outputs(model, qdq_path, x):
+    """The QDQ file's outputs for ``model``'s outputs (the heatmap before its Sigmoid)."""
+    env = qdq.Evaluator(onnx.load(qdq_path)).run({model.input_name: x}, keep_all=True)
+    return {name: env[f"{model.sigmoid_inputs[name]}_DequantizeLinear_Output"]
+            if name in model.sigmoid_inputs else env[name] for name in model.output_names}
 
 
 def initializers(path):
@@ -64,7 +63,7 @@ class QuantizationAwareTraining(unittest.TestCase):
     def assert_same_as_qdq_file(self, model, folder):
         with torch.no_grad():
             ours = model(torch.from_numpy(self.x))
-        ref = qdq_outputs(self.files(folder), self.x)
+        ref = qdq_outputs(model, self.files(folder)["int8"], self.x)
         self.assertEqual(set(ours), {"heatmap", "offset", "size", "direction"})
         for name, value in ref.items():
             np.testing.assert_allclose(ours[name].numpy(), value, rtol=0, atol=1e-5, err_msg=name)
@@ -85,6 +84,11 @@ class QuantizationAwareTraining(unittest.TestCase):
         self.assertEqual(set(a), set(b))
         for name in a:
             np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+        meta = [{p.key: p.value for p in onnx.load(self.files(d)["int8"]).metadata_props}
+                for d in (self.export_dir, out)]
+        meta[0].pop("vp.quantize.calibration_inputs")
+        meta[1].pop("vp.quantize.calibration_inputs")
+        self.assertEqual(meta[0], meta[1])
 
     def test_fine_tuning_then_export_runs_what_was_trained(self):
         seq, run, out = (os.path.join(self.tmp, n) for n in ("seq", "run", "qat_export"))
