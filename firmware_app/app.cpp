@@ -159,6 +159,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   tracker.noise.steeringDecay_s = t.steeringDecay_s;
   tracker.confirmWholeHits = t.confirmWholeHits;
   tracker.confirmHitsAnyway = t.confirmHitsAnyway;
+  tracker.confirmHitsStanding = t.confirmHitsStanding;
   tracker.partialInsideShare = t.partialInsideShare;
   tracker.partialAlongNoiseFactor = t.partialAlongNoiseFactor;
   tracker.asmModel = &asm_;

@@ -850,6 +850,8 @@ TrackingConfig readTracking(MapReader section) {
       section.integer("confirm_whole_hits", kConfirmWholeHitsRange, d.confirmWholeHits);
   t.confirmHitsAnyway =
       section.integer("confirm_hits_anyway", kConfirmHitsRange, d.confirmHitsAnyway);
+  t.confirmHitsStanding =
+      section.integer("confirm_hits_standing", kConfirmHitsRange, d.confirmHitsStanding);
   t.partialInsideShare =
       section.number("partial_inside_share", kProbabilityRange, d.partialInsideShare);
   t.partialAlongNoiseFactor =

@@ -87,8 +87,10 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
         "tracking: maxCoast_s and steeringDecay_s must be >= 0, partialAlongNoiseFactor >= 1, "
         "partialInsideShare in [0, 1], frameEdgeShapeWeight in (0, 1]");
   }
-  if (config.confirmWholeHits < 0 || config.confirmHitsAnyway < 1) {
-    return fail("tracking: confirmWholeHits must be >= 0 and confirmHitsAnyway >= 1");
+  if (config.confirmWholeHits < 0 || config.confirmHitsAnyway < 1 ||
+      config.confirmHitsStanding < 1) {
+    return fail(
+        "tracking: confirmWholeHits must be >= 0, confirmHitsAnyway and confirmHitsStanding >= 1");
   }
   config_ = config;
   if (!associator_.init(config.maxTracks, config.maxDetections, config.association)) {
@@ -245,10 +247,14 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   if (out.status == TrackStatus::Lost) {
     out.status = TrackStatus::Confirmed;
     ++report.reacquisitions;
-  } else if (out.status == TrackStatus::Tentative && out.hits >= config_.confirmHits &&
-             (slot.wholeHits >= config_.confirmWholeHits ||
-              out.hits >= config_.confirmHitsAnyway)) {
-    out.status = TrackStatus::Confirmed;
+  } else if (out.status == TrackStatus::Tentative) {
+    const bool standing = std::abs(slot.motion.state()[kV]) < config_.movingSpeed_mps &&
+                          slot.wholeHits == out.hits && out.hits >= config_.confirmHitsStanding;
+    if (standing ||
+        (out.hits >= config_.confirmHits &&
+         (slot.wholeHits >= config_.confirmWholeHits || out.hits >= config_.confirmHitsAnyway))) {
+      out.status = TrackStatus::Confirmed;
+    }
   }
 }
 

@@ -12,7 +12,9 @@
 // Lifecycle (times in seconds of the detections' clock):
 //   birth: an unmatched detection with score >= association.highScore -> Tentative
 //   Tentative -> Confirmed after confirmHits matched frames of which confirmWholeHits were
-//              not partial (cut by the frame border), or after confirmHitsAnyway matches;
+//              not partial (cut by the frame border), or after confirmHitsAnyway matches,
+//              or after confirmHitsStanding whole matches when its speed estimate is below
+//              movingSpeed_mps;
 //              deleted when unmatched for longer than maxTentativeGap_s
 //   Confirmed -> Lost when a frame brings no match; Lost -> Confirmed (same id) when a
 //              detection matches again (re-acquisition after an occlusion); Lost -> deleted
@@ -66,6 +68,11 @@ struct TrackerConfig {
   // after confirmHitsAnyway matches in any case (a car parked at the frame's border).
   int confirmWholeHits = 2;
   int confirmHitsAnyway = 5;
+  // A track whose matches were all whole and whose speed estimate is below movingSpeed_mps
+  // confirms after this many: the hold-off protects against one-off false detections and waits
+  // until the speed is observable, and two whole boxes in place show both. A vehicle that moves
+  // waits for confirmHits (its speed from two boxes 0.1 s apart is too rough to publish).
+  int confirmHitsStanding = 2;
   double maxTentativeGap_s = 0.25;
   double maxLost_s = 3.0;
   double maxCoast_s = 0.0;  // a confirmed track unmatched this long stays confirmed, then lost

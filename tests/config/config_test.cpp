@@ -153,6 +153,7 @@ tracking:
   steering_decay_s: 2.0
   confirm_whole_hits: 1
   confirm_hits_anyway: 7
+  confirm_hits_standing: 4
   partial_inside_share: 0.8
   partial_along_noise_factor: 5
 source:
@@ -711,6 +712,8 @@ const MalformedCase kMalformedCases[] = {
      "must be in [0, 100], got -1"},
     {"confirm_hits_anyway: 7", "confirm_hits_anyway: 0", "tracking.confirm_hits_anyway",
      "must be in [1, 100], got 0"},
+    {"confirm_hits_standing: 4", "confirm_hits_standing: 101", "tracking.confirm_hits_standing",
+     "must be in [1, 100], got 101"},
     {"partial_inside_share: 0.8", "partial_inside_share: 1.2", "tracking.partial_inside_share",
      "must be in [0, 1], got 1.2"},
     {"partial_along_noise_factor: 5", "partial_along_noise_factor: 0.5",
@@ -906,6 +909,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "tracking.steering_decay_s",
                                                "tracking.confirm_whole_hits",
                                                "tracking.confirm_hits_anyway",
+                                               "tracking.confirm_hits_standing",
                                                "tracking.partial_inside_share",
                                                "tracking.partial_along_noise_factor",
                                                "source",
@@ -1269,6 +1273,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(t.steeringDecay_s, 2.0);
   EXPECT_EQ(t.confirmWholeHits, 1);
   EXPECT_EQ(t.confirmHitsAnyway, 7);
+  EXPECT_EQ(t.confirmHitsStanding, 4);
   EXPECT_DOUBLE_EQ(t.partialInsideShare, 0.8);
   EXPECT_DOUBLE_EQ(t.partialAlongNoiseFactor, 5.0);
   const SourceConfig& src = config.source;

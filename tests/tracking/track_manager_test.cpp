@@ -179,6 +179,31 @@ TEST(TrackManager, VehicleDrivingIntoViewIsConfirmedWithItsSpeed) {
   }
 }
 
+// A parked car seen whole twice is confirmed on the second match (its speed is observed as
+// about 0); one driving at 10 m/s still waits for confirmHits (lifecycle test above); a zero
+// confirmHitsStanding is a configuration error.
+TEST(TrackManager, StandingVehicleIsConfirmedAfterConfirmHitsStandingWholeMatches) {
+  TrackerConfig config = smallConfig();
+  ASSERT_EQ(config.confirmHitsStanding, 2);
+  TrackManager m;
+  ASSERT_TRUE(m.init(config));
+  std::int64_t t = 0;
+  for (int k = 0; k < 3; ++k, t += kFrameNs) {
+    const double jitter_m = k == 1 ? 0.05 : 0.0;
+    ASSERT_TRUE(
+        m.step(t, std::vector<WorldDetection>{car(5.0 + jitter_m, 3.0, 1.0, t)}).hasValue());
+    ASSERT_EQ(m.tracks().size(), 1u);
+    EXPECT_EQ(m.tracks()[0].status, k == 0 ? TrackStatus::Tentative : TrackStatus::Confirmed)
+        << "match " << k + 1;
+  }
+  EXPECT_LT(std::abs(m.tracks()[0].speedMps), config.movingSpeed_mps);
+  config.confirmHitsStanding = 0;
+  std::string why;
+  TrackManager bad;
+  EXPECT_FALSE(bad.init(config, &why));
+  EXPECT_NE(why.find("confirmHitsStanding"), std::string::npos) << why;
+}
+
 // A car parked at the frame's border is only ever seen in part: it is confirmed after
 // confirmHitsAnyway matches, standing still.
 TEST(TrackManager, VehicleSeenOnlyInPartIsConfirmedAfterMoreMatches) {
