@@ -173,12 +173,21 @@ def random_crop(s: Sample, size: Tuple[int, int], rng: np.random.Generator,
             i = int(rng.integers(0, len(s)))
         else:
             i = int(rng.choice(len(s), p=weights / weights.sum()))
-        cx = s.boxes[i, 0] + rng.uniform(-0.4, 0.4) * w
-        cy = s.boxes[i, 1] + rng.uniform(-0.4, 0.4) * h
-        x0, y0 = int(round(cx - w / 2)), int(round(cy - h / 2))
-    else:
-        x0 = int(rng.integers(min(0, W - w), max(0, W - w) + 1))
-        y0 = int(rng.integers(min(0, H - h), max(0, H - h) + 1))
+        return crop_near(s, (float(s.boxes[i, 0]), float(s.boxes[i, 1])), size, rng)
+    x0 = int(rng.integers(min(0, W - w), max(0, W - w) + 1))
+    y0 = int(rng.integers(min(0, H - h), max(0, H - h) + 1))
+    return crop(s, x0, y0, w, h)
+
+
+def crop_near(s: Sample, point: Tuple[float, float], size: Tuple[int, int],
+              rng: np.random.Generator) -> Sample:
+    """A (w, h) window that holds ``point`` (pixels), placed at random: the point anywhere in
+    the middle 80 % of the window, the window kept inside the image where it fits."""
+    w, h = size
+    H, W = s.image.shape[:2]
+    cx = point[0] + rng.uniform(-0.4, 0.4) * w
+    cy = point[1] + rng.uniform(-0.4, 0.4) * h
+    x0, y0 = int(round(cx - w / 2)), int(round(cy - h / 2))
     x0 = int(np.clip(x0, min(0, W - w), max(0, W - w)))
     y0 = int(np.clip(y0, min(0, H - h), max(0, H - h)))
     return crop(s, x0, y0, w, h)

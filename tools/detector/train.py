@@ -40,6 +40,7 @@ Contract
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
 import os
@@ -107,6 +108,11 @@ def parse_args(argv=None):
                         "--hard-occlusion but not ignored) this many times as often as others")
     p.add_argument("--hard-occlusion", type=float, default=0.2,
                    help="occlusion share from which a vehicle counts as hard (--hard-weight)")
+    p.add_argument("--hard-negatives", default=None,
+                   help="CSV of false detections on training frames (mine_negatives.py): "
+                        "--negative-share of the tiles of those frames are centred on one")
+    p.add_argument("--negative-share", type=float, default=0.25,
+                   help="share of a listed frame's tiles centred on one of its hard negatives")
     p.add_argument("--working-width", type=int, default=648)
     p.add_argument("--working-gsd-range", type=float, nargs=2, default=(0.08, 0.18))
     p.add_argument("--shape-loss", choices=["l1", "l2"], default="l1", help="V_L1 or V_L2")
@@ -183,6 +189,32 @@ def hard_example_weights(s: Sample, weight: float, min_occlusion: float) -> Opti
     return np.where(hard & ~s.ignore, weight, 1.0)
 
 
+def read_hard_negatives(path: str, seq: List[Sample]) -> Dict[int, np.ndarray]:
+    """The hard negatives of mine_negatives.py per training frame: index into ``seq`` ->
+    [K, 2] pixel centres in the frame as stored. Rows of frames not in ``seq`` are skipped
+    (mined on other data); a malformed file is an error naming the row."""
+    index = {os.path.abspath(s.image_path): i for i, s in enumerate(seq) if s.image_path}
+    points: Dict[int, list] = {}
+    try:
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            if not {"image", "cx_px", "cy_px"} <= set(reader.fieldnames or []):
+                raise SystemExit(f"{path}: not a hard-negatives CSV (columns image, cx_px, cy_px)")
+            for line, r in enumerate(reader, start=2):
+                try:
+                    u, v = float(r["cx_px"]), float(r["cy_px"])
+                except (TypeError, ValueError):
+                    raise SystemExit(f"{path}:{line}: cx_px, cy_px: not numbers") from None
+                if not (math.isfinite(u) and math.isfinite(v)):
+                    raise SystemExit(f"{path}:{line}: cx_px, cy_px: not finite")
+                i = index.get(os.path.abspath(r["image"] or ""))
+                if i is not None:
+                    points.setdefault(i, []).append((u, v))
+    except OSError as e:
+        raise SystemExit(f"--hard-negatives: {e}") from None
+    return {i: np.asarray(p, np.float64) for i, p in points.items()}
+
+
 class Data:
     """Training and validation sources and the batch makers (all randomness from ``rng``)."""
 
@@ -220,9 +252,13 @@ class Data:
                           if not s.ignore[j] and s.types[j] >= 0 and not s.aa_only[j]
                           and s.direction_known[j] and math.isfinite(s.gsd_m[j])]
         self.cache = FrameCache(args.cache_frames)
+        self.negatives = (read_hard_negatives(args.hard_negatives, self.seq)
+                          if getattr(args, "hard_negatives", None) else {})
         log(f"data: {len(self.seq)} sequence/DOTA frames ({sum(len(s) for s in self.seq)} objects), "
             f"{len(self.real)} real training images, {len(self.real_val)} real validation images, "
-            f"{len(self.val_seq)} validation frames, {len(self.crop_pool)} typed objects for crops")
+            f"{len(self.val_seq)} validation frames, {len(self.crop_pool)} typed objects for crops"
+            + (f", {sum(len(v) for v in self.negatives.values())} hard negatives in "
+               f"{len(self.negatives)} frames" if self.negatives else ""))
 
     def preload(self, threads: int = 8, log=print) -> None:
         """Every training frame into the cache (no eviction): read once, then shared by the
@@ -261,9 +297,17 @@ class Data:
             target = rng.uniform(*a.working_gsd_range)
             f = gsd / target if math.isfinite(gsd) else a.working_width / s.image.shape[1]
         f *= math.exp(rng.uniform(-0.15, 0.15))
+        negatives = self.negatives.get(i) if pool == "seq" else None
+        h0, w0 = s.image.shape[:2]
         s = augment.scale(s, f)
-        s = augment.random_crop(s, (a.tile, a.tile), rng,
-                                weights=hard_example_weights(s, a.hard_weight, a.hard_occlusion))
+        if negatives is not None and rng.random() < a.negative_share:
+            u, v = negatives[int(rng.integers(0, len(negatives)))]
+            fx, fy = s.image.shape[1] / w0, s.image.shape[0] / h0  # as scale() moved the pixels
+            s = augment.crop_near(s, ((u + 0.5) * fx - 0.5, (v + 0.5) * fy - 0.5),
+                                  (a.tile, a.tile), rng)
+        else:
+            s = augment.random_crop(s, (a.tile, a.tile), rng,
+                                    weights=hard_example_weights(s, a.hard_weight, a.hard_occlusion))
         s = augment.random_geometric(s, rng)
         return augment.photometric(s, rng)
 
@@ -382,6 +426,8 @@ def train(args) -> dict:
     if not args.hard_weight > 0 or not 0.0 <= args.hard_occlusion <= 1.0:
         raise SystemExit(f"--hard-weight must be > 0 (got {args.hard_weight}) and --hard-occlusion "
                          f"in [0, 1] (got {args.hard_occlusion})")
+    if not 0.0 <= args.negative_share <= 1.0:
+        raise SystemExit(f"--negative-share must be in [0, 1] (got {args.negative_share})")
     os.makedirs(args.out, exist_ok=True)
     log_path = os.path.join(args.out, "train_log.jsonl")
 
