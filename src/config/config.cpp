@@ -852,6 +852,7 @@ TrackingConfig readTracking(MapReader section) {
       section.integer("confirm_hits_anyway", kConfirmHitsRange, d.confirmHitsAnyway);
   t.confirmHitsStanding =
       section.integer("confirm_hits_standing", kConfirmHitsRange, d.confirmHitsStanding);
+  t.confirmMinScore = section.number("confirm_min_score", kProbabilityRange, d.confirmMinScore);
   t.partialInsideShare =
       section.number("partial_inside_share", kProbabilityRange, d.partialInsideShare);
   t.partialAlongNoiseFactor =

@@ -87,6 +87,9 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
         "tracking: maxCoast_s and steeringDecay_s must be >= 0, partialAlongNoiseFactor >= 1, "
         "partialInsideShare in [0, 1], frameEdgeShapeWeight in (0, 1]");
   }
+  if (!(config.confirmMinScore >= 0.0 && config.confirmMinScore <= 1.0)) {
+    return fail("tracking: confirmMinScore must be in [0, 1]");
+  }
   if (config.confirmWholeHits < 0 || config.confirmHitsAnyway < 1 ||
       config.confirmHitsStanding < 1) {
     return fail(
@@ -247,7 +250,7 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   if (out.status == TrackStatus::Lost) {
     out.status = TrackStatus::Confirmed;
     ++report.reacquisitions;
-  } else if (out.status == TrackStatus::Tentative) {
+  } else if (out.status == TrackStatus::Tentative && out.score >= config_.confirmMinScore) {
     const bool standing = std::abs(slot.motion.state()[kV]) < config_.movingSpeed_mps &&
                           slot.wholeHits == out.hits && out.hits >= config_.confirmHitsStanding;
     if (standing ||

@@ -14,7 +14,8 @@
 //   Tentative -> Confirmed after confirmHits matched frames of which confirmWholeHits were
 //              not partial (cut by the frame border), or after confirmHitsAnyway matches,
 //              or after confirmHitsStanding whole matches when its speed estimate is below
-//              movingSpeed_mps;
+//              movingSpeed_mps; in every case only while the track's score (the mean of its
+//              detections' scores, TrackState::score) is at least confirmMinScore
 //              deleted when unmatched for longer than maxTentativeGap_s
 //   Confirmed -> Lost when a frame brings no match; Lost -> Confirmed (same id) when a
 //              detection matches again (re-acquisition after an occlusion); Lost -> deleted
@@ -73,6 +74,11 @@ struct TrackerConfig {
   // until the speed is observable, and two whole boxes in place show both. A vehicle that moves
   // waits for confirmHits (its speed from two boxes 0.1 s apart is too rough to publish).
   int confirmHitsStanding = 2;
+  // A tentative track confirms only while its score (mean of its detections' scores over the
+  // last scoreMemory frames) is at least this. Off (0) by default: with detector v5, 0.5 kept
+  // a few false tracks on shadows out on the tuning seeds but cost more occluded parked cars on
+  // the held-out ones (docs/tracking.md); an option for detectors whose scores separate better.
+  double confirmMinScore = 0.0;
   double maxTentativeGap_s = 0.25;
   double maxLost_s = 3.0;
   double maxCoast_s = 0.0;  // a confirmed track unmatched this long stays confirmed, then lost

@@ -154,6 +154,7 @@ tracking:
   confirm_whole_hits: 1
   confirm_hits_anyway: 7
   confirm_hits_standing: 4
+  confirm_min_score: 0.55
   partial_inside_share: 0.8
   partial_along_noise_factor: 5
 source:
@@ -714,6 +715,8 @@ const MalformedCase kMalformedCases[] = {
      "must be in [1, 100], got 0"},
     {"confirm_hits_standing: 4", "confirm_hits_standing: 101", "tracking.confirm_hits_standing",
      "must be in [1, 100], got 101"},
+    {"confirm_min_score: 0.55", "confirm_min_score: 1.5", "tracking.confirm_min_score",
+     "must be in [0, 1], got 1.5"},
     {"partial_inside_share: 0.8", "partial_inside_share: 1.2", "tracking.partial_inside_share",
      "must be in [0, 1], got 1.2"},
     {"partial_along_noise_factor: 5", "partial_along_noise_factor: 0.5",
@@ -910,6 +913,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "tracking.confirm_whole_hits",
                                                "tracking.confirm_hits_anyway",
                                                "tracking.confirm_hits_standing",
+                                               "tracking.confirm_min_score",
                                                "tracking.partial_inside_share",
                                                "tracking.partial_along_noise_factor",
                                                "source",
@@ -1274,6 +1278,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(t.confirmWholeHits, 1);
   EXPECT_EQ(t.confirmHitsAnyway, 7);
   EXPECT_EQ(t.confirmHitsStanding, 4);
+  EXPECT_DOUBLE_EQ(t.confirmMinScore, 0.55);
   EXPECT_DOUBLE_EQ(t.partialInsideShare, 0.8);
   EXPECT_DOUBLE_EQ(t.partialAlongNoiseFactor, 5.0);
   const SourceConfig& src = config.source;

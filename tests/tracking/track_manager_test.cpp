@@ -204,6 +204,37 @@ TEST(TrackManager, StandingVehicleIsConfirmedAfterConfirmHitsStandingWholeMatche
   EXPECT_NE(why.find("confirmHitsStanding"), std::string::npos) << why;
 }
 
+// With confirmMinScore 0.5, weak boxes (score 0.46: enough for a birth at highScore 0.45) keep a
+// track tentative however long they last: its mean score stays below it; the same place seen
+// with confident boxes confirms as usual. An out-of-range threshold is a configuration error.
+TEST(TrackManager, TrackConfirmsOnlyWithAMeanScoreOfConfirmMinScore) {
+  TrackerConfig config = smallConfig();
+  config.association.highScore = 0.45f;
+  EXPECT_DOUBLE_EQ(config.confirmMinScore, 0.0);  // off by default
+  config.confirmMinScore = 0.5;
+  TrackManager m;
+  ASSERT_TRUE(m.init(config));
+  std::int64_t t = 0;
+  for (int k = 0; k < 20; ++k, t += kFrameNs) {
+    ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{car(5.0, 3.0, 1.0, t, 0.46f)}).hasValue());
+    ASSERT_EQ(m.tracks().size(), 1u);
+    EXPECT_EQ(m.tracks()[0].status, TrackStatus::Tentative) << "frame " << k;
+  }
+  EXPECT_NEAR(m.tracks()[0].score, 0.46, 1e-6);
+  TrackManager strong;
+  ASSERT_TRUE(strong.init(config));
+  for (int k = 0; k < 2; ++k, t += kFrameNs) {
+    ASSERT_TRUE(
+        strong.step(t, std::vector<WorldDetection>{car(5.0, 3.0, 1.0, t, 0.6f)}).hasValue());
+  }
+  EXPECT_EQ(strong.tracks()[0].status, TrackStatus::Confirmed);
+  config.confirmMinScore = 1.5;
+  std::string why;
+  TrackManager bad;
+  EXPECT_FALSE(bad.init(config, &why));
+  EXPECT_NE(why.find("confirmMinScore"), std::string::npos) << why;
+}
+
 // A car parked at the frame's border is only ever seen in part: it is confirmed after
 // confirmHitsAnyway matches, standing still.
 TEST(TrackManager, VehicleSeenOnlyInPartIsConfirmedAfterMoreMatches) {
