@@ -72,20 +72,18 @@ class HardNegatives(unittest.TestCase):
                          [(image, x, y)])
 
     def test_refuses_missing_or_malformed_detections(self):
-        err = io.StringIO()
-        with redirect_stderr(err):
-            code = mine_negatives.main(["--data", self.seq, "--detections", self.dets,
-                                        "--out", os.path.join(self.root, "n.csv")])
-        self.assertEqual(code, 1)
-        self.assertIn("no detections for sequence", err.getvalue())
+        def refusal():
+            err = io.StringIO()
+            with redirect_stderr(err):
+                code = mine_negatives.main(["--data", self.seq, "--detections", self.dets,
+                                            "--out", os.path.join(self.root, "n.csv")])
+            self.assertEqual(code, 1)
+            return err.getvalue()
+
+        self.assertIn("no detections for sequence", refusal())
         with open(os.path.join(self.dets, "seq_7.csv"), "w") as f:
             f.write("frame_id,score\n0,0.5\n")
-        err = io.StringIO()
-        with redirect_stderr(err):
-            code = mine_negatives.main(["--data", self.seq, "--detections", self.dets,
-                                        "--out", os.path.join(self.root, "n.csv")])
-        self.assertEqual(code, 1)
-        self.assertIn("not a detections CSV", err.getvalue())
+        self.assertIn("not a detections CSV", refusal())
 
     def negatives_file(self, rows, name="negatives.csv"):
         path = os.path.join(self.root, name)
