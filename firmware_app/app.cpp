@@ -146,6 +146,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   tracker.confirmHits = t.confirmHits;
   tracker.maxTentativeGap_s = t.maxTentativeGap_s;
   tracker.maxLost_s = t.maxLost_s;
+  tracker.maxLostAtFrameEdge_s = t.maxLostAtEdge_s;
   tracker.maxCoast_s = t.coast_s;
   tracker.movingSpeed_mps = t.movingSpeed_mps;
   tracker.flipVotes = t.flipVotes;

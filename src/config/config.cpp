@@ -832,6 +832,7 @@ TrackingConfig readTracking(MapReader section) {
   t.maxTentativeGap_s =
       section.number("max_tentative_gap_s", kTrackTimeRangeS, d.maxTentativeGap_s);
   t.maxLost_s = section.number("max_lost_s", kTrackTimeRangeS, d.maxLost_s);
+  t.maxLostAtEdge_s = section.number("max_lost_at_edge_s", kTrackTimeRangeS, d.maxLostAtEdge_s);
   t.coast_s = section.number("coast_s", kTrackTimeRangeS, d.coast_s);
   t.movingSpeed_mps = section.number("moving_speed_mps", kSpeedRangeMps, d.movingSpeed_mps);
   t.flipVotes = section.integer("flip_votes", kFlipVotesRange, d.flipVotes);

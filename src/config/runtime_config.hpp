@@ -67,7 +67,8 @@ struct TrackingConfig {
   int confirmHits = 3;
   double maxTentativeGap_s = 0.25;
   double maxLost_s = 3.0;
-  double coast_s = 0.3;  // unmatched confirmed tracks stay confirmed this long, then lost
+  double maxLostAtEdge_s = 1.0;  // lost track last seen at the frame's border deleted after this
+  double coast_s = 0.3;          // unmatched confirmed tracks stay confirmed this long, then lost
   double movingSpeed_mps = 1.5;
   int flipVotes = 3;
   double typeEvidenceWeight = 0.5;

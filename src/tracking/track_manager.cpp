@@ -73,10 +73,10 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
   if (config.confirmHits < 1 || config.flipVotes < 1 || config.scoreMemory < 1) {
     return fail("tracking: confirmHits, flipVotes and scoreMemory must be >= 1");
   }
-  if (!(config.maxLost_s >= 0.0) || !(config.maxTentativeGap_s >= 0.0) ||
-      !(config.noise.measurementPosition_m > 0.0) || !(config.noise.measurementHeading_rad > 0.0) ||
-      !(config.noise.accelerationDecay_s > 0.0) || !(config.typeFloor > 0.0) ||
-      !(config.shapeMaxWeight > 0.0)) {
+  if (!(config.maxLost_s >= 0.0) || !(config.maxLostAtFrameEdge_s >= 0.0) ||
+      !(config.maxTentativeGap_s >= 0.0) || !(config.noise.measurementPosition_m > 0.0) ||
+      !(config.noise.measurementHeading_rad > 0.0) || !(config.noise.accelerationDecay_s > 0.0) ||
+      !(config.typeFloor > 0.0) || !(config.shapeMaxWeight > 0.0)) {
     return fail("tracking: times, noise sigmas, typeFloor and shapeMaxWeight must be > 0");
   }
   if (!(config.maxCoast_s >= 0.0) || !(config.noise.steeringDecay_s >= 0.0) ||
@@ -145,6 +145,7 @@ void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t times
   out.status = TrackStatus::Tentative;
   out.hits = 1;
   slot.wholeHits = partial(d) ? 0 : 1;
+  slot.lastAtFrameEdge = d.atFrameEdge;
   out.birthNs = timestampNs;
   out.score = static_cast<double>(d.score);
   out.updated = true;
@@ -242,6 +243,7 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   updateGeometry(slot);
 
   slot.lastUpdateNs = timestampNs;
+  slot.lastAtFrameEdge = d.atFrameEdge;
   out.updated = true;
   ++out.hits;
   slot.wholeHits += partial(d) ? 0 : 1;
@@ -377,7 +379,9 @@ Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestampNs,
         slot.out.status = TrackStatus::Lost;
         [[fallthrough]];
       case TrackStatus::Lost:
-        if (since > config_.maxLost_s) {
+        // Last seen at the frame's border: it has most likely left the view, and a vehicle
+        // entering there must not inherit its id and motion.
+        if (since > (slot.lastAtFrameEdge ? config_.maxLostAtFrameEdge_s : config_.maxLost_s)) {
           slot.live = false;
         }
         break;

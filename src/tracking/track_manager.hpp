@@ -20,7 +20,8 @@
 //   Confirmed -> Lost when a frame brings no match; Lost -> Confirmed (same id) when a
 //              detection matches again (re-acquisition after an occlusion); Lost -> deleted
 //              after maxLost_s without a match. Lost tracks are predicted (a parked car
-//              stays put), so the gates find the vehicle where it reappears.
+//              stays put), so the gates find the vehicle where it reappears; a lost track
+//              last seen at the frame's border is deleted after maxLostAtFrameEdge_s.
 // Heading: a matched detection whose heading differs from the track's by more than 90
 // degrees is turned by 180 degrees before the update (counted). The track itself turns
 // when it moves backwards faster than movingSpeed_mps with confidence (cars drive forwards),
@@ -81,6 +82,11 @@ struct TrackerConfig {
   double confirmMinScore = 0.0;
   double maxTentativeGap_s = 0.25;
   double maxLost_s = 3.0;
+  // A lost track whose last detection touched the frame's border (atFrameEdge) is deleted after
+  // this instead: the vehicle has most likely driven out of view, and kept for maxLost_s the
+  // track was re-acquired by a vehicle driving in at the same place, which inherited its id and
+  // its motion the wrong way round (tuning seeds: docs/tracking.md).
+  double maxLostAtFrameEdge_s = 1.0;
   double maxCoast_s = 0.0;  // a confirmed track unmatched this long stays confirmed, then lost
   double movingSpeed_mps = 1.5;
   int flipVotes = 3;
@@ -171,7 +177,8 @@ class TrackManager {
     std::array<double, shape::kMaxShapeComponents> gammaSum{};
     double gammaWeight = 0.0;
     double sizeWeight = 0.0;
-    int wholeHits = 0;  // matched detections that were not partial
+    int wholeHits = 0;             // matched detections that were not partial
+    bool lastAtFrameEdge = false;  // the last matched detection touched the frame's border
     std::int64_t lastUpdateNs = 0;
     int disagreeRun = 0;
   };

@@ -140,6 +140,7 @@ tracking:
   confirm_hits: 4
   max_tentative_gap_s: 0.3
   max_lost_s: 2.5
+  max_lost_at_edge_s: 0.7
   coast_s: 0.4
   moving_speed_mps: 1.2
   flip_votes: 5
@@ -691,6 +692,8 @@ const MalformedCase kMalformedCases[] = {
     {"max_tentative_gap_s: 0.3", "max_tentative_gap_s: -1", "tracking.max_tentative_gap_s",
      "must be in [0, 60], got -1"},
     {"max_lost_s: 2.5", "max_lost_s: 61", "tracking.max_lost_s", "must be in [0, 60], got 61"},
+    {"max_lost_at_edge_s: 0.7", "max_lost_at_edge_s: -1", "tracking.max_lost_at_edge_s",
+     "must be in [0, 60], got -1"},
     {"coast_s: 0.4", "coast_s: -0.1", "tracking.coast_s", "must be in [0, 60], got -0.1"},
     {"moving_speed_mps: 1.2", "moving_speed_mps: x", "tracking.moving_speed_mps",
      "expected a number, got 'x'"},
@@ -899,6 +902,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "tracking.confirm_hits",
                                                "tracking.max_tentative_gap_s",
                                                "tracking.max_lost_s",
+                                               "tracking.max_lost_at_edge_s",
                                                "tracking.coast_s",
                                                "tracking.moving_speed_mps",
                                                "tracking.flip_votes",
@@ -1264,6 +1268,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(t.confirmHits, 4);
   EXPECT_DOUBLE_EQ(t.maxTentativeGap_s, 0.3);
   EXPECT_DOUBLE_EQ(t.maxLost_s, 2.5);
+  EXPECT_DOUBLE_EQ(t.maxLostAtEdge_s, 0.7);
   EXPECT_DOUBLE_EQ(t.coast_s, 0.4);
   EXPECT_DOUBLE_EQ(t.movingSpeed_mps, 1.2);
   EXPECT_EQ(t.flipVotes, 5);

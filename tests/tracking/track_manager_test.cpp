@@ -236,6 +236,41 @@ TEST(TrackManager, TrackConfirmsOnlyWithAMeanScoreOfConfirmMinScore) {
   EXPECT_NE(initProblem(config).find("confirmMinScore"), std::string::npos);
 }
 
+// A car that drives out of the frame (its last boxes touch the border) is deleted
+// maxLostAtFrameEdge_s after its last detection, so a car driving in at the same place later
+// gets a new id; one that disappears inside the frame (under a tree) is kept for maxLost_s.
+TEST(TrackManager, TrackLastSeenAtTheFrameBorderIsDeletedSooner) {
+  const TrackerConfig config = smallConfig();
+  ASSERT_LT(config.maxLostAtFrameEdge_s + 0.5, config.maxLost_s);
+  for (const bool atEdge : {true, false}) {
+    TrackManager m;
+    ASSERT_TRUE(m.init(config));
+    std::int64_t t = 0;
+    double x = 0.0;
+    for (int k = 0; k < 10; ++k, t += kFrameNs, x += 1.0) {
+      WorldDetection d = car(x, 0.0, 0.0, t);
+      d.atFrameEdge = atEdge && k == 9;  // the last box touches the border
+      ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{d}).hasValue());
+    }
+    ASSERT_EQ(m.tracks().size(), 1u);
+    ASSERT_EQ(m.tracks()[0].status, TrackStatus::Confirmed);
+    const std::int64_t lastSeen = t - kFrameNs;
+    auto aliveAfter = [&](double seconds) {
+      while (t <= lastSeen + static_cast<std::int64_t>(seconds * 1e9)) {
+        EXPECT_TRUE(m.step(t, {}).hasValue());
+        t += kFrameNs;
+      }
+      return !m.tracks().empty();
+    };
+    EXPECT_TRUE(aliveAfter(config.maxLostAtFrameEdge_s - 0.05)) << "at edge " << atEdge;
+    EXPECT_EQ(aliveAfter(config.maxLostAtFrameEdge_s + 0.15), !atEdge) << "at edge " << atEdge;
+    EXPECT_FALSE(aliveAfter(config.maxLost_s + 0.15)) << "at edge " << atEdge;
+  }
+  TrackerConfig bad = smallConfig();
+  bad.maxLostAtFrameEdge_s = -1.0;
+  EXPECT_NE(initProblem(bad), "");
+}
+
 // A car parked at the frame's border is only ever seen in part: it is confirmed after
 // confirmHitsAnyway matches, standing still.
 TEST(TrackManager, VehicleSeenOnlyInPartIsConfirmedAfterMoreMatches) {
