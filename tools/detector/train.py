@@ -253,7 +253,7 @@ class Data:
                           and s.direction_known[j] and math.isfinite(s.gsd_m[j])]
         self.cache = FrameCache(args.cache_frames)
         self.negatives = (read_hard_negatives(args.hard_negatives, self.seq)
-                          if getattr(args, "hard_negatives", None) else {})
+                          if args.hard_negatives else {})
         log(f"data: {len(self.seq)} sequence/DOTA frames ({sum(len(s) for s in self.seq)} objects), "
             f"{len(self.real)} real training images, {len(self.real_val)} real validation images, "
             f"{len(self.val_seq)} validation frames, {len(self.crop_pool)} typed objects for crops"
