@@ -807,6 +807,8 @@ PerceptionConfig readPerception(MapReader section, const std::string& baseDir) {
   p.applyRefine = section.boolean("apply_refine", d.applyRefine);
   p.cropMirrorAverage = section.boolean("crop_mirror_average", d.cropMirrorAverage);
   p.cropMirrorRefine = section.boolean("crop_mirror_refine", d.cropMirrorRefine);
+  p.cropMinVehicleProbability = section.number("crop_min_vehicle_probability", kProbabilityRange,
+                                               d.cropMinVehicleProbability);
   p.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRangeM, d.fixedGsd_m);
   p.nominalCarLength_m =
       section.number("nominal_car_length_m", kCarLengthRangeM, d.nominalCarLength_m);

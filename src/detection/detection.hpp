@@ -14,6 +14,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "geometry/rotated_box.hpp"
 #include "shape/vehicle_model.hpp"
@@ -35,6 +36,9 @@ struct Detection {
   bool atFrameEdge = false;      // the box reaches the frame's border: the vehicle may be cut
                                  // off there, so its centre and size are biased
   float insideShare = 1.0F;      // share of the box's area inside the frame, [0, 1]
+  // The second stage's verifier: probability that the box shows a vehicle at all (NaN: the
+  // crop network has no verifier output or did not run). score stays the first stage's.
+  float vehicleProbability = std::numeric_limits<float>::quiet_NaN();
 };
 
 // Most likely type and the runner-up (the pipeline keeps the top two).

@@ -204,13 +204,27 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
     }
     stats_.cropFailures += static_cast<int>(kept - crops);
   }
+  // The verifier: boxes the crop network says show no vehicle go (order kept; a detection
+  // without a verifier probability stays).
+  std::size_t verified = kept;
+  const float minVehicle = options_.secondStage.minVehicleProbability;
+  if (secondStage && minVehicle > 0.0F) {
+    verified = 0;
+    for (std::size_t i = 0; i < kept; ++i) {
+      if (!(out[i].vehicleProbability < minVehicle)) {
+        out[verified++] = out[i];
+      }
+    }
+  }
+  stats_.rejectedByVerifier = static_cast<int>(kept - verified);
   // The second stage moves and resizes boxes (refinement): two first-stage peaks of one
   // vehicle (e.g. its copies from two overlapping tiles, one of them offset) can land on the
   // same car. A last suppression on the refined boxes keeps the better one. Cars do not
   // overlap each other on the ground, so the "contained in" test is safe within a tile too.
-  const std::size_t refinedKept = secondStage ? suppressRefinedDuplicates(out.first(kept)) : kept;
+  const std::size_t refinedKept =
+      secondStage ? suppressRefinedDuplicates(out.first(verified)) : verified;
   markFrameEdge(frame.geometry, out.first(refinedKept));
-  stats_.refinedDuplicates = static_cast<int>(kept - refinedKept);
+  stats_.refinedDuplicates = static_cast<int>(verified - refinedKept);
   stats_.crops_ms = millisecondsBetween(nmsEnd, Clock::now());
   stats_.detector_ms = detectorMs;
   stats_.decode_ms = decodeMs;

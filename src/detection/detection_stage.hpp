@@ -67,6 +67,7 @@ struct DetectionStats {
   int droppedForCapacity = 0;  // kept by NMS but beyond the output's size
   int crops = 0;               // second-stage runs that succeeded
   int refinedDuplicates = 0;   // detections that became duplicates after refinement, removed
+  int rejectedByVerifier = 0;  // below SecondStageOptions::minVehicleProbability, removed
   int cropFailures = 0;        // second stage skipped or failed (no GSD, engine error, ...)
   double frameGsd_m = 0.0;     // the frame-level GSD estimate used (0: provider or none)
   double detector_ms = 0.0;    // detector engine, all tiles
@@ -89,6 +90,8 @@ class DetectionStage {
                       std::size_t* count, const GsdProvider* gsdProvider = nullptr);
 
   const DetectionStats& stats() const { return stats_; }
+  // The crop network has the verifier output (minVehicleProbability can act).
+  bool hasVerifier() const { return cropper_.hasVerifier(); }
   int detectorInputWidth() const { return inputWidth_; }
   int detectorInputHeight() const { return inputHeight_; }
   int stridePx() const { return stridePx_; }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "geometry/rotated_box.hpp"
 
@@ -139,7 +140,8 @@ SecondStageStatus applyCropOutputs(const CropNetOutputs& outputs, double gsd_m,
       outputs.shape.size() > static_cast<std::size_t>(shape::kMaxShapeComponents) ||
       outputs.refine.size() != static_cast<std::size_t>(kRefineCount) ||
       !allFinite(outputs.typeLogits) || !allFinite(outputs.shape) || !allFinite(outputs.refine) ||
-      !std::isfinite(outputs.flipLogit)) {
+      !std::isfinite(outputs.flipLogit) ||
+      (outputs.hasVehicleLogit && !std::isfinite(outputs.vehicleLogit))) {
     return SecondStageStatus::BadOutputs;
   }
   Detection& d = *detection;
@@ -195,6 +197,10 @@ SecondStageStatus applyCropOutputs(const CropNetOutputs& outputs, double gsd_m,
     angle += geometry::kPi;
   }
   d.box.angle = geometry::wrapTwoPi(angle);
+  d.vehicleProbability =
+      outputs.hasVehicleLogit
+          ? static_cast<float>(1.0 / (1.0 + std::exp(-static_cast<double>(outputs.vehicleLogit))))
+          : std::numeric_limits<float>::quiet_NaN();
   return SecondStageStatus::Ok;
 }
 
@@ -249,6 +255,21 @@ bool VehicleCropper::init(const std::string& cropModelPath,
                            "' (the crop network needs type_logits, shape, flip_logit, refine)");
     }
   }
+  // The verifier output is optional (crop networks before it lack it).
+  hasVerifier_ = false;
+  for (std::size_t i = 0; i < engine_.outputCount(); ++i) {
+    const inference::OutputTensor& out = engine_.output(i);
+    if (out.name != "vehicle_logit") {
+      continue;
+    }
+    if (out.shape.c != 1 || out.shape.h != 1 || out.shape.w != 1) {
+      return fail(why, cropModelPath + ": output 'vehicle_logit' is " +
+                           std::to_string(out.shape.c) + "x" + std::to_string(out.shape.h) + "x" +
+                           std::to_string(out.shape.w) + ", expected 1 x 1 x 1");
+    }
+    vehicleIndex_ = i;
+    hasVerifier_ = true;
+  }
   shapeCount_ = engine_.output(shapeIndex_).shape.c;
   options_ = options;
   crop_.create(kCropHeightPx, kCropWidthPx, CV_8UC3);
@@ -282,6 +303,8 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
   outputs.shape = values(shapeIndex_);
   outputs.flipLogit = values(flipIndex_)[0];
   outputs.refine = values(refineIndex_);
+  outputs.hasVehicleLogit = hasVerifier_;
+  outputs.vehicleLogit = hasVerifier_ ? values(vehicleIndex_)[0] : 0.0F;
   if (!options_.mirrorAverage) {
     return applyCropOutputs(outputs, gsd_m, options_, detection);
   }
@@ -297,6 +320,9 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
   }
   const std::span<const float> typeLogits = values(typeIndex_);
   const std::span<const float> refine = values(refineIndex_);
+  if (hasVerifier_) {  // a mirrored vehicle is still a vehicle: both runs' logits averaged
+    outputs.vehicleLogit = 0.5F * (outputs.vehicleLogit + values(vehicleIndex_)[0]);
+  }
   for (std::size_t t = 0; t < typeLogits_.size(); ++t) {
     typeLogits_[t] = 0.5F * (typeLogits_[t] + typeLogits[t]);
   }

@@ -22,12 +22,15 @@
 //    centre along the axis (du not applied) unless refineLargeVehicleLength: the 5.76 m crop
 //    window shows only part of a bus or truck, so the crop network's length for it is a guess,
 //    while the first stage saw the whole vehicle.
+//  - An optional output vehicle_logit (1 x 1 x 1, the verifier) gives vehicleProbability =
+//    sigmoid(vehicle_logit); a model without it leaves vehicleProbability NaN. The detection
+//    stage drops detections below SecondStageOptions::minVehicleProbability.
 //  - With mirrorAverage, classify() runs the network a second time on the crop mirrored across
 //    the vehicle's axis (rows reversed: left and right swapped, front stays front) and averages
-//    the two runs' type logits, with mirrorRefine also their refinements (du, length, width as
-//    they are; dv and d_angle negated back); flip logit and shape come from the crop as cut (an
-//    ASM component need not be mirror-symmetric). A test-time augmentation: one more
-//    crop-network run.
+//    the two runs' type logits (and verifier logits), with mirrorRefine also their refinements (du,
+//    length, width as they are; dv and d_angle negated back); flip logit and shape come from the
+//    crop as cut (an ASM component need not be mirror-symmetric). A test-time augmentation: one
+//    more crop-network run.
 //  - VehicleCropper owns the crop engine and two crop buffers; classify() runs one detection
 //    (the engine is batch 1) with no heap allocation.
 #pragma once
@@ -68,6 +71,8 @@ struct CropNetOutputs {
   std::span<const float> shape;       // n_s <= shape::kMaxShapeComponents
   float flipLogit = 0.0F;
   std::span<const float> refine;  // kRefineCount (raw, before scale/offset)
+  bool hasVehicleLogit = false;   // the crop network has the verifier output
+  float vehicleLogit = 0.0F;
 };
 
 struct SecondStageOptions {
@@ -77,6 +82,9 @@ struct SecondStageOptions {
   bool refineLargeVehicleLength = false;  // apply length and du when the top type is Large
   bool mirrorAverage = false;             // type averaged with the mirrored crop's (see contract)
   bool mirrorRefine = false;              // ... and the refinement (needs mirrorAverage)
+  // Detections whose verifier probability is below this are dropped after the second stage;
+  // 0 keeps all, and so does a crop network without the verifier output. [0, 1]
+  float minVehicleProbability = 0.0F;
 };
 
 enum class SecondStageStatus {
@@ -100,8 +108,8 @@ class VehicleCropper {
   VehicleCropper& operator=(const VehicleCropper&) = delete;
 
   // Start-up: loads the crop model (input 1 x 3 x 48 x 96; outputs type_logits 7, shape n_s,
-  // flip_logit 1, refine 5, each 1 x 1) and checks its interface; *why names the file and the
-  // offending output.
+  // flip_logit 1, refine 5 and optionally vehicle_logit 1, each 1 x 1) and checks its
+  // interface; *why names the file and the offending output.
   bool init(const std::string& cropModelPath, const inference::EngineOptions& engineOptions,
             const SecondStageOptions& options, std::string* why = nullptr);
   bool initialised() const { return engine_.loaded(); }
@@ -111,6 +119,7 @@ class VehicleCropper {
 
   const cv::Mat& lastCrop() const { return crop_; }  // diagnostics and tests
   int shapeCount() const { return shapeCount_; }
+  bool hasVerifier() const { return hasVerifier_; }
 
  private:
   inference::Engine engine_;
@@ -124,6 +133,8 @@ class VehicleCropper {
   std::size_t shapeIndex_ = 0;
   std::size_t flipIndex_ = 0;
   std::size_t refineIndex_ = 0;
+  std::size_t vehicleIndex_ = 0;
+  bool hasVerifier_ = false;
   int shapeCount_ = 0;
 };
 

@@ -114,6 +114,53 @@ TEST(DetectionStage, RunsTheShippedModelsOnAFullFrame) {
 
 // cropBackend changes the second stage's engine only: with the second stage's boxes not
 // applied, the first stage's boxes are those of the all-int8 run, the types are not.
+// The verifier drops what it doubts and nothing else; a crop network without it keeps all.
+TEST(DetectionStage, VerifierDropsOnlyDetectionsBelowTheMinimumVehicleProbability) {
+  preprocess::Preprocessor pre;
+  std::string why;
+  ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}, &why)) << why;
+  ASSERT_EQ(pre.process(sceneFrame()), preprocess::PreprocessStatus::Ok);
+  DetectionStageOptions options = stageOptions(1);
+  DetectionStage all;
+  ASSERT_TRUE(all.init(options, static_cast<int>(pre.tileCount()), &why)) << why;
+  constexpr float kMin = 0.5F;
+  options.secondStage.minVehicleProbability = kMin;
+  DetectionStage verified;
+  ASSERT_TRUE(verified.init(options, static_cast<int>(pre.tileCount()), &why)) << why;
+  std::array<Detection, kMaxDetectionsPerFrame> outAll{};
+  std::array<Detection, kMaxDetectionsPerFrame> outVerified{};
+  std::size_t countAll = 0;
+  std::size_t countVerified = 0;
+  ASSERT_EQ(all.run(pre.output(), outAll, &countAll), DetectionStatus::Ok);
+  ASSERT_EQ(verified.run(pre.output(), outVerified, &countVerified), DetectionStatus::Ok);
+  ASSERT_GT(countAll, 0U);
+  EXPECT_EQ(all.stats().rejectedByVerifier, 0);
+  if (!verified.hasVerifier()) {
+    EXPECT_EQ(countVerified, countAll);
+    EXPECT_EQ(verified.stats().rejectedByVerifier, 0);
+    for (std::size_t i = 0; i < countAll; ++i) {
+      EXPECT_TRUE(std::isnan(outAll[i].vehicleProbability));
+    }
+    return;
+  }
+  // Every kept detection passed, and each of them is one the unfiltered run found too.
+  int below = 0;
+  for (std::size_t i = 0; i < countAll; ++i) {
+    below += outAll[i].vehicleProbability < kMin ? 1 : 0;
+  }
+  // (A rejected box may also have been a refined duplicate that the unfiltered run removed.)
+  EXPECT_GE(verified.stats().rejectedByVerifier, below);
+  for (std::size_t i = 0; i < countVerified; ++i) {
+    EXPECT_GE(outVerified[i].vehicleProbability, kMin);
+    bool found = false;
+    for (std::size_t k = 0; k < countAll && !found; ++k) {
+      found =
+          outAll[k].box.cx == outVerified[i].box.cx && outAll[k].box.cy == outVerified[i].box.cy;
+    }
+    EXPECT_TRUE(found) << "detection " << i;
+  }
+}
+
 TEST(DetectionStage, CropBackendSwitchesOnlyTheSecondStage) {
   preprocess::Preprocessor pre;
   std::string why;

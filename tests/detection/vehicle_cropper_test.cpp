@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -148,6 +149,27 @@ TEST(VehicleCropper, AppliedOutputsInvertThePythonTrainingTargets) {
     EXPECT_NEAR(geometry::absAngleDifference(d.box.angle, c.box[4]), 0.0, 1e-6);
     EXPECT_NEAR(d.flipProbability, c.flip != 0 ? 0.952574 : 0.047426, 1e-6);
   }
+}
+
+TEST(VehicleCropper, VerifierLogitBecomesTheVehicleProbability) {
+  const std::array<float, 7> logits{0.1F, 2.0F, -1.0F, 0.5F, 0.0F, -0.3F, 1.0F};
+  const std::array<float, 3> gamma{0.25F, -1.5F, 0.125F};
+  const std::array<float, 5> refine{0.0F, 0.0F, 0.0F, 0.0F, 0.0F};
+  CropNetOutputs outputs{logits, gamma, -1.0F, refine};
+  Detection d;
+  d.box = {100.0, 50.0, 150.0, 60.0, 0.5};
+  // No verifier output: unknown, not "certainly a vehicle".
+  ASSERT_EQ(applyCropOutputs(outputs, 0.03, SecondStageOptions{}, &d), SecondStageStatus::Ok);
+  EXPECT_TRUE(std::isnan(d.vehicleProbability));
+  outputs.hasVehicleLogit = true;
+  for (const float logit : {-2.0F, 0.0F, 3.0F}) {
+    outputs.vehicleLogit = logit;
+    ASSERT_EQ(applyCropOutputs(outputs, 0.03, SecondStageOptions{}, &d), SecondStageStatus::Ok);
+    EXPECT_NEAR(d.vehicleProbability, 1.0 / (1.0 + std::exp(-static_cast<double>(logit))), 1e-6);
+  }
+  outputs.vehicleLogit = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(applyCropOutputs(outputs, 0.03, SecondStageOptions{}, &d),
+            SecondStageStatus::BadOutputs);
 }
 
 TEST(VehicleCropper, TypesShapeAndFlipOnly) {

@@ -64,6 +64,10 @@ options:
                         averaged, as the app's perception.crop_mirror_average)
   --no-mirror-refine    average only the type over the crop and its mirror image, not the box
                         refinement (default: both, as the app's perception.crop_mirror_refine)
+  --min-vehicle-probability P
+                        drop detections the crop network's verifier gives a lower vehicle
+                        probability, [0, 1] (default 0: keep all, as the app's
+                        perception.crop_min_vehicle_probability; no effect without a verifier)
   --refine-large-length apply the second stage's length to vehicles most likely large too
                         (default: they keep the first stage's length; the crop shows a part)
   --help                this text
@@ -89,6 +93,7 @@ struct Options {
   bool mirrorAverage = true;
   bool mirrorRefine = true;
   bool refineLargeLength = false;
+  double minVehicleProbability = 0.0;
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -174,6 +179,8 @@ Options parseArguments(int argc, char** argv) {
       o.gsd = parseDouble(arg, value, 1e-4, 10.0);
     else if (arg == "--score-threshold")
       o.scoreThreshold = parseDouble(arg, value, 0.0, 1.0);
+    else if (arg == "--min-vehicle-probability")
+      o.minVehicleProbability = parseDouble(arg, value, 0.0, 1.0);
     else if (arg == "--threads")
       o.threads = static_cast<int>(parseDouble(arg, value, 1, 64));
     else
@@ -237,6 +244,8 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
   stageOptions.secondStage.mirrorAverage = options.mirrorAverage;
   stageOptions.secondStage.mirrorRefine = options.mirrorRefine && options.mirrorAverage;
   stageOptions.secondStage.refineLargeVehicleLength = options.refineLargeLength;
+  stageOptions.secondStage.minVehicleProbability =
+      static_cast<float>(options.minVehicleProbability);
   return stage.init(stageOptions, vp::preprocess::kMaxTiles, why);
 }
 

@@ -3,6 +3,7 @@
 
     tools/detector/export.py --checkpoint RUNDIR/checkpoint.pt --out EXPORTDIR
         [--calib-data SEQDIR ...] [--calib-real DIR] [--calib-count 32]
+        [--calib-verifier-samples CSV ...]
         [--input-size 672x512] [--eval-data SEQDIR ...] [--engine-bench build/release/tests/bench/vp_bench_engine]
 
 Contract
@@ -100,7 +101,7 @@ def load_run(checkpoint: str):
     det.load_state_dict(ck["detector"])
     crop = None
     if ck.get("crop") is not None:
-        crop = CropNet(n_s=ck["n_s"])
+        crop = CropNet(n_s=ck["n_s"], verifier="vehicle_logit.weight" in ck["crop"])
         crop.load_state_dict(ck["crop"])
     return ck, det.eval(), (crop.eval() if crop else None)
 
@@ -116,8 +117,10 @@ def working_canvas(image: np.ndarray, hw, scale: float) -> np.ndarray:
     return canvas
 
 
-def calibration_images(args, hw, n_s: int, rng) -> (np.ndarray, np.ndarray):
-    """(detector canvases [N, H, W, 3], crops [M, CROP_H, CROP_W, 3]) uint8 RGB."""
+def calibration_images(args, hw, n_s: int, rng, verifier: bool = False) -> (np.ndarray, np.ndarray):
+    """(detector canvases [N, H, W, 3], crops [M, CROP_H, CROP_W, 3]) uint8 RGB. For a crop
+    network with the verifier head a third of the crops show no vehicle (rows of
+    --calib-verifier-samples), so that the int8 range of vehicle_logit covers negative values."""
     from detector import crops as cropmod
     from detector.datasets import read_sequence, read_yolo, split_from_file
     from detector.train import estimate_gsd
@@ -147,7 +150,23 @@ def calibration_images(args, hw, n_s: int, rng) -> (np.ndarray, np.ndarray):
         dets = list(qdq.synthetic_images(8, hw[0], hw[1], seed=1))
     if not cps:
         cps = list(qdq.synthetic_images(16, CROP_H, CROP_W, seed=2))
-    return np.stack(dets), np.stack(cps[:max(16, n * 2)])
+    cps = cps[:max(16, n * 2)]
+    if verifier and args.calib_verifier_samples:
+        from detector.datasets import load_image
+        from detector.train import read_verifier_samples
+
+        rows = [r for p in args.calib_verifier_samples for r in read_verifier_samples(p)
+                if r[-1] == 0]
+        extra = []
+        for i in rng.permutation(len(rows))[:max(8, len(cps) // 2)]:
+            path, cx, cy, length, width, angle, gsd, _ = rows[i]
+            extra.append(cropmod.extract_crop(load_image(path), (cx, cy), angle, gsd))
+        # Interleaved, so that both the calibration and the check share of the list hold some.
+        mixed = []
+        for k in range(max(len(cps), len(extra))):
+            mixed += cps[k:k + 1] + extra[k:k + 1]
+        cps = mixed
+    return np.stack(dets), np.stack(cps)
 
 
 class OnnxDetector:
@@ -201,7 +220,8 @@ def export(args) -> dict:
     rng = np.random.default_rng(args.seed)
     cfg_common = dict(NORMALIZATION, method=args.method)
     report: dict = {"checkpoint": args.checkpoint, "input_size": [w, h], "models": {}}
-    calib_det, calib_crop = calibration_images(args, hw, n_s, rng)
+    calib_det, calib_crop = calibration_images(args, hw, n_s, rng,
+                                               verifier=crop is not None and crop.verifier)
     half = max(1, len(calib_det) * 3 // 4)
     jobs = [("detector", det, hw, calib_det, "vp_detector")]
     if crop is not None:
@@ -275,6 +295,9 @@ def parse_args(argv=None):
     p.add_argument("--calib-real-split", default=None,
                    help="split JSON (split_real.py): calibrate only on its training images")
     p.add_argument("--calib-count", type=int, default=32)
+    p.add_argument("--calib-verifier-samples", nargs="*", default=[], metavar="CSV",
+                   help="with a verifier crop network: background rows of these mine_negatives.py "
+                        "lists join the crop calibration (the vehicle_logit range must cover them)")
     p.add_argument("--method", choices=["minmax", "percentile", "mse"], default="minmax")
     p.add_argument("--eval-data", nargs="*", default=[])
     p.add_argument("--engine-bench", default=None, help="path of vp_bench_engine")

@@ -156,7 +156,7 @@ def detector_loss(out: Dict[str, torch.Tensor], batch: Dict[str, torch.Tensor],
 
 def crop_loss(out: Dict[str, torch.Tensor], batch: Dict[str, torch.Tensor], shape_loss,
               weights: Optional[Dict[str, float]] = None):
-    wts = {"type": 1.0, "shape": 1.0, "flip": 1.0, "refine": 1.0}
+    wts = {"type": 1.0, "shape": 1.0, "flip": 1.0, "refine": 1.0, "vehicle": 1.0}
     if weights:
         wts.update(weights)
     terms = {}
@@ -167,10 +167,17 @@ def crop_loss(out: Dict[str, torch.Tensor], batch: Dict[str, torch.Tensor], shap
     g = batch["gamma"]
     gk = ~torch.isnan(g).any(-1)
     terms["shape"] = shape_loss(out["shape"].flatten(1)[gk], g[gk])
-    terms["flip"] = F.binary_cross_entropy_with_logits(out["flip_logit"].flatten(), batch["flip"].float())
+    # Verifier crops (batch["full"] False: a mined box, vehicle or not) train only the
+    # verifier head; their type is -1 and gamma NaN, so those terms skip them already.
+    full = batch["full"] if "full" in batch else torch.ones_like(t, dtype=torch.bool)
+    terms["flip"] = F.binary_cross_entropy_with_logits(out["flip_logit"].flatten()[full],
+                                                       batch["flip"].float()[full])
     sc = torch.tensor(REFINE_SCALE, device=logits.device)
     of = torch.tensor(REFINE_OFFSET, device=logits.device)
-    pred = out["refine"].flatten(1) * sc + of
-    terms["refine"] = ((pred - batch["refine"]).abs() / sc).sum(-1).mean()
+    pred = out["refine"].flatten(1)[full] * sc + of
+    terms["refine"] = ((pred - batch["refine"][full]).abs() / sc).sum(-1).mean()
+    if "vehicle_logit" in out and "vehicle" in batch:
+        terms["vehicle"] = F.binary_cross_entropy_with_logits(out["vehicle_logit"].flatten(),
+                                                              batch["vehicle"].float())
     total = sum(wts[k] * v for k, v in terms.items())
     return total, {k: float(v.detach()) for k, v in terms.items()}

@@ -8,17 +8,29 @@ training ignores (occluded or cut by the border) — with rotated IoU >= --max-i
 (CSV: image, cx_px, cy_px, score; the image path as the sequence's frames.csv names it, made
 absolute) is what `train.py --hard-negatives FILE --negative-share P` centres a share of its
 tiles on, so that the first stage sees the shadows, road marks and roof fixtures it mistook for
-vehicles more often than uniform tiles show them.
+vehicles more often than uniform tiles show them. Each row also carries the detected box
+(length_px, width_px, angle_rad), the ground sample distance the crop network would cut it at
+(gsd_m: the frame's median vehicle GSD; real images: --gsd-m) and a label (0: background), so
+that `train.py --verifier-samples FILE` can teach the crop network's verifier head the same
+mistakes at 6 cm per pixel.
 
   tools/detector/mine_negatives.py --data SEQ_DIR... --detections DIR --out negatives.csv
+  tools/detector/mine_negatives.py --images ROOT --list STEMS --detections FILE --gsd-m G \
+      --positives --out real_samples.csv
 
-DIR holds <sequence name>.csv for each sequence (its folder's basename). Run with Debian's
-Python (/usr/bin/python3).
+DIR holds <sequence name>.csv for each sequence (its folder's basename). With --images (a
+folder of images/ and YOLO labels/, as ../shared/data/real/cats-madison) FILE is one
+`vp_detect_images --images ROOT` CSV; a detection's axis-aligned enclosing box, clipped to the
+image as the labels are, is compared with the labels (IoU), and --positives also lists the
+detections that match a label (IoU >= 0.5) with label 1: real vehicles as the first stage boxes
+them, so that the verifier does not learn "real image = background". Run with Debian's Python
+(/usr/bin/python3).
 """
 from __future__ import annotations
 
 import argparse
 import csv
+import math
 import os
 import sys
 from typing import Dict, List, Tuple
@@ -28,31 +40,81 @@ import numpy as np
 if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from detector.datasets import DatasetError, read_sequence  # noqa: E402
+from detector.datasets import DatasetError, file_stem, read_sequence, read_yolo  # noqa: E402
 from detector.geometry import rotated_iou_matrix  # noqa: E402
 
-DETECTION_COLUMNS = ["frame_id", "score", "box_cx_px", "box_cy_px", "box_length_px",
-                     "box_width_px", "box_angle_rad"]
+DETECTION_COLUMNS = ["score", "box_cx_px", "box_cy_px", "box_length_px", "box_width_px",
+                     "box_angle_rad"]
+OUT_COLUMNS = ["image", "cx_px", "cy_px", "score", "length_px", "width_px", "angle_rad", "gsd_m",
+               "label"]
 
 
-def read_detections(path: str) -> Dict[int, List[Tuple[float, np.ndarray]]]:
-    """Per frame id: (score, box [cx, cy, length, width, angle]) of each detection in a
-    vp_detect_images CSV (comment lines start with '#')."""
+def read_detections(path: str, key: str = "frame_id") -> Dict:
+    """Per frame id (or per ``key`` column, e.g. "image") : (score, box [cx, cy, length, width,
+    angle]) of each detection in a vp_detect_images CSV (comment lines start with '#')."""
     with open(path, newline="") as f:
         rows = [line for line in f if not line.startswith("#")]
     reader = csv.DictReader(rows)
-    missing = [c for c in DETECTION_COLUMNS if c not in (reader.fieldnames or [])]
+    missing = [c for c in [key] + DETECTION_COLUMNS if c not in (reader.fieldnames or [])]
     if missing:
         raise DatasetError(f"{path}: not a detections CSV (no column {', '.join(missing)})")
-    out: Dict[int, List[Tuple[float, np.ndarray]]] = {}
+    out: Dict = {}
     for line, r in enumerate(reader, start=2):
         try:
-            box = np.array([float(r[c]) for c in DETECTION_COLUMNS[2:]], np.float64)
-            fid, score = int(r["frame_id"]), float(r["score"])
+            box = np.array([float(r[c]) for c in DETECTION_COLUMNS[1:]], np.float64)
+            fid = int(r[key]) if key == "frame_id" else r[key]
+            score = float(r["score"])
         except ValueError as e:
             raise DatasetError(f"{path}: row {line}: {e}") from None
         out.setdefault(fid, []).append((score, box))
     return out
+
+
+def enclosing_box(box: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Axis-aligned box [x0, y0, x1, y1] around a rotated one, clipped to the image."""
+    c, s = abs(math.cos(box[4])), abs(math.sin(box[4]))
+    hw, hh = 0.5 * (box[2] * c + box[3] * s), 0.5 * (box[2] * s + box[3] * c)
+    return np.array([max(box[0] - hw, -0.5), max(box[1] - hh, -0.5),
+                     min(box[0] + hw, width - 0.5), min(box[1] + hh, height - 0.5)])
+
+
+def aa_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """IoU of one box [x0, y0, x1, y1] with each row of ``b``."""
+    if not len(b):
+        return np.zeros(0)
+    ix = np.clip(np.minimum(a[2], b[:, 2]) - np.maximum(a[0], b[:, 0]), 0, None)
+    iy = np.clip(np.minimum(a[3], b[:, 3]) - np.maximum(a[1], b[:, 1]), 0, None)
+    inter = ix * iy
+    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1]) - inter
+    return np.where(union > 0, inter / np.maximum(union, 1e-9), 0.0)
+
+
+def mine_images(root: str, det_path: str, stems, gsd_m: float, min_score: float, max_iou: float,
+                positives: bool):
+    """Rows of OUT_COLUMNS for the images of a YOLO folder: detections overlapping no label
+    (label 0) and, with ``positives``, those matching one with IoU >= 0.5 (label 1)."""
+    dets = read_detections(det_path, key="image")
+    rows, counts = [], {}
+    for s in read_yolo(root):
+        stem = file_stem(s.image_path)
+        if stems is not None and stem not in stems:
+            continue
+        found = [(sc, b) for sc, b in dets.get(stem, []) if sc >= min_score]
+        if not found:
+            continue
+        h, w = s.loaded().image.shape[:2]
+        labels = np.array([[(cx - bw / 2) * w - 0.5, (cy - bh / 2) * h - 0.5,
+                            (cx + bw / 2) * w - 0.5, (cy + bh / 2) * h - 0.5]
+                           for cx, cy, bw, bh, _ in s.boxes]).reshape(-1, 4)
+        n = 0
+        for sc, b in found:
+            best = aa_iou(enclosing_box(b, w, h), labels).max(initial=0.0)
+            label = 0 if best < max_iou else (1 if positives and best >= 0.5 else -1)
+            if label >= 0:
+                rows.append((os.path.abspath(s.image_path), *b[:2], sc, *b[2:], gsd_m, label))
+                n += label == 0
+        counts[stem] = n
+    return rows, counts
 
 
 def mine(seq_dirs: List[str], det_dir: str, min_score: float, max_iou: float):
@@ -75,20 +137,44 @@ def mine(seq_dirs: List[str], det_dir: str, min_score: float, max_iou: float):
             boxes = np.stack([b for _, b in found])
             iou = (rotated_iou_matrix(boxes, s.boxes).max(axis=1) if len(s)
                    else np.zeros(len(found)))
+            gsd = float(np.nanmedian(s.gsd_m)) if np.isfinite(s.gsd_m).any() else math.nan
             for (sc, b), best in zip(found, iou):
                 if best < max_iou:
-                    rows.append((os.path.abspath(s.image_path), float(b[0]), float(b[1]), sc))
+                    rows.append((os.path.abspath(s.image_path), *b[:2], sc, *b[2:], gsd, 0))
                     n += 1
         counts[name] = n
     return rows, counts
 
 
+def read_stems(path: str):
+    """Image stems from a text file (one per line) or a split JSON (its train_stems)."""
+    import json
+
+    with open(path) as f:
+        text = f.read()
+    if path.endswith(".json"):
+        try:
+            return set(json.loads(text)["train_stems"])
+        except (ValueError, KeyError):
+            raise DatasetError(f"{path}: not a split JSON with train_stems") from None
+    return {line.strip() for line in text.splitlines() if line.strip()}
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--data", nargs="+", required=True, help="recorded sequence directories")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--data", nargs="+", help="recorded sequence directories")
+    src.add_argument("--images", help="a folder of images/ and YOLO labels/ (real images)")
     p.add_argument("--detections", required=True,
-                   help="folder of <sequence name>.csv files written by vp_detect_images")
+                   help="--data: folder of <sequence name>.csv files written by vp_detect_images; "
+                        "--images: that tool's one CSV for the folder")
+    p.add_argument("--list", help="--images: only these images (one stem per line, or a split "
+                                  "JSON's train_stems)")
+    p.add_argument("--gsd-m", type=float, default=math.nan,
+                   help="--images: ground sample distance the detections were cropped at, m/px")
+    p.add_argument("--positives", action="store_true",
+                   help="--images: also list detections matching a label (label 1)")
     p.add_argument("--out", required=True, help="negatives CSV to write")
     p.add_argument("--min-score", type=float, default=0.4,
                    help="detections from this score count (the tracker's births start at 0.45)")
@@ -97,20 +183,31 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     if not 0.0 <= a.min_score <= 1.0 or not 0.0 < a.max_iou <= 1.0:
         p.error("--min-score must be in [0, 1] and --max-iou in (0, 1]")
+    if a.images and not (a.gsd_m > 0):
+        p.error("--images needs --gsd-m > 0 (the GSD the detections were cropped at)")
     try:
-        rows, counts = mine(a.data, a.detections, a.min_score, a.max_iou)
+        if a.images:
+            stems = read_stems(a.list) if a.list else None
+            rows, counts = mine_images(a.images, a.detections, stems, a.gsd_m, a.min_score,
+                                       a.max_iou, a.positives)
+        else:
+            rows, counts = mine(a.data, a.detections, a.min_score, a.max_iou)
     except (DatasetError, OSError) as e:
         print(f"mine_negatives.py: {e}", file=sys.stderr)
         return 1
     os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
     with open(a.out, "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["image", "cx_px", "cy_px", "score"])
-        for image, cx, cy, score in rows:
-            w.writerow([image, f"{cx:.1f}", f"{cy:.1f}", f"{score:.4f}"])
-    frames = len({r[0] for r in rows})
-    print(f"mine_negatives.py: {len(rows)} false detections in {frames} frames of "
-          f"{sum(1 for c in counts.values() if c)} of {len(counts)} sequences -> {a.out}")
+        w.writerow(OUT_COLUMNS)
+        for image, cx, cy, score, length, width, angle, gsd, label in rows:
+            w.writerow([image, f"{cx:.1f}", f"{cy:.1f}", f"{score:.4f}", f"{length:.1f}",
+                        f"{width:.1f}", f"{angle:.4f}", f"{gsd:.5f}", label])
+    negatives = [r for r in rows if r[-1] == 0]
+    frames = len({r[0] for r in negatives})
+    print(f"mine_negatives.py: {len(negatives)} false detections in {frames} frames of "
+          f"{sum(1 for c in counts.values() if c)} of {len(counts)} "
+          f"{'images' if a.images else 'sequences'}"
+          + (f", {len(rows) - len(negatives)} matched ones" if a.positives else "") + f" -> {a.out}")
     return 0
 
 

@@ -159,9 +159,14 @@ class Detector(nn.Module):
 
 
 class CropNet(nn.Module):
-    def __init__(self, n_s: int = 3):
+    """The second stage. With ``verifier`` it also outputs ``vehicle_logit``: whether the crop
+    shows a vehicle at all (the first stage's box may sit on a planter, a shadow or a roof
+    fixture), trained on mined false detections (train.py --verifier-samples)."""
+
+    def __init__(self, n_s: int = 3, verifier: bool = False):
         super().__init__()
         self.n_s = n_s
+        self.verifier = verifier
         self.export_mode = False
         self.body = nn.Sequential(
             ConvBN(3, 24, 3, 2),                       # 24 x 48
@@ -178,17 +183,25 @@ class CropNet(nn.Module):
         self.shape = nn.Conv2d(192, n_s, 1)
         self.flip_logit = nn.Conv2d(192, 1, 1)
         self.refine = nn.Conv2d(192, 5, 1)
-        for m in (self.type_logits, self.shape, self.flip_logit, self.refine):
+        heads = [self.type_logits, self.shape, self.flip_logit, self.refine]
+        if verifier:
+            self.vehicle_logit = nn.Conv2d(192, 1, 1)
+            heads.append(self.vehicle_logit)
+        for m in heads:
             nn.init.normal_(m.weight, std=0.01)
             nn.init.zeros_(m.bias)
 
     def forward(self, x) -> Dict[str, torch.Tensor]:
         f = self.fc(self.body(x))
-        return {"type_logits": self.type_logits(f), "shape": self.shape(f),
-                "flip_logit": self.flip_logit(f), "refine": self.refine(f)}
+        out = {"type_logits": self.type_logits(f), "shape": self.shape(f),
+               "flip_logit": self.flip_logit(f), "refine": self.refine(f)}
+        if self.verifier:
+            out["vehicle_logit"] = self.vehicle_logit(f)
+        return out
 
     def output_names(self):
-        return ["type_logits", "shape", "flip_logit", "refine"]
+        return ["type_logits", "shape", "flip_logit", "refine"] + (
+            ["vehicle_logit"] if self.verifier else [])
 
 
 # refine output scaling: raw * REFINE_SCALE = (du_m, dv_m, d_angle_rad, length_m, width_m)

@@ -40,13 +40,14 @@ Contract
 from __future__ import annotations
 
 import argparse
+import collections
 import csv
 import json
 import math
 import os
 import sys
 import time
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -62,8 +63,9 @@ import torch
 
 from detector import augment, crops, targets
 from detector.asm import DEFAULT_ASM_PATH, REPO_ROOT, load_asm
-from detector.datasets import (LARGE, Sample, read_dota, read_sequence, read_yolo,
+from detector.datasets import (LARGE, Sample, load_image, read_dota, read_sequence, read_yolo,
                                split_from_file, split_near_duplicate_free)
+from detector.geometry import rotated_iou_matrix
 from detector.losses import crop_loss, detector_loss, make_shape_loss
 from detector.model import CropNet, Detector, normalize
 
@@ -113,6 +115,20 @@ def parse_args(argv=None):
                         "--negative-share of the tiles of those frames are centred on one")
     p.add_argument("--negative-share", type=float, default=0.25,
                    help="share of a listed frame's tiles centred on one of its hard negatives")
+    p.add_argument("--verifier-samples", nargs="+", default=[], metavar="CSV",
+                   help="train the crop network's verifier head (vehicle or not) on these "
+                        "mine_negatives.py lists: detected boxes labelled 0 (background) or 1 "
+                        "(vehicle); the ground-truth crops count as vehicles")
+    p.add_argument("--verifier-head-only", action="store_true",
+                   help="train only the verifier head; the rest of the crop network (type, shape, "
+                        "flip, refinement) stays as --init-from left it")
+    p.add_argument("--verifier-batch", type=int, default=16,
+                   help="listed or random background crops added to each crop batch")
+    p.add_argument("--verifier-random-share", type=float, default=0.25,
+                   help="share of those cut at a random place of a training frame that holds no "
+                        "vehicle (car-sized box, random angle)")
+    p.add_argument("--verifier-negative-share", type=float, default=0.6,
+                   help="share of the listed crops drawn from the background (label 0) rows")
     p.add_argument("--working-width", type=int, default=648)
     p.add_argument("--working-gsd-range", type=float, nargs=2, default=(0.08, 0.18))
     p.add_argument("--shape-loss", choices=["l1", "l2"], default="l1", help="V_L1 or V_L2")
@@ -215,6 +231,31 @@ def read_hard_negatives(path: str, seq: List[Sample]) -> Dict[int, np.ndarray]:
     return {i: np.asarray(p, np.float64) for i, p in points.items()}
 
 
+def read_verifier_samples(path: str) -> List[tuple]:
+    """Rows (image, cx, cy, length, width, angle, gsd_m, label) of a mine_negatives.py list;
+    rows without a finite GSD are skipped; a malformed file is an error naming the row."""
+    cols = ["image", "cx_px", "cy_px", "length_px", "width_px", "angle_rad", "gsd_m", "label"]
+    out = []
+    try:
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            if not set(cols) <= set(reader.fieldnames or []):
+                raise SystemExit(f"{path}: not a verifier list (columns {', '.join(cols)})")
+            for line, r in enumerate(reader, start=2):
+                try:
+                    vals = [float(r[c]) for c in cols[1:7]]
+                    label = int(r["label"])
+                except (TypeError, ValueError):
+                    raise SystemExit(f"{path}:{line}: not numbers") from None
+                if label not in (0, 1):
+                    raise SystemExit(f"{path}:{line}: label must be 0 or 1")
+                if all(math.isfinite(v) for v in vals) and vals[5] > 0:
+                    out.append((os.path.abspath(r["image"]), *vals, label))
+    except OSError as e:
+        raise SystemExit(f"--verifier-samples: {e}") from None
+    return out
+
+
 class Data:
     """Training and validation sources and the batch makers (all randomness from ``rng``)."""
 
@@ -254,6 +295,14 @@ class Data:
         self.cache = FrameCache(args.cache_frames)
         self.negatives = (read_hard_negatives(args.hard_negatives, self.seq)
                           if args.hard_negatives else {})
+        self.verifier = [read_verifier_samples(p) for p in args.verifier_samples]
+        self.verifier = {label: [r for rows in self.verifier for r in rows if r[-1] == label]
+                         for label in (0, 1)} if self.verifier else {}
+        self.empty_frames = [i for i, s in enumerate(self.seq) if np.isfinite(s.gsd_m).any()]
+        self.verifier_images = collections.OrderedDict()  # path -> image, least recent first
+        if self.verifier:
+            log(f"verifier: {len(self.verifier[0])} background and {len(self.verifier[1])} vehicle "
+                f"boxes listed, random background from {len(self.empty_frames)} frames")
         log(f"data: {len(self.seq)} sequence/DOTA frames ({sum(len(s) for s in self.seq)} objects), "
             f"{len(self.real)} real training images, {len(self.real_val)} real validation images, "
             f"{len(self.val_seq)} validation frames, {len(self.crop_pool)} typed objects for crops"
@@ -345,8 +394,57 @@ class Data:
             gammas.append(s.gammas[j])
             flips.append(flip)
             refines.append(refine)
+        full = [True] * len(imgs)
+        vehicle = [1.0] * len(imgs)
+        if self.verifier:
+            for _ in range(self.args.verifier_batch):
+                patch, label = self.verifier_crop(rng)
+                tmp = Sample(image_path=None, image=patch, **{k: v for k, v in _empty(self.n_s).items()})
+                imgs.append(augment.photometric(tmp, rng).image)
+                types.append(-1)
+                gammas.append(np.full(self.n_s, np.nan, np.float32))
+                flips.append(0.0)
+                refines.append(np.zeros(5, np.float32))
+                full.append(False)
+                vehicle.append(float(label))
         return {"image": np.stack(imgs), "type": np.array(types), "gamma": np.stack(gammas),
-                "flip": np.array(flips), "refine": np.stack(refines)}
+                "flip": np.array(flips), "refine": np.stack(refines),
+                "full": np.array(full), "vehicle": np.array(vehicle, np.float32)}
+
+    def _verifier_image(self, path: str) -> np.ndarray:
+        img = self.verifier_images.pop(path, None)
+        if img is None:
+            img = load_image(path)
+            while len(self.verifier_images) >= max(16, self.args.cache_frames // 4):
+                self.verifier_images.popitem(last=False)
+        self.verifier_images[path] = img
+        return img
+
+    def verifier_crop(self, rng) -> Tuple[np.ndarray, int]:
+        """One crop for the verifier head and its label (1 vehicle, 0 background): a listed box
+        (jittered like the ground-truth crops) or a car-sized box at a random place of a
+        training frame that overlaps no vehicle."""
+        a = self.args
+        if self.empty_frames and rng.random() < a.verifier_random_share:
+            for _ in range(20):
+                s = self._load("seq", self.empty_frames[int(rng.integers(0, len(self.empty_frames)))])
+                gsd = float(np.nanmedian(s.gsd_m))
+                h, w = s.image.shape[:2]
+                box = np.array([rng.uniform(0, w), rng.uniform(0, h), 4.5 / gsd, 1.9 / gsd,
+                                rng.uniform(0, 2 * math.pi)])
+                if not len(s) or rotated_iou_matrix(box[None], s.boxes).max() < 0.01:
+                    return crops.extract_crop(s.image, box[:2], float(box[4]), gsd), 0
+        label = 0 if (not self.verifier[1] or (self.verifier[0] and
+                                               rng.random() < a.verifier_negative_share)) else 1
+        rows = self.verifier[label]
+        path, cx, cy, length, width, angle, gsd, _ = rows[int(rng.integers(0, len(rows)))]
+        box = np.array([cx, cy, length, width, angle])
+        cen, ang, gsd_used, _, _ = crops.jittered_crop_target(box, gsd, rng, center_sigma_m=0.15,
+                                                              angle_sigma=math.radians(4))
+        patch = crops.extract_crop(self._verifier_image(path), cen, ang, gsd_used)
+        if rng.random() < 0.5:
+            patch = np.ascontiguousarray(patch[::-1])
+        return patch, label
 
     def detector_batch(self, rng, device) -> Dict[str, torch.Tensor]:
         return to_device(self.detector_arrays(rng), device)
@@ -426,6 +524,10 @@ def train(args) -> dict:
     if not args.hard_weight > 0 or not 0.0 <= args.hard_occlusion <= 1.0:
         raise SystemExit(f"--hard-weight must be > 0 (got {args.hard_weight}) and --hard-occlusion "
                          f"in [0, 1] (got {args.hard_occlusion})")
+    if args.verifier_samples and (args.no_crop or args.verifier_batch < 1 or not (
+            0.0 <= args.verifier_random_share <= 1.0 and 0.0 <= args.verifier_negative_share <= 1.0)):
+        raise SystemExit("--verifier-samples needs the crop network (no --no-crop), "
+                         "--verifier-batch >= 1 and shares in [0, 1]")
     if not 0.0 <= args.negative_share <= 1.0:
         raise SystemExit(f"--negative-share must be in [0, 1] (got {args.negative_share})")
     os.makedirs(args.out, exist_ok=True)
@@ -471,14 +573,19 @@ def train(args) -> dict:
         det = Detector(n_s=asm.n_s, single_stage=args.single_stage).to(device)
     if args.crop_only and args.no_crop:
         raise SystemExit("--crop-only and --no-crop exclude each other")
-    crop_net = None if args.no_crop else CropNet(n_s=asm.n_s).to(device)
+    crop_net = (None if args.no_crop
+                else CropNet(n_s=asm.n_s, verifier=bool(args.verifier_samples)).to(device))
     if args.init_from:
         ck0 = torch.load(args.init_from, map_location=device)
         missing, unexpected = det.load_state_dict(ck0["detector"], strict=False)
         if unexpected:
             raise SystemExit(f"--init-from {args.init_from}: unexpected detector weights {unexpected[:4]}")
         if crop_net is not None and ck0.get("crop") is not None:
-            crop_net.load_state_dict(ck0["crop"])
+            missing_c, unexpected_c = crop_net.load_state_dict(ck0["crop"], strict=False)
+            if unexpected_c or any(not k.startswith("vehicle_logit.") for k in missing_c):
+                raise SystemExit(f"--init-from {args.init_from}: crop network weights do not fit "
+                                 f"(missing {missing_c[:4]}, unexpected {unexpected_c[:4]})")
+            missing += missing_c
         log(f"initialised from {args.init_from}; new: {sorted({k.split('.')[0] for k in missing})}")
     head_names = ("type_head", "shape_head")
     if args.train_heads_only:
@@ -488,7 +595,14 @@ def train(args) -> dict:
             prm.requires_grad = name.split(".")[0] in head_names
     opt_d = torch.optim.AdamW([q for q in det.parameters() if q.requires_grad], lr=args.lr,
                               weight_decay=1e-4)
-    opt_c = torch.optim.AdamW(crop_net.parameters(), lr=args.lr, weight_decay=1e-4) if crop_net else None
+    if args.verifier_head_only:
+        if not (args.verifier_samples and args.init_from and args.crop_only):
+            raise SystemExit("--verifier-head-only needs --verifier-samples, --init-from and "
+                             "--crop-only")
+        for name, prm in crop_net.named_parameters():
+            prm.requires_grad = name.startswith("vehicle_logit.")
+    opt_c = torch.optim.AdamW([q for q in crop_net.parameters() if q.requires_grad], lr=args.lr,
+                              weight_decay=1e-4) if crop_net else None
     shape_loss = make_shape_loss(args.shape_loss, asm)
     steps_per_epoch = max(1, math.ceil(data.frames_per_epoch() / args.batch))
     total_steps = args.epochs * steps_per_epoch
@@ -530,7 +644,9 @@ def train(args) -> dict:
             if name not in head_names:
                 mod.eval()
     if crop_net:
-        crop_net.train()
+        # Head only: the frozen layers keep their batch-norm statistics (eval mode), so the
+        # other outputs stay exactly what --init-from gave.
+        crop_net.train(not args.verifier_head_only)
     last_ckpt = time.monotonic()
     t_run = time.monotonic()
     elapsed0 = elapsed

@@ -15,7 +15,7 @@ import numpy as np
 import _common  # noqa: F401
 from detector import augment, mine_negatives, train
 from detector.datasets import read_sequence
-from test_train_smoke import write_synthetic_sequence
+from test_train_smoke import tiny_run_args, write_synthetic_sequence
 
 HEADER = ("frame_id,det_id,score,box_cx_px,box_cy_px,box_length_px,box_width_px,box_angle_rad,"
           "type\n")
@@ -58,9 +58,12 @@ class HardNegatives(unittest.TestCase):
         rows, counts = mine_negatives.mine([self.seq], self.dets, min_score=0.4, max_iou=0.1)
         self.assertEqual(counts, {"seq_7": 1})
         self.assertEqual(len(rows), 1)
-        image, cx, cy, score = rows[0]
+        image, cx, cy, score, length, width, angle, gsd, label = rows[0]
         self.assertEqual(image, os.path.abspath(self.frames[1].image_path))
         self.assertEqual((cx, cy, score), (x, y, 0.6))
+        # The box as detected, the frame's vehicle GSD (the crop scale), background.
+        self.assertEqual((length, width, angle, label), (24.0, 10.0, 0.3, 0))
+        self.assertAlmostEqual(gsd, float(np.nanmedian(self.frames[1].gsd_m)))
 
         out = os.path.join(self.root, "neg", "negatives.csv")
         with redirect_stderr(io.StringIO()), redirect_stdout(io.StringIO()):
@@ -163,6 +166,129 @@ class HardNegatives(unittest.TestCase):
                 self.assertEqual(t.image.shape[:2], (48, 48))
                 self.assertEqual(len(t), 1, point)  # its centre stayed inside the window
                 self.assertTrue(0 <= t.boxes[0, 0] < 48 and 0 <= t.boxes[0, 1] < 48, point)
+
+
+
+class Verifier(unittest.TestCase):
+    """The crop network's verifier head: mined boxes (vehicle or not) and its training batch."""
+
+    def setUp(self):
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        self.root = tmp.name
+        import cv2
+
+        # A YOLO folder with one 200 x 100 image and one labelled car at (50..90, 20..40).
+        os.makedirs(os.path.join(self.root, "real", "images"))
+        os.makedirs(os.path.join(self.root, "real", "labels"))
+        cv2.imwrite(os.path.join(self.root, "real", "images", "0_1.png"),
+                    np.full((100, 200, 3), 128, np.uint8))
+        with open(os.path.join(self.root, "real", "labels", "0_1.txt"), "w") as f:
+            f.write("0 0.35 0.3 0.2 0.2\n")
+        self.dets = os.path.join(self.root, "real.csv")
+        with open(self.dets, "w") as f:
+            f.write("# format_version: 1\nimage,det_id,score,box_cx_px,box_cy_px,box_length_px,"
+                    "box_width_px,box_angle_rad,type\n")
+            f.write("0_1,0,0.9,69.5,29.5,40.0,20.0,0.0,sedan\n")    # the car: IoU 1
+            f.write("0_1,1,0.7,150.0,70.0,40.0,20.0,1.57,sedan\n")  # background
+            f.write("0_1,2,0.6,95.0,29.5,40.0,20.0,0.0,sedan\n")    # partly on the car: neither
+            f.write("0_1,3,0.3,150.0,20.0,40.0,20.0,0.0,sedan\n")   # below --min-score
+
+    def test_mines_real_images_against_their_axis_aligned_labels(self):
+        rows, counts = mine_negatives.mine_images(os.path.join(self.root, "real"), self.dets,
+                                                  None, 0.047, 0.4, 0.1, positives=True)
+        self.assertEqual(counts, {"0_1": 1})
+        self.assertEqual(sorted((r[1], r[-1]) for r in rows), [(69.5, 1), (150.0, 0)])
+        self.assertTrue(all(r[7] == 0.047 for r in rows))
+        rows, _ = mine_negatives.mine_images(os.path.join(self.root, "real"), self.dets,
+                                             {"other"}, 0.047, 0.4, 0.1, positives=True)
+        self.assertEqual(rows, [])  # not listed
+        err = io.StringIO()
+        with redirect_stderr(err):
+            with self.assertRaises(SystemExit):
+                mine_negatives.main(["--images", os.path.join(self.root, "real"), "--detections",
+                                     self.dets, "--out", os.path.join(self.root, "v.csv")])
+        self.assertIn("--gsd-m", err.getvalue())
+
+    def test_training_batch_holds_verifier_crops_and_the_loss_uses_them(self):
+        import torch
+
+        from detector import losses
+        from detector.model import CropNet
+
+        seq = os.path.join(self.root, "seq_3")
+        write_synthetic_sequence(seq, frames=2)
+        frame = read_sequence(seq)[0]
+        listed = os.path.join(self.root, "verifier.csv")
+        with open(listed, "w") as f:
+            f.write(",".join(mine_negatives.OUT_COLUMNS) + "\n")
+            f.write(f"{frame.image_path},60,60,0.7,30,12,0.2,0.05,0\n")
+            f.write(f"{frame.image_path},60,60,0.7,30,12,0.2,nan,0\n")  # no GSD: skipped
+            f.write(f"{frame.image_path},30,30,0.9,30,12,0.0,0.05,1\n")
+        self.assertEqual([r[-1] for r in train.read_verifier_samples(listed)], [0, 1])
+        args = train.parse_args(["--data", seq, "--out", os.path.join(self.root, "run"),
+                                 "--crop-batch", "4", "--verifier-samples", listed,
+                                 "--verifier-batch", "6"])
+        data = train.Data(args, 3, log=lambda *_: None)
+        batch = data.crop_arrays(np.random.default_rng(1))
+        self.assertEqual(batch["image"].shape[0], 10)
+        np.testing.assert_array_equal(batch["full"], [True] * 4 + [False] * 6)
+        self.assertTrue((batch["vehicle"][:4] == 1).all())
+        self.assertTrue((batch["type"][4:] == -1).all() and np.isnan(batch["gamma"][4:]).all())
+        net = CropNet(n_s=3, verifier=True)
+        self.assertEqual(net.output_names()[-1], "vehicle_logit")
+        self.assertNotIn("vehicle_logit", CropNet(n_s=3).output_names())
+        tb = train.to_device(batch, "cpu")
+        total, terms = losses.crop_loss(net(tb["input"]), tb, lambda p, g: (p - g).abs().mean())
+        self.assertIn("vehicle", terms)
+        self.assertTrue(math.isfinite(float(total)))
+        # Export: the int8 calibration of a verifier crop network sees background crops too.
+        from detector import export
+
+        cal = train.parse_args(["--data", seq, "--out", "x"])  # any namespace with the fields
+        cal.calib_data, cal.calib_real, cal.calib_real_split = [seq], None, None
+        cal.calib_count, cal.working_width, cal.calib_verifier_samples = 2, 128, [listed]
+        _, plain = export.calibration_images(cal, (128, 128), 3, np.random.default_rng(0))
+        _, mixed = export.calibration_images(cal, (128, 128), 3, np.random.default_rng(0),
+                                             verifier=True)
+        self.assertGreater(len(mixed), len(plain))
+        np.testing.assert_array_equal(mixed[0], plain[0])  # interleaved: vehicle, background, ...
+        bad = os.path.join(self.root, "bad.csv")
+        with open(bad, "w") as f:
+            f.write(",".join(mine_negatives.OUT_COLUMNS) + "\n")
+            f.write(f"{frame.image_path},60,60,0.7,30,12,0.2,0.05,2\n")
+        with self.assertRaises(SystemExit) as e:
+            train.read_verifier_samples(bad)
+        self.assertIn("bad.csv:2: label must be 0 or 1", str(e.exception))
+
+    def test_head_only_training_leaves_the_other_outputs_as_they_were(self):
+        import torch
+
+        seq = os.path.join(self.root, "seq_4")
+        write_synthetic_sequence(seq, frames=2)
+        frame = read_sequence(seq)[0]
+        listed = os.path.join(self.root, "verifier.csv")
+        with open(listed, "w") as f:
+            f.write(",".join(mine_negatives.OUT_COLUMNS) + "\n")
+            f.write(f"{frame.image_path},60,60,0.7,30,12,0.2,0.05,0\n")
+        first = os.path.join(self.root, "first")
+        with redirect_stdout(io.StringIO()):
+            train.train(train.parse_args(tiny_run_args(seq, first, 1) + ["--max-steps", "1"]))
+            second = os.path.join(self.root, "second")
+            train.train(train.parse_args(
+                tiny_run_args(seq, second, 1) + ["--max-steps", "3", "--crop-only", "--init-from",
+                                                 os.path.join(first, "checkpoint.pt"),
+                                                 "--verifier-samples", listed,
+                                                 "--verifier-head-only"]))
+        before = torch.load(os.path.join(first, "checkpoint.pt"))["crop"]
+        after = torch.load(os.path.join(second, "checkpoint.pt"))["crop"]
+        self.assertEqual(set(after) - set(before), {"vehicle_logit.weight", "vehicle_logit.bias"})
+        for k, v in before.items():  # weights and batch-norm statistics alike
+            self.assertTrue(torch.equal(v, after[k]), k)
+        with self.assertRaises(SystemExit) as e:
+            train.train(train.parse_args(tiny_run_args(seq, second, 1) + [
+                "--verifier-samples", listed, "--verifier-head-only"]))
+        self.assertIn("--verifier-head-only needs", str(e.exception))
 
 
 if __name__ == "__main__":
