@@ -129,7 +129,7 @@ perception:
   apply_refine: false
   crop_mirror_average: false
   crop_mirror_refine: false
-  crop_min_vehicle_probability: 0.3
+  crop_min_vehicle_probability: 0.25
   fixed_gsd_m: 0.03
   nominal_car_length_m: 4.4
   lift_height_share: 0.4
@@ -671,7 +671,7 @@ const MalformedCase kMalformedCases[] = {
      "expected true or false, got '1'"},
     {"crop_mirror_refine: false", "crop_mirror_refine: yes please", "perception.crop_mirror_refine",
      "expected true or false, got 'yes please'"},
-    {"crop_min_vehicle_probability: 0.3", "crop_min_vehicle_probability: 1.5",
+    {"crop_min_vehicle_probability: 0.25", "crop_min_vehicle_probability: 1.5",
      "perception.crop_min_vehicle_probability", "must be in [0, 1], got 1.5"},
     {"apply_refine: false", "apply_refine: []", "perception.apply_refine",
      "expected true or false, got a sequence of 0 element(s)"},
@@ -1262,7 +1262,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_FALSE(p.applyRefine);
   EXPECT_FALSE(p.cropMirrorAverage);
   EXPECT_FALSE(p.cropMirrorRefine);
-  EXPECT_DOUBLE_EQ(p.cropMinVehicleProbability, 0.3);
+  EXPECT_DOUBLE_EQ(p.cropMinVehicleProbability, 0.25);
   EXPECT_DOUBLE_EQ(p.fixedGsd_m, 0.03);
   EXPECT_DOUBLE_EQ(p.nominalCarLength_m, 4.4);
   EXPECT_DOUBLE_EQ(p.liftHeightShare, 0.4);

@@ -121,6 +121,7 @@ TEST(DetectionStage, VerifierDropsOnlyDetectionsBelowTheMinimumVehicleProbabilit
   ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}, &why)) << why;
   ASSERT_EQ(pre.process(sceneFrame()), preprocess::PreprocessStatus::Ok);
   DetectionStageOptions options = stageOptions(1);
+  options.maxCrops = kMaxDetectionsPerFrame;  // every detection gets its crop run
   DetectionStage all;
   ASSERT_TRUE(all.init(options, static_cast<int>(pre.tileCount()), &why)) << why;
   constexpr float kMin = 0.5F;
@@ -143,21 +144,20 @@ TEST(DetectionStage, VerifierDropsOnlyDetectionsBelowTheMinimumVehicleProbabilit
     }
     return;
   }
-  // Every kept detection passed, and each of them is one the unfiltered run found too.
+  // The synthetic rectangles at score threshold 0 are mostly no vehicles: some go. Each one
+  // the unfiltered run kept below the minimum is among them (the refined-duplicate suppression
+  // comes after the verifier, so a box it removed there may be rejected too, or may survive
+  // when the box it duplicated was rejected).
   int below = 0;
   for (std::size_t i = 0; i < countAll; ++i) {
+    ASSERT_FALSE(std::isnan(outAll[i].vehicleProbability)) << "detection " << i;
     below += outAll[i].vehicleProbability < kMin ? 1 : 0;
   }
-  // (A rejected box may also have been a refined duplicate that the unfiltered run removed.)
+  EXPECT_GT(below, 0);
   EXPECT_GE(verified.stats().rejectedByVerifier, below);
+  EXPECT_LT(countVerified, countAll);
   for (std::size_t i = 0; i < countVerified; ++i) {
-    EXPECT_GE(outVerified[i].vehicleProbability, kMin);
-    bool found = false;
-    for (std::size_t k = 0; k < countAll && !found; ++k) {
-      found =
-          outAll[k].box.cx == outVerified[i].box.cx && outAll[k].box.cy == outVerified[i].box.cy;
-    }
-    EXPECT_TRUE(found) << "detection " << i;
+    EXPECT_GE(outVerified[i].vehicleProbability, kMin) << "detection " << i;
   }
 }
 

@@ -66,8 +66,9 @@ options:
                         refinement (default: both, as the app's perception.crop_mirror_refine)
   --min-vehicle-probability P
                         drop detections the crop network's verifier gives a lower vehicle
-                        probability, [0, 1] (default 0: keep all, as the app's
-                        perception.crop_min_vehicle_probability; no effect without a verifier)
+                        probability, [0, 1] (default 0.3, as the app's
+                        perception.crop_min_vehicle_probability; 0 keeps all; no effect
+                        without a verifier)
   --refine-large-length apply the second stage's length to vehicles most likely large too
                         (default: they keep the first stage's length; the crop shows a part)
   --help                this text
@@ -93,7 +94,7 @@ struct Options {
   bool mirrorAverage = true;
   bool mirrorRefine = true;
   bool refineLargeLength = false;
-  double minVehicleProbability = 0.0;
+  double minVehicleProbability = 0.3;  // as the app's perception.crop_min_vehicle_probability
 };
 
 [[noreturn]] void usageError(const std::string& message) {

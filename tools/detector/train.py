@@ -298,11 +298,11 @@ class Data:
         self.verifier = [read_verifier_samples(p) for p in args.verifier_samples]
         self.verifier = {label: [r for rows in self.verifier for r in rows if r[-1] == label]
                          for label in (0, 1)} if self.verifier else {}
-        self.empty_frames = [i for i, s in enumerate(self.seq) if np.isfinite(s.gsd_m).any()]
+        self.gsd_frames = [i for i, s in enumerate(self.seq) if np.isfinite(s.gsd_m).any()]
         self.verifier_images = collections.OrderedDict()  # path -> image, least recent first
         if self.verifier:
             log(f"verifier: {len(self.verifier[0])} background and {len(self.verifier[1])} vehicle "
-                f"boxes listed, random background from {len(self.empty_frames)} frames")
+                f"boxes listed, random background from {len(self.gsd_frames)} frames")
         log(f"data: {len(self.seq)} sequence/DOTA frames ({sum(len(s) for s in self.seq)} objects), "
             f"{len(self.real)} real training images, {len(self.real_val)} real validation images, "
             f"{len(self.val_seq)} validation frames, {len(self.crop_pool)} typed objects for crops"
@@ -425,9 +425,9 @@ class Data:
         (jittered like the ground-truth crops) or a car-sized box at a random place of a
         training frame that overlaps no vehicle."""
         a = self.args
-        if self.empty_frames and rng.random() < a.verifier_random_share:
+        if self.gsd_frames and rng.random() < a.verifier_random_share:
             for _ in range(20):
-                s = self._load("seq", self.empty_frames[int(rng.integers(0, len(self.empty_frames)))])
+                s = self._load("seq", self.gsd_frames[int(rng.integers(0, len(self.gsd_frames)))])
                 gsd = float(np.nanmedian(s.gsd_m))
                 h, w = s.image.shape[:2]
                 box = np.array([rng.uniform(0, w), rng.uniform(0, h), 4.5 / gsd, 1.9 / gsd,
