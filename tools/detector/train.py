@@ -20,7 +20,10 @@ Contract
   long side taken as a 4.5 m car). Training tiles are ``--tile`` px squares.
 * Every step trains the Detector on a batch of tiles and (unless ``--no-crop``) the CropNet on
   a batch of jittered ground-truth crops (crops.py); losses in losses.py; the shape loss is
-  V_L1 or V_L2 (``--shape-loss``).
+  V_L1 or V_L2 (``--shape-loss``). With ``--verifier-samples`` the CropNet gets its verifier
+  head (vehicle or not): each crop batch adds ``--verifier-batch`` crops of mined boxes and of
+  random vehicle-free places, which train that head only (``--verifier-head-only``: nothing
+  else).
 * Output (never inside the repository): RUNDIR/checkpoint.pt (every
   ``--checkpoint-minutes`` and at the end; atomic replace), RUNDIR/train_log.jsonl (losses),
   RUNDIR/split.json, RUNDIR/metrics.json (validation at the end), RUNDIR/args.json.
