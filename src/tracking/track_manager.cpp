@@ -187,9 +187,13 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
       heading = geometry::wrapTwoPi(heading + geometry::kPi);
       ++out.headingCorrections;
       ++report.headingCorrections;
-      // Disagreement counts against the track only while motion cannot vouch for it.
-      slot.disagreeRun = movingForward ? 0 : slot.disagreeRun + 1;
-    } else {
+      // Disagreement counts against the track only while motion cannot vouch for it, and
+      // only from whole vehicles: of a vehicle cut by the border the detector may see just
+      // one end, and tells front from back worst there.
+      if (!partial(d)) {
+        slot.disagreeRun = movingForward ? 0 : slot.disagreeRun + 1;
+      }
+    } else if (!partial(d)) {
       slot.disagreeRun = 0;
     }
   }
@@ -253,7 +257,12 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
     out.status = TrackStatus::Confirmed;
     ++report.reacquisitions;
   } else if (out.status == TrackStatus::Tentative && out.score >= config_.confirmMinScore) {
-    const bool standing = std::abs(slot.motion.state()[kV]) < config_.movingSpeed_mps &&
+    // Not for a large vehicle: the first stage may box only the cab of a truck or bus, and
+    // such boxes can stand still for frames while the vehicle drives on.
+    const auto best = std::max_element(slot.typeLog.begin(), slot.typeLog.end());
+    const bool large =
+        static_cast<shape::VehicleType>(best - slot.typeLog.begin()) == shape::VehicleType::Large;
+    const bool standing = !large && std::abs(slot.motion.state()[kV]) < config_.movingSpeed_mps &&
                           slot.wholeHits == out.hits && out.hits >= config_.confirmHitsStanding;
     if (standing ||
         (out.hits >= config_.confirmHits &&

@@ -14,7 +14,7 @@
 //   Tentative -> Confirmed after confirmHits matched frames of which confirmWholeHits were
 //              not partial (cut by the frame border), or after confirmHitsAnyway matches,
 //              or after confirmHitsStanding whole matches when its speed estimate is below
-//              movingSpeed_mps; in every case only while the track's score (the mean of its
+//              movingSpeed_mps and its fused type is not Large; in every case only while the track's score (the mean of its
 //              detections' scores, TrackState::score) is at least confirmMinScore
 //              deleted when unmatched for longer than maxTentativeGap_s
 //   Confirmed -> Lost when a frame brings no match; Lost -> Confirmed (same id) when a
@@ -25,7 +25,8 @@
 // Heading: a matched detection whose heading differs from the track's by more than 90
 // degrees is turned by 180 degrees before the update (counted). The track itself turns
 // when it moves backwards faster than movingSpeed_mps with confidence (cars drive forwards),
-// or, when it is not moving, when flipVotes detections in a row disagreed with it.
+// or, when it is not moving, when flipVotes whole detections in a row disagreed with it
+// (partial ones neither count nor break the run).
 // Type: p(type) ~ prod_frames p_det(type)^typeEvidenceWeight (a tempered naive Bayes in log
 // space, floored at typeFloor: frames of one car are not independent). Shape gamma, length
 // and width: score-weighted means with the total weight capped at shapeMaxWeight, so a slow

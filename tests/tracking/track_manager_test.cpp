@@ -417,6 +417,48 @@ TEST(TrackManager, StandingCarBornFlippedTurnsOnAgreeingDetections) {
   EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnuRad, 0.0), 0.1);
 }
 
+// A vehicle cut by the frame's border (partial detections) whose boxes point the other way
+// keeps its heading: the detector may see one end of it only. Whole boxes do turn it.
+TEST(TrackManager, PartialDetectionsDoNotVoteOnTheDirection) {
+  TrackManager m;
+  ASSERT_TRUE(m.init(smallConfig()));
+  std::int64_t t = 0;
+  m.step(t, std::vector{car(0.0, 0.0, 0.0, t)});
+  for (int k = 1; k < 10; ++k) {
+    t += kFrameNs;
+    WorldDetection d = car(0.0, 0.0, geometry::kPi, t);
+    d.insideShare = 0.8;  // below partialInsideShare
+    m.step(t, std::vector{d});
+  }
+  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnuRad, 0.0), 0.1);
+  for (int k = 0; k < 3; ++k) {
+    t += kFrameNs;
+    m.step(t, std::vector{car(0.0, 0.0, geometry::kPi, t)});
+  }
+  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnuRad, geometry::kPi), 0.1);
+}
+
+// A large vehicle standing in place is not confirmed on its second box: the first stage may box
+// a truck's cab, which can stand still for frames while the truck drives; it waits for
+// confirmHits as a moving vehicle does.
+TEST(TrackManager, LargeVehicleIsNotConfirmedAsStandingEarly) {
+  TrackerConfig config = smallConfig();
+  ASSERT_EQ(config.confirmHitsStanding, 2);
+  ASSERT_EQ(config.confirmHits, 3);
+  TrackManager m;
+  ASSERT_TRUE(m.init(config));
+  std::int64_t t = 0;
+  for (int k = 0; k < 3; ++k, t += kFrameNs) {
+    WorldDetection d = car(5.0, 3.0, 1.0, t);
+    d.lengthM = 9.0;
+    d.typeProbabilities.fill(0.02f);
+    d.typeProbabilities[static_cast<std::size_t>(shape::VehicleType::Large)] = 0.88f;
+    ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{d}).hasValue());
+    EXPECT_EQ(m.tracks()[0].status, k < 2 ? TrackStatus::Tentative : TrackStatus::Confirmed)
+        << "match " << k + 1;
+  }
+}
+
 TEST(TrackManager, TypeIsFusedFromProbabilities) {
   TrackManager m;
   ASSERT_TRUE(m.init(smallConfig()));
