@@ -14,8 +14,9 @@
 //   Tentative -> Confirmed after confirmHits matched frames of which confirmWholeHits were
 //              not partial (cut by the frame border), or after confirmHitsAnyway matches,
 //              or after confirmHitsStanding whole matches when its speed estimate is below
-//              movingSpeed_mps and its fused type is not Large; in every case only while the track's score (the mean of its
-//              detections' scores, TrackState::score) is at least confirmMinScore
+//              movingSpeed_mps and its fused type is not Large; in every case only while
+//              the track's score (the mean of its detections' scores, TrackState::score)
+//              is at least confirmMinScore
 //              deleted when unmatched for longer than maxTentativeGap_s
 //   Confirmed -> Lost when a frame brings no match; Lost -> Confirmed (same id) when a
 //              detection matches again (re-acquisition after an occlusion); Lost -> deleted

@@ -210,21 +210,27 @@ class Verifier(unittest.TestCase):
                                      self.dets, "--out", os.path.join(self.root, "v.csv")])
         self.assertIn("--gsd-m", err.getvalue())
 
-    def test_training_batch_holds_verifier_crops_and_the_loss_uses_them(self):
-        import torch
+    def sequence_and_list(self, name, rows):
+        """A synthetic sequence and a verifier list of ``rows`` (the columns after image and
+        the centre: score, box, GSD, label) on its first frame: (sequence, frame, list path)."""
+        seq = os.path.join(self.root, name)
+        write_synthetic_sequence(seq, frames=2)
+        frame = read_sequence(seq)[0]
+        listed = os.path.join(self.root, name + "_verifier.csv")
+        with open(listed, "w") as f:
+            f.write(",".join(mine_negatives.OUT_COLUMNS) + "\n")
+            for row in rows:
+                f.write(f"{frame.image_path},{row}\n")
+        return seq, frame, listed
 
+    def test_training_batch_holds_verifier_crops_and_the_loss_uses_them(self):
         from detector import losses
         from detector.model import CropNet
 
-        seq = os.path.join(self.root, "seq_3")
-        write_synthetic_sequence(seq, frames=2)
-        frame = read_sequence(seq)[0]
-        listed = os.path.join(self.root, "verifier.csv")
-        with open(listed, "w") as f:
-            f.write(",".join(mine_negatives.OUT_COLUMNS) + "\n")
-            f.write(f"{frame.image_path},60,60,0.7,30,12,0.2,0.05,0\n")
-            f.write(f"{frame.image_path},60,60,0.7,30,12,0.2,nan,0\n")  # no GSD: skipped
-            f.write(f"{frame.image_path},30,30,0.9,30,12,0.0,0.05,1\n")
+        seq, frame, listed = self.sequence_and_list("seq_3", [
+            "60,60,0.7,30,12,0.2,0.05,0",
+            "60,60,0.7,30,12,0.2,nan,0",  # no GSD: skipped
+            "30,30,0.9,30,12,0.0,0.05,1"])
         self.assertEqual([r[-1] for r in train.read_verifier_samples(listed)], [0, 1])
         args = train.parse_args(["--data", seq, "--out", os.path.join(self.root, "run"),
                                  "--crop-batch", "4", "--verifier-samples", listed,
@@ -264,13 +270,7 @@ class Verifier(unittest.TestCase):
     def test_head_only_training_leaves_the_other_outputs_as_they_were(self):
         import torch
 
-        seq = os.path.join(self.root, "seq_4")
-        write_synthetic_sequence(seq, frames=2)
-        frame = read_sequence(seq)[0]
-        listed = os.path.join(self.root, "verifier.csv")
-        with open(listed, "w") as f:
-            f.write(",".join(mine_negatives.OUT_COLUMNS) + "\n")
-            f.write(f"{frame.image_path},60,60,0.7,30,12,0.2,0.05,0\n")
+        seq, _, listed = self.sequence_and_list("seq_4", ["60,60,0.7,30,12,0.2,0.05,0"])
         first = os.path.join(self.root, "first")
         with redirect_stdout(io.StringIO()):
             train.train(train.parse_args(tiny_run_args(seq, first, 1) + ["--max-steps", "1"]))
