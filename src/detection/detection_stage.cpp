@@ -208,7 +208,7 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
   // without a verifier probability stays).
   std::size_t verified = kept;
   const float minVehicle = options_.secondStage.minVehicleProbability;
-  if (secondStage && minVehicle > 0.0F) {
+  if (secondStage && minVehicle > 0.0F && cropper_.hasVerifier()) {
     verified = 0;
     for (std::size_t i = 0; i < kept; ++i) {
       if (!(out[i].vehicleProbability < minVehicle)) {

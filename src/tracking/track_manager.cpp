@@ -14,6 +14,12 @@ constexpr double kNsPerS = 1e9;
 constexpr double kWheelbasePerLength = 0.60;
 constexpr double kRearAxlePerLength = 0.28;
 
+// The type with the largest fused log-probability.
+shape::VehicleType mostLikelyType(const std::array<double, shape::kVehicleTypeCount>& typeLog) {
+  const auto best = std::max_element(typeLog.begin(), typeLog.end());
+  return static_cast<shape::VehicleType>(best - typeLog.begin());
+}
+
 bool valid(const WorldDetection& d) {
   if (!std::isfinite(d.centreEnu.x()) || !std::isfinite(d.centreEnu.y()) ||
       !std::isfinite(d.headingEnuRad) || !std::isfinite(d.lengthM) || !std::isfinite(d.widthM) ||
@@ -166,8 +172,7 @@ void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t times
     out.shape = d.shape;
   }
   // The type decides whether the ASM applies; set it before the geometry.
-  const auto best = std::max_element(slot.typeLog.begin(), slot.typeLog.end());
-  out.type = static_cast<shape::VehicleType>(best - slot.typeLog.begin());
+  out.type = mostLikelyType(slot.typeLog);
   slot.motion.initialise(d.centreEnu, d.headingEnuRad, kWheelbasePerLength * d.lengthM,
                          kRearAxlePerLength * d.lengthM, config_.noise, alongAxisFactor(d));
   updateGeometry(slot);
@@ -259,9 +264,7 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   } else if (out.status == TrackStatus::Tentative && out.score >= config_.confirmMinScore) {
     // Not for a large vehicle: the first stage may box only the cab of a truck or bus, and
     // such boxes can stand still for frames while the vehicle drives on.
-    const auto best = std::max_element(slot.typeLog.begin(), slot.typeLog.end());
-    const bool large =
-        static_cast<shape::VehicleType>(best - slot.typeLog.begin()) == shape::VehicleType::Large;
+    const bool large = mostLikelyType(slot.typeLog) == shape::VehicleType::Large;
     const bool standing = !large && std::abs(slot.motion.state()[kV]) < config_.movingSpeed_mps &&
                           slot.wholeHits == out.hits && out.hits >= config_.confirmHitsStanding;
     if (standing ||

@@ -184,8 +184,7 @@ def main(argv=None) -> int:
     else:
         if ck.get("crop") is None:
             raise SystemExit(f"{args.checkpoint}: the run has no crop net (--no-crop)")
-        net = CropNet(n_s=ck.get("n_s", asm.n_s), verifier="vehicle_logit.weight" in ck["crop"])
-        net.load_state_dict(ck["crop"])
+        net = CropNet.from_state_dict(ck["crop"], n_s=ck.get("n_s", asm.n_s))
         res = evaluate(net, asm, args.data, args.jitter, args.seed)
     res.update({"checkpoint": args.checkpoint, "steps": ck.get("step"),
                 "shape_loss": ck.get("shape_loss"), "label": args.label})

@@ -101,8 +101,7 @@ def load_run(checkpoint: str):
     det.load_state_dict(ck["detector"])
     crop = None
     if ck.get("crop") is not None:
-        crop = CropNet(n_s=ck["n_s"], verifier="vehicle_logit.weight" in ck["crop"])
-        crop.load_state_dict(ck["crop"])
+        crop = CropNet.from_state_dict(ck["crop"], n_s=ck["n_s"])
     return ck, det.eval(), (crop.eval() if crop else None)
 
 

@@ -199,6 +199,14 @@ class CropNet(nn.Module):
             out["vehicle_logit"] = self.vehicle_logit(f)
         return out
 
+    @classmethod
+    def from_state_dict(cls, state: Dict[str, torch.Tensor], n_s: int) -> "CropNet":
+        """A CropNet with the weights of a checkpoint's ``crop`` entry, with the verifier head
+        when the checkpoint has one."""
+        net = cls(n_s=n_s, verifier="vehicle_logit.weight" in state)
+        net.load_state_dict(state)
+        return net
+
     def output_names(self):
         return ["type_logits", "shape", "flip_logit", "refine"] + (
             ["vehicle_logit"] if self.verifier else [])
