@@ -189,6 +189,7 @@ void TrackingEvaluator::addCountedFrame(std::span<const TruthVehicle> truth,
   for (std::size_t g = 0; g < truth.size(); ++g) {
     truthKeys[g] = truthKey(truth[g].id);
     truthType_.emplace(truthKeys[g], truth[g].type);
+    truthId_.emplace(truthKeys[g], truth[g].id);
     truthPositions[g] = truth[g].positionEnu;
     truthObjects[g].id = truthKeys[g];
     truthObjects[g].position = truth[g].positionEnu;
@@ -196,6 +197,8 @@ void TrackingEvaluator::addCountedFrame(std::span<const TruthVehicle> truth,
   for (std::size_t h = 0; h < tracks.size(); ++h) {
     trackKeys[h] = trackKey(tracks[h].id);
     TrackRecord& record = tracks_[trackKeys[h]];
+    record.sequence = sequence_;
+    record.id = tracks[h].id;
     record.lastType = tracks[h].type;
     trackPositions[h] = tracks[h].centreEnu;
     trackObjects[h].id = trackKeys[h];
@@ -222,10 +225,15 @@ void TrackingEvaluator::addCountedFrame(std::span<const TruthVehicle> truth,
     ++matchOrder_;
     if (moving) {
       const double e = std::abs(track.speedMps) - std::abs(t.speedMps);
+      const int flip = isFlip(t.headingEnuRad, track.headingEnuRad) ? 1 : 0;
       speedSquaredSum_ += e * e;
       ++speedSamples_;
       ++trackHeadingSamples_;
-      trackHeadingFlips_ += isFlip(t.headingEnuRad, track.headingEnuRad) ? 1 : 0;
+      trackHeadingFlips_ += flip;
+      TrackRecord& record = tracks_[trackKeys[h]];
+      record.speedSquaredSum += e * e;
+      ++record.speedSamples;
+      record.headingFlips += flip;
     }
     if (t.type >= 0 && track.type >= 0) {
       ++trackFrameTypeSamples_;
@@ -301,6 +309,7 @@ TrackingSummary TrackingEvaluator::summary() const {
   s.ignoredDetections = ignoredDetections_;
   s.speedSamples = speedSamples_;
   s.speedRmse_mps = speedSamples_ > 0 ? std::sqrt(speedSquaredSum_ / speedSamples_) : kNaN;
+  s.speedSquaredErrorSum = speedSquaredSum_;
   s.trackHeadingSamples = trackHeadingSamples_;
   s.trackHeadingFlips = trackHeadingFlips_;
   s.trackFlipShare = share(trackHeadingFlips_, trackHeadingSamples_);
@@ -326,6 +335,18 @@ TrackingSummary TrackingEvaluator::summary() const {
       ++s.typedTracks;
       s.typeCorrectTracks += truthType == record.lastType ? 1 : 0;
     }
+    if (record.speedSamples > 0) {
+      s.largestSpeedErrors.push_back({record.sequence, record.id, truthId_.at(best->first),
+                                      truthType, record.speedSamples, record.speedSquaredSum,
+                                      record.headingFlips});
+    }
+  }
+  std::sort(s.largestSpeedErrors.begin(), s.largestSpeedErrors.end(),
+            [](const TrackSpeedError& a, const TrackSpeedError& b) {
+              return a.squaredErrorSum > b.squaredErrorSum;
+            });
+  if (s.largestSpeedErrors.size() > static_cast<std::size_t>(options_.largestSpeedErrors)) {
+    s.largestSpeedErrors.resize(static_cast<std::size_t>(std::max(0, options_.largestSpeedErrors)));
   }
   s.trackTypeOa1 = share(s.typeCorrectTracks, s.typedTracks);
   s.trackFrameTypeSamples = trackFrameTypeSamples_;

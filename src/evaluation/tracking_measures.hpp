@@ -23,6 +23,9 @@
 //   - heading flips: share of matched track-frames (detections) of moving vehicles whose
 //     heading differs from the truth's by more than 90 degrees; detections whose front/back is
 //     unknown are left out and counted;
+//   - the tracks that carry the speed error: per confirmed track its moving track-frames, sum
+//     of squared speed errors and heading flips; summary() lists the largest sums (diagnosis:
+//     one badly tracked vehicle can decide the RMSE);
 //   - type OA-1 per track: each track's last fused type against the type of the truth vehicle
 //     it was matched to in most frames (ties: the one matched first); tracks never matched are
 //     counted apart. Also per track-frame (the type of each matched track row) and per frame
@@ -74,9 +77,21 @@ struct DetectionObservation {
 
 struct TrackingOptions {
   double matchDistance_m = kDefaultTrackMatchDistance_m;
+  int largestSpeedErrors = 10;  // how many tracks TrackingSummary::largestSpeedErrors lists
   double movingSpeed_mps = kDefaultMovingSpeed_mps;
   double mostlyTrackedShare = 0.8;  // matched in >= this share of its frames
   double mostlyLostShare = 0.2;     // matched in <= this share
+};
+
+// One track's part of the speed error (TrackingSummary::largestSpeedErrors).
+struct TrackSpeedError {
+  int sequence = 0;            // index of the sequence (beginSequence order)
+  std::int64_t trackId = 0;    // track_id in that sequence
+  std::int64_t vehicleId = 0;  // the truth vehicle matched in most frames
+  int vehicleType = -1;        // its type, -1 unknown
+  int samples = 0;             // matched track-frames of moving vehicles
+  double squaredErrorSum = 0.0;
+  int headingFlips = 0;
 };
 
 struct TrackingSummary {
@@ -91,6 +106,8 @@ struct TrackingSummary {
   // speed (matched track-frames of moving vehicles)
   int speedSamples = 0;
   double speedRmse_mps = 0.0;
+  double speedSquaredErrorSum = 0.0;
+  std::vector<TrackSpeedError> largestSpeedErrors;  // largest squaredErrorSum first
   // heading > 90 degrees on moving vehicles
   int trackHeadingSamples = 0;
   int trackHeadingFlips = 0;
@@ -129,7 +146,12 @@ class TrackingEvaluator {
 
  private:
   struct TrackRecord {
+    int sequence = 0;
+    std::int64_t id = 0;
     int lastType = -1;
+    int speedSamples = 0;
+    double speedSquaredSum = 0.0;
+    int headingFlips = 0;
     std::map<int, std::pair<int, int>> truthFrames;  // truth key -> (frames matched, order)
   };
   int truthKey(std::int64_t id);
@@ -149,6 +171,7 @@ class TrackingEvaluator {
   std::map<std::pair<int, std::int64_t>, int> truthKeys_;  // (sequence, truth id) -> key
   std::map<std::pair<int, std::int64_t>, int> trackKeys_;  // (sequence, track id) -> key
   std::map<int, int> truthType_;                           // truth key -> type
+  std::map<int, std::int64_t> truthId_;                    // truth key -> truth id
   std::map<int, int> previousMatch_;                       // truth key -> track key
   std::map<int, TrackRecord> tracks_;                      // track key -> record
   int matchOrder_ = 0;

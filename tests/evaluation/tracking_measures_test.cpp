@@ -215,6 +215,50 @@ TEST(TrackingMeasures, SpeedAndHeadingOfMovingVehiclesOnly) {
   EXPECT_DOUBLE_EQ(s.detectorTypeOa1, 16.0 / 20.0);  // B called an SUV in 4 frames
 }
 
+TEST(TrackingMeasures, LargestSpeedErrorsListTheTracksThatCarryTheRmse) {
+  // Three moving vehicles in two sequences: tracks off by 1, 3 and 0.5 m/s; one parked vehicle
+  // (no speed samples: not listed). The list holds the largest sums first, capped by the option.
+  TrackingOptions options;
+  options.largestSpeedErrors = 2;
+  TrackingEvaluator e(options);
+  e.beginSequence();
+  for (int f = 0; f < 4; ++f) {
+    const TruthVehicle a = vehicle(1, f, 0.0, 10.0);
+    const TruthVehicle b = vehicle(2, f, 10.0, 5.0, kVan, kPi);
+    const TruthVehicle parked = vehicle(3, 40.0, 0.0, 0.0);
+    TrackObservation onA = trackOn(11, a);
+    onA.speedMps = 11.0;
+    TrackObservation onB = trackOn(12, b);
+    onB.speedMps = -8.0;  // |-8| - 5 = 3 m/s
+    onB.headingEnuRad = f < 1 ? 0.0 : kPi;
+    TrackObservation onParked = trackOn(13, parked);
+    onParked.speedMps = 2.0;
+    e.addFrame(std::vector<TruthVehicle>{a, b, parked},
+               std::vector<TrackObservation>{onA, onB, onParked});
+  }
+  e.beginSequence();
+  for (int f = 0; f < 2; ++f) {
+    const TruthVehicle c = vehicle(1, f, 0.0, 10.0, kSuv);
+    TrackObservation onC = trackOn(11, c);
+    onC.speedMps = 9.5;
+    e.addFrame(std::vector<TruthVehicle>{c}, std::vector<TrackObservation>{onC});
+  }
+  const TrackingSummary s = e.summary();
+  EXPECT_DOUBLE_EQ(s.speedSquaredErrorSum, 4 * 1.0 + 4 * 9.0 + 2 * 0.25);
+  ASSERT_EQ(s.largestSpeedErrors.size(), 2U);
+  const TrackSpeedError& first = s.largestSpeedErrors[0];
+  EXPECT_EQ(first.sequence, 0);
+  EXPECT_EQ(first.trackId, 12);
+  EXPECT_EQ(first.vehicleId, 2);
+  EXPECT_EQ(first.vehicleType, kVan);
+  EXPECT_EQ(first.samples, 4);
+  EXPECT_DOUBLE_EQ(first.squaredErrorSum, 36.0);
+  EXPECT_EQ(first.headingFlips, 1);
+  EXPECT_EQ(s.largestSpeedErrors[1].trackId, 11);
+  EXPECT_EQ(s.largestSpeedErrors[1].sequence, 0);
+  EXPECT_DOUBLE_EQ(s.largestSpeedErrors[1].squaredErrorSum, 4.0);
+}
+
 TEST(TrackingMeasures, TypePerTrackUsesTheLastFusedTypeAndTheMostMatchedVehicle) {
   TrackingEvaluator e;
   for (int f = 0; f < 6; ++f) {

@@ -265,6 +265,30 @@ std::string samplesCell(int samples) {
   return samples >= 0 ? std::to_string(samples) : std::string();
 }
 
+// The tracks that carry most of the speed error: one badly tracked vehicle can decide the RMSE.
+void writeLargestSpeedErrors(std::ostream& md, const ReportContext& context) {
+  const evaluation::TrackingSummary& t = context.tracking;
+  if (t.largestSpeedErrors.empty() || !(t.speedSquaredErrorSum > 0.0)) {
+    return;
+  }
+  md << "\n### Largest speed errors (confirmed tracks on moving vehicles)\n\n"
+        "| input | track | vehicle | type | moving track-frames | speed RMSE | share of the "
+        "squared error | heading flips |\n| --- | ---: | ---: | --- | ---: | ---: | ---: | ---: "
+        "|\n";
+  for (const evaluation::TrackSpeedError& e : t.largestSpeedErrors) {
+    const auto seq = static_cast<std::size_t>(e.sequence);
+    const std::string label =
+        seq < context.trackingInputs.size() ? context.trackingInputs[seq].label : "?";
+    md << "| " << label << " | " << e.trackId << " | " << e.vehicleId << " | "
+       << (e.vehicleType >= 0 ? shape::toString(static_cast<shape::VehicleType>(e.vehicleType))
+                              : "unknown")
+       << " | " << e.samples << " | "
+       << display(std::sqrt(e.squaredErrorSum / e.samples), Unit::MetrePerSecond) << " | "
+       << display(e.squaredErrorSum / t.speedSquaredErrorSum, Unit::Percent) << " | "
+       << e.headingFlips << " |\n";
+  }
+}
+
 std::string trackingMarkdown(const ReportContext& context) {
   const evaluation::TrackingSummary& t = context.tracking;
   const bool detector = t.detectorFrames > 0;
@@ -327,6 +351,7 @@ std::string trackingMarkdown(const ReportContext& context) {
      << (detector ? std::to_string(t.detectorTypeSamples) : std::string()) << " |\n";
   md << "| type OA-1 per track-frame | " << display(t.trackFrameTypeOa1, Unit::Percent) << " | "
      << t.trackFrameTypeSamples << " | | |\n";
+  writeLargestSpeedErrors(md, context);
   if (detector) {
     md << "\nDetector alone: " << t.detections << " lifted detections in the evaluated frames, "
        << t.detectionsMatched << " matched to a vehicle; " << t.detectorDirectionUnknown
@@ -378,7 +403,19 @@ std::string trackingJson(const ReportContext& context) {
        << ", \"idf1\": " << jsonNumber(e.mot.idf1) << ", \"id_switches\": " << e.mot.idSwitches
        << ", \"speed_rmse_mps\": " << jsonNumber(e.speedRmse_mps) << "}";
   }
-  js << "\n    ]\n  }";
+  js << "\n    ],\n    \"largest_speed_errors\": [";
+  const evaluation::TrackingSummary& t = context.tracking;
+  for (std::size_t i = 0; i < t.largestSpeedErrors.size(); ++i) {
+    const evaluation::TrackSpeedError& e = t.largestSpeedErrors[i];
+    const auto seq = static_cast<std::size_t>(e.sequence);
+    js << (i == 0 ? "\n" : ",\n") << "      {\"input\": "
+       << jsonString(seq < context.trackingInputs.size() ? context.trackingInputs[seq].label : "")
+       << ", \"track_id\": " << e.trackId << ", \"vehicle_id\": " << e.vehicleId
+       << ", \"vehicle_type\": " << e.vehicleType << ", \"samples\": " << e.samples
+       << ", \"squared_error_sum\": " << jsonNumber(e.squaredErrorSum)
+       << ", \"heading_flips\": " << e.headingFlips << "}";
+  }
+  js << (t.largestSpeedErrors.empty() ? "]" : "\n    ]") << "\n  }";
   return js.str();
 }
 
