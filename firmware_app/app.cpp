@@ -161,6 +161,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   tracker.confirmWholeHits = t.confirmWholeHits;
   tracker.confirmHitsAnyway = t.confirmHitsAnyway;
   tracker.confirmHitsStanding = t.confirmHitsStanding;
+  tracker.confirmHitsLarge = t.confirmHitsLarge;
   tracker.confirmMinScore = t.confirmMinScore;
   tracker.partialInsideShare = t.partialInsideShare;
   tracker.partialAlongNoiseFactor = t.partialAlongNoiseFactor;

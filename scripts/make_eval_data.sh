@@ -18,7 +18,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 sets="sim_tune     5000 9  4  detector tuning (score threshold, calibration)
 sim_tune_b   5009 27 4  detector tuning, with sim_tune (verifier threshold, round 6 and 8 choices)
 sim_val      9000 13 4  detector held-out
-trk_tune     5100 3  60 tracker tuning
+trk_tune     5100 3  50 tracker tuning
 trk_tune2    5103 6  60 tracker tuning, with trk_tune (scripts/eval_tracking.sh sweeps)
 trk_tune3    5109 12 60 tracker tuning, a second set
 trk_val      9100 6  60 tracker held-out, first set

@@ -855,6 +855,7 @@ TrackingConfig readTracking(MapReader section) {
       section.integer("confirm_hits_anyway", kConfirmHitsRange, d.confirmHitsAnyway);
   t.confirmHitsStanding =
       section.integer("confirm_hits_standing", kConfirmHitsRange, d.confirmHitsStanding);
+  t.confirmHitsLarge = section.integer("confirm_hits_large", kConfirmHitsRange, d.confirmHitsLarge);
   t.confirmMinScore = section.number("confirm_min_score", kProbabilityRange, d.confirmMinScore);
   t.partialInsideShare =
       section.number("partial_inside_share", kProbabilityRange, d.partialInsideShare);

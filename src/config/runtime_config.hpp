@@ -86,6 +86,7 @@ struct TrackingConfig {
   int confirmWholeHits = 2;             // of the confirm_hits, detections not partial, [0, 100]
   int confirmHitsAnyway = 5;            // matches that confirm a track whatever they were, [1, 100]
   int confirmHitsStanding = 2;          // whole matches that confirm a standing track, [1, 100]
+  int confirmHitsLarge = 6;             // matches that confirm a large vehicle's track, [1, 100]
   double confirmMinScore = 0.0;         // mean track score needed to confirm, [0, 1]; 0 = off
   double partialInsideShare = 0.97;     // a detection with less of its box in the frame is partial
   double partialAlongNoiseFactor = 10.0;  // its along-axis position sigma factor, [1, 1000]

@@ -97,9 +97,10 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
     return fail("tracking: confirmMinScore must be in [0, 1]");
   }
   if (config.confirmWholeHits < 0 || config.confirmHitsAnyway < 1 ||
-      config.confirmHitsStanding < 1) {
+      config.confirmHitsStanding < 1 || config.confirmHitsLarge < 1) {
     return fail(
-        "tracking: confirmWholeHits must be >= 0, confirmHitsAnyway and confirmHitsStanding >= 1");
+        "tracking: confirmWholeHits must be >= 0, confirmHitsAnyway, confirmHitsStanding and "
+        "confirmHitsLarge >= 1");
   }
   config_ = config;
   if (!associator_.init(config.maxTracks, config.maxDetections, config.association)) {
@@ -268,7 +269,7 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
     const bool standing = !large && std::abs(slot.motion.state()[kV]) < config_.movingSpeed_mps &&
                           slot.wholeHits == out.hits && out.hits >= config_.confirmHitsStanding;
     if (standing ||
-        (out.hits >= config_.confirmHits &&
+        (out.hits >= config_.confirmHits && (!large || out.hits >= config_.confirmHitsLarge) &&
          (slot.wholeHits >= config_.confirmWholeHits || out.hits >= config_.confirmHitsAnyway))) {
       out.status = TrackStatus::Confirmed;
     }

@@ -77,6 +77,10 @@ struct TrackerConfig {
   // until the speed is observable, and two whole boxes in place show both. A vehicle that moves
   // waits for confirmHits (its speed from two boxes 0.1 s apart is too rough to publish).
   int confirmHitsStanding = 2;
+  // A track most likely of a large vehicle confirms after at least this many matches: the first
+  // stage boxes buses and trucks in parts that stand still and jump, so their first boxes give
+  // a wrong speed.
+  int confirmHitsLarge = 6;
   // A tentative track confirms only while its score (mean of its detections' scores over the
   // last scoreMemory frames) is at least this. Off (0) by default: with detector v5, 0.5 kept
   // a few false tracks on shadows out on the tuning seeds but cost more occluded parked cars on

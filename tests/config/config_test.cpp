@@ -156,6 +156,7 @@ tracking:
   confirm_whole_hits: 1
   confirm_hits_anyway: 7
   confirm_hits_standing: 4
+  confirm_hits_large: 8
   confirm_min_score: 0.55
   partial_inside_share: 0.8
   partial_along_noise_factor: 5
@@ -721,6 +722,8 @@ const MalformedCase kMalformedCases[] = {
      "must be in [1, 100], got 0"},
     {"confirm_hits_standing: 4", "confirm_hits_standing: 101", "tracking.confirm_hits_standing",
      "must be in [1, 100], got 101"},
+    {"confirm_hits_large: 8", "confirm_hits_large: 0", "tracking.confirm_hits_large",
+     "must be in [1, 100], got 0"},
     {"confirm_min_score: 0.55", "confirm_min_score: 1.5", "tracking.confirm_min_score",
      "must be in [0, 1], got 1.5"},
     {"partial_inside_share: 0.8", "partial_inside_share: 1.2", "tracking.partial_inside_share",
@@ -921,6 +924,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "tracking.confirm_whole_hits",
                                                "tracking.confirm_hits_anyway",
                                                "tracking.confirm_hits_standing",
+                                               "tracking.confirm_hits_large",
                                                "tracking.confirm_min_score",
                                                "tracking.partial_inside_share",
                                                "tracking.partial_along_noise_factor",
@@ -1288,6 +1292,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(t.confirmWholeHits, 1);
   EXPECT_EQ(t.confirmHitsAnyway, 7);
   EXPECT_EQ(t.confirmHitsStanding, 4);
+  EXPECT_EQ(t.confirmHitsLarge, 8);
   EXPECT_DOUBLE_EQ(t.confirmMinScore, 0.55);
   EXPECT_DOUBLE_EQ(t.partialInsideShare, 0.8);
   EXPECT_DOUBLE_EQ(t.partialAlongNoiseFactor, 5.0);

@@ -441,21 +441,33 @@ TEST(TrackManager, PartialDetectionsDoNotVoteOnTheDirection) {
 // A large vehicle standing in place is not confirmed on its second box: the first stage may box
 // a truck's cab, which can stand still for frames while the truck drives; it waits for
 // confirmHits as a moving vehicle does.
-TEST(TrackManager, LargeVehicleIsNotConfirmedAsStandingEarly) {
+TEST(TrackManager, LargeVehicleWaitsForConfirmHitsLarge) {
+  // A standing large vehicle and a standing car, side by side: the car confirms on its second
+  // whole box (confirmHitsStanding), the large one neither then nor at confirmHits but at
+  // confirmHitsLarge (its first boxes may be parts of a bus that stand still while it drives).
   TrackerConfig config = smallConfig();
   ASSERT_EQ(config.confirmHitsStanding, 2);
   ASSERT_EQ(config.confirmHits, 3);
+  config.confirmHitsLarge = 6;
   TrackManager m;
   ASSERT_TRUE(m.init(config));
   std::int64_t t = 0;
-  for (int k = 0; k < 3; ++k, t += kFrameNs) {
-    WorldDetection d = car(5.0, 3.0, 1.0, t);
-    d.lengthM = 9.0;
-    d.typeProbabilities.fill(0.02f);
-    d.typeProbabilities[static_cast<std::size_t>(shape::VehicleType::Large)] = 0.88f;
-    ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{d}).hasValue());
-    EXPECT_EQ(m.tracks()[0].status, k < 2 ? TrackStatus::Tentative : TrackStatus::Confirmed)
-        << "match " << k + 1;
+  for (int k = 0; k < 7; ++k, t += kFrameNs) {
+    WorldDetection large = car(5.0, 3.0, 1.0, t);
+    large.lengthM = 9.0;
+    large.typeProbabilities.fill(0.02f);
+    large.typeProbabilities[static_cast<std::size_t>(shape::VehicleType::Large)] = 0.88f;
+    WorldDetection small = car(5.0, 13.0, 1.0, t);
+    small.typeProbabilities.fill(0.02f);
+    small.typeProbabilities[static_cast<std::size_t>(shape::VehicleType::Sedan)] = 0.88f;
+    ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{large, small}).hasValue());
+    ASSERT_EQ(m.tracks().size(), 2U);
+    for (const TrackState& s : m.tracks()) {
+      const bool isLarge = s.type == shape::VehicleType::Large;
+      const int confirmAt = isLarge ? 6 : 2;
+      EXPECT_EQ(s.status, k + 1 < confirmAt ? TrackStatus::Tentative : TrackStatus::Confirmed)
+          << (isLarge ? "large" : "car") << ", match " << k + 1;
+    }
   }
 }
 
