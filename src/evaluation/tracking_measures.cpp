@@ -345,8 +345,9 @@ TrackingSummary TrackingEvaluator::summary() const {
             [](const TrackSpeedError& a, const TrackSpeedError& b) {
               return a.squaredErrorSum > b.squaredErrorSum;
             });
-  if (s.largestSpeedErrors.size() > static_cast<std::size_t>(options_.largestSpeedErrors)) {
-    s.largestSpeedErrors.resize(static_cast<std::size_t>(std::max(0, options_.largestSpeedErrors)));
+  const auto listed = static_cast<std::size_t>(std::max(0, options_.largestSpeedErrors));
+  if (s.largestSpeedErrors.size() > listed) {
+    s.largestSpeedErrors.resize(listed);
   }
   s.trackTypeOa1 = share(s.typeCorrectTracks, s.typedTracks);
   s.trackFrameTypeSamples = trackFrameTypeSamples_;
