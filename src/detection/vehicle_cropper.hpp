@@ -27,10 +27,10 @@
 //    stage drops detections below SecondStageOptions::minVehicleProbability.
 //  - With mirrorAverage, classify() runs the network a second time on the crop mirrored across
 //    the vehicle's axis (rows reversed: left and right swapped, front stays front) and averages
-//    the two runs' type logits (and verifier logits), with mirrorRefine also their refinements (du,
-//    length, width as they are; dv and d_angle negated back); flip logit and shape come from the
-//    crop as cut (an ASM component need not be mirror-symmetric). A test-time augmentation: one
-//    more crop-network run.
+//    the two runs' type logits (and verifier logits) and shape gamma (the ASM's components are
+//    left-right symmetric, so a mirrored car has the same gamma), with mirrorRefine also their
+//    refinements (du, length, width as they are; dv and d_angle negated back); the flip logit
+//    comes from the crop as cut. A test-time augmentation: one more crop-network run.
 //  - VehicleCropper owns the crop engine and two crop buffers; classify() runs one detection
 //    (the engine is batch 1) with no heap allocation.
 #pragma once

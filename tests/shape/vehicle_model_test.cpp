@@ -409,6 +409,26 @@ TEST(Asm, LoadErrorsNameTheFileAndTheField) {
 
 // --- The shipped default model ------------------------------------------------------------
 
+// The crop network's mirror averaging averages gamma of a crop and its mirror image as they are
+// (detection/vehicle_cropper.hpp): right only if every component maps onto itself when left and
+// right swap (keypoint pairs exchanged, the lateral coordinate negated) — cars are symmetric.
+TEST(DefaultAsm, ComponentsAreLeftRightSymmetric) {
+  ActiveShapeModel model;
+  std::string why;
+  ASSERT_TRUE(model.load(kDefaultAsm, &why)) << why;
+  for (int s = 0; s < model.componentCount(); ++s) {
+    const KeypointModel& e = model.eigenvector(s);
+    KeypointModel mirrored = e;
+    for (int k = 0; k < kKeypointCount; k += 2) {
+      mirrored.col(k) = e.col(k + 1);
+      mirrored.col(k + 1) = e.col(k);
+    }
+    mirrored.row(1) *= -1.0;  // lateral (vehicle frame: x forward, y left, z up)
+    EXPECT_LT((mirrored - e).cwiseAbs().maxCoeff(), 1e-6) << "component " << s;
+    EXPECT_GT(e.cwiseAbs().maxCoeff(), 0.1) << "component " << s;
+  }
+}
+
 TEST(DefaultAsm, LoadsWithThreeComponentsAndTypePriors) {
   ActiveShapeModel model;
   std::string why;
