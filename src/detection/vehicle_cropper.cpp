@@ -333,7 +333,7 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
       refine_[i] = 0.5F * (refine_[i] + kMirrorSign[i] * refine[i]);
     }
   }
-  // The ASM's components are left-right symmetric (cars are; ShippedAsm test): a mirrored car
+  // The ASM's components are left-right symmetric (cars are; DefaultAsm test): a mirrored car
   // has the same gamma, so the two runs' shapes are averaged as they are.
   const std::span<const float> shape = values(shapeIndex_);
   for (std::size_t i = 0; i < outputs.shape.size(); ++i) {

@@ -334,7 +334,7 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
     const auto k = static_cast<std::size_t>(s);
     EXPECT_NEAR(c.gamma.gamma[k], 0.5F * (a.gamma.gamma[k] + b.gamma.gamma[k]), 1e-5F);
   }
-  // Without mirrorRefine only the type is averaged: the box is the single run's.
+  // Without mirrorRefine the box is the single run's (type and shape still averaged).
   SecondStageOptions typeOnly = single;
   typeOnly.mirrorAverage = true;
   VehicleCropper typed;
@@ -348,8 +348,18 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
   for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
     EXPECT_EQ(e.typeProbabilities[t], c.typeProbabilities[t]) << "type " << t;
   }
+  for (int s = 0; s < e.gamma.count; ++s) {
+    EXPECT_EQ(e.gamma.gamma[static_cast<std::size_t>(s)],
+              c.gamma.gamma[static_cast<std::size_t>(s)]);
+  }
   // The two runs differ, or the test would show nothing.
   EXPECT_GT(std::abs(a.box.cy - 119.5) + std::abs(b.box.cy - 119.5), 1e-3);
+  double gammaDifference = 0.0;
+  for (int s = 0; s < a.gamma.count; ++s) {
+    gammaDifference += static_cast<double>(std::abs(a.gamma.gamma[static_cast<std::size_t>(s)] -
+                                                    b.gamma.gamma[static_cast<std::size_t>(s)]));
+  }
+  EXPECT_GT(gammaDifference, 1e-3);
 }
 
 TEST(GroundSampleDistance, MedianBoxIsANominalCar) {
