@@ -50,11 +50,8 @@ done
 out=$(realpath -m "$1"); shift
 [[ $# -ge 1 || -n "$real" ]] || { echo "eval_detector.sh: give sequences, --real, or both" >&2; exit 2; }
 [[ -z "$real" || -n "$split" ]] || { echo "eval_detector.sh: --real needs --split (the held-out list)" >&2; exit 2; }
-if [[ -z "$build" ]]; then
-  for b in release ci; do
-    [[ -x "$root/build/$b/tools/detect_images/vp_detect_images" ]] && build="$root/build/$b" && break
-  done
-fi
+source "$root/scripts/lib/find_build.sh"
+[[ -n "$build" ]] || build=$(vp_find_build tools/detect_images/vp_detect_images)
 detect="$build/tools/detect_images/vp_detect_images"
 evaluate="$build/tools/evaluate/vp_evaluate"
 [[ -x "$detect" && -x "$evaluate" ]] || { echo "eval_detector.sh: vp_detect_images / vp_evaluate not built in '${build:-build/release or build/ci}'" >&2; exit 1; }

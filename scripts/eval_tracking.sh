@@ -36,11 +36,8 @@ while [[ $# -gt 0 ]]; do
 done
 [[ $# -ge 2 ]] || { usage >&2; exit 2; }
 out=$(realpath -m "$1"); shift
-if [[ -z "$build" ]]; then
-  for b in release ci; do
-    [[ -x "$root/build/$b/firmware_app/vp_firmware_app" ]] && build="$root/build/$b" && break
-  done
-fi
+source "$root/scripts/lib/find_build.sh"
+[[ -n "$build" ]] || build=$(vp_find_build firmware_app/vp_firmware_app)
 app="$build/firmware_app/vp_firmware_app"
 evaluate="$build/tools/evaluate/vp_evaluate"
 [[ -x "$app" && -x "$evaluate" ]] || { echo "eval_tracking.sh: vp_firmware_app / vp_evaluate not built in '${build:-build/release or build/ci}'" >&2; exit 1; }

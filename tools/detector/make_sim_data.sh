@@ -19,9 +19,9 @@ width=${size%x*} height=${size#*x}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 sim=${VP_SIMULATE:-}
 if [[ -z "$sim" ]]; then
-  for b in release ci; do
-    [[ -x "$root/build/$b/tools/simulator/vp_simulate" ]] && sim="$root/build/$b/tools/simulator/vp_simulate" && break
-  done
+  source "$root/scripts/lib/find_build.sh"
+  build=$(vp_find_build tools/simulator/vp_simulate)
+  [[ -z "$build" ]] || sim="$build/tools/simulator/vp_simulate"
 fi
 [[ -x "$sim" ]] || { echo "make_sim_data.sh: vp_simulate not found; build first (cmake --preset release && cmake --build build/release)" >&2; exit 1; }
 scenes=(intersection straight parking)
