@@ -14,23 +14,25 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 
-# name  first-seed  count  frames  use
-sets="sim_tune     5000 9  4  detector tuning (score threshold, calibration)
-sim_tune_b   5009 27 4  detector tuning, with sim_tune (verifier threshold, round 6 and 8 choices)
-sim_val      9000 13 4  detector held-out
-trk_tune     5100 3  50 tracker tuning
-trk_tune2    5103 6  60 tracker tuning, with trk_tune (scripts/eval_tracking.sh sweeps)
-trk_tune3    5109 12 60 tracker tuning, a second set
-trk_val      9100 6  60 tracker held-out, first set
-trk_val2     9200 6  60 tracker held-out, second set (used for diagnosis since)
-trk_val3     9300 6  60 tracker held-out, third set"
+# name  first-seed  count  frames  size  use
+sets="sim_tune      5000 9  4   1296x1024  detector tuning (score threshold, calibration)
+sim_tune_b    5009 27 4   1296x1024  detector tuning, with sim_tune (verifier threshold, round 6 and 8 choices)
+sim_val       9000 13 4   1296x1024  detector held-out
+trk_tune      5100 3  50  1296x1024  tracker tuning
+trk_tune2     5103 6  60  1296x1024  tracker tuning, with trk_tune (scripts/eval_tracking.sh sweeps)
+trk_tune3     5109 12 60  1296x1024  tracker tuning, a second set
+trk_val       9100 6  60  1296x1024  tracker held-out, first set
+trk_val2      9200 6  60  1296x1024  tracker held-out, second set (used for diagnosis since)
+trk_val3      9300 6  60  1296x1024  tracker held-out, third set
+sim_tune_full 5000 36 4  2592x2048  detector tuning at the camera's resolution (the seeds of sim_tune + sim_tune_b)
+sim_val_full  9000 13 4  2592x2048  detector held-out at the camera's resolution (the seeds of sim_val)"
 
 usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
 case "${1:-}" in
   -h|--help) usage; exit 0 ;;
-  --list) printf '%-12s %-11s %-7s %s\n' set seeds frames use
-          while read -r name first count frames use; do
-            printf '%-12s %-11s %-7s %s\n' "$name" "$first-$((first + count - 1))" "$frames" "$use"
+  --list) printf '%-14s %-11s %-7s %-10s %s\n' set seeds frames size use
+          while read -r name first count frames size use; do
+            printf '%-14s %-11s %-7s %-10s %s\n' "$name" "$first-$((first + count - 1))" "$frames" "$size" "$use"
           done <<< "$sets"; exit 0 ;;
   "") usage >&2; exit 2 ;;
   -*) echo "make_eval_data.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
@@ -45,10 +47,10 @@ done
 want() { [[ ${#wanted[@]} -eq 0 ]] || printf '%s\n' "${wanted[@]}" | grep -qx "$1"; }
 
 mkdir -p "$out"
-while read -r name first count frames use; do
+while read -r name first count frames size use; do
   want "$name" || continue
-  echo "make_eval_data.sh: $name (seeds $first-$((first + count - 1)), $frames frames): $use"
-  "$root/tools/detector/make_sim_data.sh" "$out/$name" "$first" "$count" "$frames" 1296x1024
+  echo "make_eval_data.sh: $name (seeds $first-$((first + count - 1)), $frames frames, $size): $use"
+  "$root/tools/detector/make_sim_data.sh" "$out/$name" "$first" "$count" "$frames" "$size"
 done <<< "$sets"
 if want real_split; then
   real=${REAL:-$root/../shared/data/real/cats-madison}
