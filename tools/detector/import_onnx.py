@@ -47,7 +47,7 @@ import torch.nn as nn
 from onnx import numpy_helper
 
 from detector.asm import REPO_ROOT
-from detector.model import CROP_H, CROP_W, DEFAULT_INPUT_HW, NORMALIZATION, CropNet, Detector
+from detector.model import CROP_H, CROP_W, CropNet, Detector, normalize
 
 sys.path.insert(0, os.path.join(REPO_ROOT, "tools", "quantize"))
 import qdq  # noqa: E402
@@ -204,22 +204,29 @@ def check_against_file(module: nn.Module, model: onnx.ModelProto, x: torch.Tenso
     return errs
 
 
+def load_model(path: str) -> onnx.ModelProto:
+    """The ONNX file at ``path``, or a ValueError naming it."""
+    if not os.path.isfile(path):
+        raise ValueError(f"no file '{path}'")
+    try:
+        return onnx.load(path)
+    except Exception as exc:  # protobuf's DecodeError and friends: not an ONNX file
+        raise ValueError(f"'{path}' is not an ONNX model ({type(exc).__name__}: {exc})") from None
+
+
 def input_hw_of(model: onnx.ModelProto) -> Tuple[int, int]:
-    dims = [d.dim_value for d in model.graph.input[0].type.tensor_type.shape.dim]
-    return int(dims[2]), int(dims[3])
+    return tuple(qdq.input_shape_of(model)[2:])  # type: ignore[return-value]
 
 
 def normalized(images_uint8: np.ndarray) -> torch.Tensor:
-    mean = np.asarray(NORMALIZATION["mean"], np.float32)
-    scale = np.asarray(NORMALIZATION["scale"], np.float32)
-    x = (images_uint8.astype(np.float32) - mean) * scale
-    return torch.from_numpy(np.ascontiguousarray(x.transpose(0, 3, 1, 2)))
+    """uint8 NHWC RGB images -> the network input (NCHW, ``model.normalize``)."""
+    return normalize(torch.from_numpy(np.ascontiguousarray(images_uint8)).permute(0, 3, 1, 2))
 
 
 def import_files(detector_path: str, crop_path: Optional[str], n_s: int,
                  calib_det: Optional[np.ndarray] = None, calib_crop: Optional[np.ndarray] = None,
                  log=print) -> dict:
-    det_model = onnx.load(detector_path)
+    det_model = load_model(detector_path)
     hw = input_hw_of(det_model)
     det = Detector(n_s=n_s)
     x_det = normalized(calib_det) if calib_det is not None and len(calib_det) else None
@@ -231,7 +238,7 @@ def import_files(detector_path: str, crop_path: Optional[str], n_s: int,
     bad = {k: v for k, v in errs.items() if v > MAX_RELATIVE_ERROR}
     crop = None
     if crop_path:
-        crop_model = onnx.load(crop_path)
+        crop_model = load_model(crop_path)
         if input_hw_of(crop_model) != (CROP_H, CROP_W):
             raise ValueError(f"{crop_path}: input {input_hw_of(crop_model)}, the crop network "
                              f"takes {(CROP_H, CROP_W)}")
@@ -249,7 +256,7 @@ def import_files(detector_path: str, crop_path: Optional[str], n_s: int,
         raise ValueError("the imported model does not compute what the file computes: "
                          + ", ".join(f"{k} {v:.1e}" for k, v in bad.items()))
     step = 0
-    for m in [det_model] + ([onnx.load(crop_path)] if crop_path else []):
+    for m in [det_model] + ([crop_model] if crop_path else []):
         meta = {p.key: p.value for p in m.metadata_props}
         if meta.get("vp.model.version", "").isdigit():
             step = max(step, int(meta["vp.model.version"]))
@@ -282,13 +289,14 @@ def main(argv=None) -> int:
 
     asm = load_asm(args.asm) if args.asm else load_asm()
     calib_det = calib_crop = None
-    if args.calib_data:
-        ns = argparse.Namespace(calib_data=args.calib_data, calib_real=None, calib_real_split=None,
-                                calib_count=args.calib_count, working_width=args.working_width,
-                                calib_verifier_samples=[])
-        hw = input_hw_of(onnx.load(args.detector))
-        calib_det, calib_crop = calibration_images(ns, hw, asm.n_s, np.random.default_rng(args.seed))
     try:
+        if args.calib_data:
+            ns = argparse.Namespace(calib_data=args.calib_data, calib_real=None,
+                                    calib_real_split=None, calib_count=args.calib_count,
+                                    working_width=args.working_width, calib_verifier_samples=[])
+            hw = input_hw_of(load_model(args.detector))
+            calib_det, calib_crop = calibration_images(ns, hw, asm.n_s,
+                                                       np.random.default_rng(args.seed))
         ck = import_files(args.detector, args.crop, asm.n_s, calib_det, calib_crop)
     except (ValueError, OSError) as exc:
         raise SystemExit(f"import_onnx.py: {exc}")

@@ -107,6 +107,11 @@ class ImportOnnx(unittest.TestCase):
             import_onnx.import_files(self.crop_int8, None, 3, log=lambda *_: None)
         with self.assertRaisesRegex(ValueError, "the crop network takes"):
             import_onnx.import_files(self.det_int8, self.det_int8, 3, log=lambda *_: None)
+        text = os.path.join(self.tmp, "notes.onnx")
+        with open(text, "w") as f:
+            f.write("not a model\n")
+        with self.assertRaisesRegex(ValueError, "notes.onnx' is not an ONNX model"):
+            import_onnx.import_files(text, None, 3, log=lambda *_: None)
         other = randomized(CropNet(n_s=5))
         path = write_files(self.tmp, "crop5", other, (CROP_H, CROP_W))
         with self.assertRaisesRegex(ValueError, "weight shape"):
