@@ -44,6 +44,7 @@ perception::PipelineOptions pipelineOptions(const config::PerceptionConfig& conf
   det.secondStage.applyRefine = config.applyRefine;
   det.secondStage.mirrorAverage = config.cropMirrorAverage;
   det.secondStage.mirrorRefine = config.cropMirrorRefine;
+  det.secondStage.largeVehicleEnds = config.cropLargeVehicleEnds;
   det.secondStage.minVehicleProbability = static_cast<float>(config.cropMinVehicleProbability);
   det.gsd.fixedGsd_m = config.fixedGsd_m;
   det.gsd.nominalCarLength_m = config.nominalCarLength_m;

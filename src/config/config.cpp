@@ -807,6 +807,7 @@ PerceptionConfig readPerception(MapReader section, const std::string& baseDir) {
   p.applyRefine = section.boolean("apply_refine", d.applyRefine);
   p.cropMirrorAverage = section.boolean("crop_mirror_average", d.cropMirrorAverage);
   p.cropMirrorRefine = section.boolean("crop_mirror_refine", d.cropMirrorRefine);
+  p.cropLargeVehicleEnds = section.boolean("crop_large_vehicle_ends", d.cropLargeVehicleEnds);
   p.cropMinVehicleProbability = section.number("crop_min_vehicle_probability", kProbabilityRange,
                                                d.cropMinVehicleProbability);
   p.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRangeM, d.fixedGsd_m);

@@ -50,8 +50,9 @@ struct PerceptionConfig {
   int maxCrops = 512;
   bool applyFlip = true;
   bool applyRefine = true;
-  bool cropMirrorAverage = true;  // second crop-network run on the mirrored crop, type averaged
-  bool cropMirrorRefine = true;   // ... and the box refinement
+  bool cropMirrorAverage = true;     // second crop-network run on the mirrored crop, type averaged
+  bool cropMirrorRefine = true;      // ... and the box refinement
+  bool cropLargeVehicleEnds = true;  // front/back of a most-likely-large vehicle from its ends
   // The crop network's verifier: detections it gives a lower vehicle probability are dropped;
   // [0, 1], 0 = keep all (also what a crop network without the verifier output does). 0.3:
   // chosen on the tuning seeds (docs/model_card.md, round 8).

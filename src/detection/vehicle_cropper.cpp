@@ -294,24 +294,80 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
   if (engine_.run(view) != inference::RunStatus::Ok) {
     return SecondStageStatus::EngineFailed;
   }
-  auto values = [this](std::size_t index) {
-    const inference::OutputTensor& out = engine_.output(index);
-    return std::span<const float>(out.data, out.shape.elements());
-  };
+  // The engine reuses its output buffers: keep the first run's values (sizes checked at init),
+  // since the mirrored and the end crops run it again.
+  const std::span<const float> firstShape = values(shapeIndex_);
+  std::copy(firstShape.begin(), firstShape.end(), shape_.begin());
+  const std::span<const float> firstTypes = values(typeIndex_);
+  std::copy(firstTypes.begin(), firstTypes.end(), typeLogits_.begin());
+  const std::span<const float> firstRefine = values(refineIndex_);
+  std::copy(firstRefine.begin(), firstRefine.end(), refine_.begin());
   CropNetOutputs outputs;
-  outputs.typeLogits = values(typeIndex_);
-  outputs.shape = values(shapeIndex_);
+  outputs.typeLogits = typeLogits_;
+  outputs.shape = std::span<const float>(shape_.data(), firstShape.size());
   outputs.flipLogit = values(flipIndex_)[0];
-  outputs.refine = values(refineIndex_);
+  outputs.refine = refine_;
   outputs.hasVehicleLogit = hasVerifier_;
   outputs.vehicleLogit = hasVerifier_ ? values(vehicleIndex_)[0] : 0.0F;
-  if (!options_.mirrorAverage) {
-    return applyCropOutputs(outputs, gsd_m, options_, detection);
+  if (options_.mirrorAverage) {
+    const SecondStageStatus status = mirrorAverage(&outputs);
+    if (status != SecondStageStatus::Ok) {
+      return status;
+    }
   }
-  // The engine reuses its output buffers: keep the first run's values (sizes checked at init).
-  std::copy(outputs.typeLogits.begin(), outputs.typeLogits.end(), typeLogits_.begin());
-  std::copy(outputs.refine.begin(), outputs.refine.end(), refine_.begin());
-  std::copy(outputs.shape.begin(), outputs.shape.end(), shape_.begin());
+  const auto top = std::max_element(typeLogits_.begin(), typeLogits_.end()) - typeLogits_.begin();
+  if (options_.largeVehicleEnds && top == static_cast<std::ptrdiff_t>(shape::VehicleType::Large)) {
+    const geometry::RotatedBox firstStageBox = detection->box;
+    const SecondStageStatus status = endsFlipLogit(frame, gsd_m, firstStageBox, &outputs.flipLogit);
+    if (status != SecondStageStatus::Ok) {
+      return status;
+    }
+  }
+  return applyCropOutputs(outputs, gsd_m, options_, detection);
+}
+
+SecondStageStatus VehicleCropper::endsFlipLogit(const cv::Mat& frame, double gsd_m,
+                                                const geometry::RotatedBox& box, float* flipLogit) {
+  if (!initialised()) {
+    return SecondStageStatus::NotInitialised;
+  }
+  if (!(gsd_m > 0.0) || !std::isfinite(gsd_m)) {
+    return SecondStageStatus::BadGsd;
+  }
+  const double halfWindowPx = 0.5 * kCropWidthPx * kCropGsd_m / gsd_m;
+  const double offsetPx = std::max(0.0, 0.5 * box.length - halfWindowPx);
+  const double c = std::cos(box.angle);
+  const double s = std::sin(box.angle);
+  std::array<float, 2> flips{};
+  for (int end = 0; end < 2; ++end) {  // 0: ahead, looking ahead; 1: behind, looking back
+    const double sign = end == 0 ? 1.0 : -1.0;
+    const double angle = end == 0 ? box.angle : geometry::wrapTwoPi(box.angle + geometry::kPi);
+    if (!cutCrop(
+            frame,
+            cropAffine(box.cx + sign * offsetPx * c, box.cy + sign * offsetPx * s, angle, gsd_m),
+            mirrored_)) {
+      return SecondStageStatus::CropFailed;
+    }
+    const inference::ImageView view{mirrored_.data, mirrored_.cols, mirrored_.rows,
+                                    mirrored_.step[0]};
+    if (engine_.run(view) != inference::RunStatus::Ok) {
+      return SecondStageStatus::EngineFailed;
+    }
+    flips[static_cast<std::size_t>(end)] = engine_.output(flipIndex_).data[0];
+  }
+  if (!std::isfinite(flips[0]) || !std::isfinite(flips[1])) {
+    return SecondStageStatus::BadOutputs;
+  }
+  *flipLogit = 0.5F * (flips[0] - flips[1]);
+  return SecondStageStatus::Ok;
+}
+
+std::span<const float> VehicleCropper::values(std::size_t index) const {
+  const inference::OutputTensor& out = engine_.output(index);
+  return {out.data, out.shape.elements()};
+}
+
+SecondStageStatus VehicleCropper::mirrorAverage(CropNetOutputs* outputs) {
   cv::flip(crop_, mirrored_, 0);
   const inference::ImageView mirroredView{mirrored_.data, mirrored_.cols, mirrored_.rows,
                                           mirrored_.step[0]};
@@ -321,7 +377,7 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
   const std::span<const float> typeLogits = values(typeIndex_);
   const std::span<const float> refine = values(refineIndex_);
   if (hasVerifier_) {  // a mirrored vehicle is still a vehicle: both runs' logits averaged
-    outputs.vehicleLogit = 0.5F * (outputs.vehicleLogit + values(vehicleIndex_)[0]);
+    outputs->vehicleLogit = 0.5F * (outputs->vehicleLogit + values(vehicleIndex_)[0]);
   }
   for (std::size_t t = 0; t < typeLogits_.size(); ++t) {
     typeLogits_[t] = 0.5F * (typeLogits_[t] + typeLogits[t]);
@@ -336,13 +392,10 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
   // The ASM's components are left-right symmetric (cars are; DefaultAsm test): a mirrored car
   // has the same gamma, so the two runs' shapes are averaged as they are.
   const std::span<const float> shape = values(shapeIndex_);
-  for (std::size_t i = 0; i < outputs.shape.size(); ++i) {
+  for (std::size_t i = 0; i < outputs->shape.size(); ++i) {
     shape_[i] = 0.5F * (shape_[i] + shape[i]);
   }
-  outputs.typeLogits = typeLogits_;
-  outputs.refine = refine_;
-  outputs.shape = std::span<const float>(shape_.data(), outputs.shape.size());
-  return applyCropOutputs(outputs, gsd_m, options_, detection);
+  return SecondStageStatus::Ok;
 }
 
 }  // namespace vp::detection

@@ -31,6 +31,14 @@
 //    left-right symmetric, so a mirrored car has the same gamma), with mirrorRefine also their
 //    refinements (du, length, width as they are; dv and d_angle negated back); the flip logit
 //    comes from the crop as cut. A test-time augmentation: one more crop-network run.
+//  - With largeVehicleEnds, a vehicle whose most likely type (after mirror averaging) is Large
+//    gets its front/back from two more crops, one at each end of its box instead of its middle:
+//    the 5.76 m window on the middle of a 12 m bus shows neither end. endsFlipLogit() cuts crop F
+//    centred (L/2 - 2.88 m) ahead of the box centre along the box's heading, looking ahead, and
+//    crop R as far behind it, looking back, and returns (flip(F) - flip(R)) / 2: > 0 when F looks
+//    like a rear and R like a front, i.e. the box's heading is the vehicle's rear, the meaning
+//    of flip_logit. Turning the box by 180 deg swaps F and R and negates the result. A box no
+//    longer than the window cuts both crops at its centre, facing either way.
 //  - VehicleCropper owns the crop engine and two crop buffers; classify() runs one detection
 //    (the engine is batch 1) with no heap allocation.
 #pragma once
@@ -44,6 +52,7 @@
 #include <opencv2/core.hpp>
 
 #include "detection/detection.hpp"
+#include "geometry/rotated_box.hpp"
 #include "inference/engine.hpp"
 
 namespace vp::detection {
@@ -82,6 +91,7 @@ struct SecondStageOptions {
   bool refineLargeVehicleLength = false;  // apply length and du when the top type is Large
   bool mirrorAverage = false;             // type averaged with the mirrored crop's (see contract)
   bool mirrorRefine = false;              // ... and the refinement (needs mirrorAverage)
+  bool largeVehicleEnds = false;          // Large: front/back from crops at both ends (contract)
   // Detections whose verifier probability is below this are dropped after the second stage;
   // 0 keeps all, and so does a crop network without the verifier output. [0, 1]
   float minVehicleProbability = 0.0F;
@@ -117,11 +127,20 @@ class VehicleCropper {
   // Real-time: crop at the detection's box with gsd_m, run the network, apply its outputs.
   SecondStageStatus classify(const cv::Mat& frame, double gsd_m, Detection* detection);
 
+  // Real-time: the front/back logit of a long vehicle from crops at its two ends (contract);
+  // the same statuses as classify().
+  SecondStageStatus endsFlipLogit(const cv::Mat& frame, double gsd_m,
+                                  const geometry::RotatedBox& box, float* flipLogit);
+
   const cv::Mat& lastCrop() const { return crop_; }  // diagnostics and tests
   int shapeCount() const { return shapeCount_; }
   bool hasVerifier() const { return hasVerifier_; }
 
  private:
+  std::span<const float> values(std::size_t outputIndex) const;  // the engine's last run
+  // Runs the mirrored crop and averages into the first run's copies (contract).
+  SecondStageStatus mirrorAverage(CropNetOutputs* outputs);
+
   inference::Engine engine_;
   SecondStageOptions options_{};
   cv::Mat crop_;

@@ -129,6 +129,7 @@ perception:
   apply_refine: false
   crop_mirror_average: false
   crop_mirror_refine: false
+  crop_large_vehicle_ends: false
   crop_min_vehicle_probability: 0.25
   fixed_gsd_m: 0.03
   nominal_car_length_m: 4.4
@@ -672,6 +673,8 @@ const MalformedCase kMalformedCases[] = {
      "expected true or false, got '1'"},
     {"crop_mirror_refine: false", "crop_mirror_refine: yes please", "perception.crop_mirror_refine",
      "expected true or false, got 'yes please'"},
+    {"crop_large_vehicle_ends: false", "crop_large_vehicle_ends: 2",
+     "perception.crop_large_vehicle_ends", "expected true or false, got '2'"},
     {"crop_min_vehicle_probability: 0.25", "crop_min_vehicle_probability: 1.5",
      "perception.crop_min_vehicle_probability", "must be in [0, 1], got 1.5"},
     {"apply_refine: false", "apply_refine: []", "perception.apply_refine",
@@ -897,6 +900,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "perception.apply_refine",
                                                "perception.crop_mirror_average",
                                                "perception.crop_mirror_refine",
+                                               "perception.crop_large_vehicle_ends",
                                                "perception.crop_min_vehicle_probability",
                                                "perception.fixed_gsd_m",
                                                "perception.nominal_car_length_m",
@@ -1266,6 +1270,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_FALSE(p.applyRefine);
   EXPECT_FALSE(p.cropMirrorAverage);
   EXPECT_FALSE(p.cropMirrorRefine);
+  EXPECT_FALSE(p.cropLargeVehicleEnds);
   EXPECT_DOUBLE_EQ(p.cropMinVehicleProbability, 0.25);
   EXPECT_DOUBLE_EQ(p.fixedGsd_m, 0.03);
   EXPECT_DOUBLE_EQ(p.nominalCarLength_m, 4.4);

@@ -362,6 +362,75 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
   EXPECT_GT(gammaDifference, 1e-3);
 }
 
+// largeVehicleEnds: a long vehicle's front/back from crops at its two ends. endsFlipLogit() is
+// half the difference of the flip logits of a crop ahead of the centre looking ahead and one
+// behind it looking back (each what classify() gives for a box there: flipProbability =
+// sigmoid(flip_logit)); turning the box by 180 deg negates it; a car is classified as before.
+TEST(VehicleCropper, LargeVehicleFrontBackFromCropsAtBothEnds) {
+  cv::Mat frame(400, 800, CV_8UC3);
+  cv::RNG rng(11);
+  rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(frame, frame, cv::Size(9, 9), 2.0);
+  // A 12 m x 2.5 m "bus" along +u with a dark front end (windscreen) and a light car beside it.
+  cv::rectangle(frame, cv::Rect(160, 175, 480, 100), cv::Scalar(200, 200, 190), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(600, 180, 30, 90), cv::Scalar(30, 30, 40), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(200, 320, 180, 72), cv::Scalar(40, 60, 200), cv::FILLED);
+  constexpr double kGsd = 0.025;  // 12 m = 480 px; the crop window 5.76 m = 230.4 px
+  const std::string model = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
+  SecondStageOptions plain;
+  plain.applyRefine = false;
+  plain.applyFlip = false;
+  VehicleCropper cropper;
+  ASSERT_TRUE(cropper.init(model, {}, plain));
+  auto flipLogitAt = [&](double u, double v, double angle) {
+    Detection d;
+    d.box = {u, v, 100.0, 40.0, angle};
+    EXPECT_EQ(cropper.classify(frame, kGsd, &d), SecondStageStatus::Ok);
+    const double p = d.flipProbability;
+    return std::log(p / (1.0 - p));
+  };
+  const geometry::RotatedBox bus{400.0, 225.0, 480.0, 100.0, 0.0};
+  float ends = 0.0F;
+  ASSERT_EQ(cropper.endsFlipLogit(frame, kGsd, bus, &ends), SecondStageStatus::Ok);
+  const double offset = 240.0 - 115.2;  // L / 2 - half the window, in frame px
+  const double ahead = flipLogitAt(400.0 + offset, 225.0, 0.0);
+  const double behind = flipLogitAt(400.0 - offset, 225.0, geometry::kPi);
+  EXPECT_NEAR(ends, 0.5 * (ahead - behind), 1e-3);
+  EXPECT_GT(std::abs(ahead - behind), 1e-2);  // the two ends do differ
+  geometry::RotatedBox turned = bus;
+  turned.angle = geometry::kPi;
+  float turnedEnds = 0.0F;
+  ASSERT_EQ(cropper.endsFlipLogit(frame, kGsd, turned, &turnedEnds), SecondStageStatus::Ok);
+  EXPECT_NEAR(turnedEnds, -ends, 1e-4);
+  // A box no longer than the window: both crops at its centre, facing either way.
+  const geometry::RotatedBox shortBox{400.0, 225.0, 200.0, 100.0, 0.0};
+  ASSERT_EQ(cropper.endsFlipLogit(frame, kGsd, shortBox, &ends), SecondStageStatus::Ok);
+  EXPECT_NEAR(ends,
+              0.5 * (flipLogitAt(400.0, 225.0, 0.0) - flipLogitAt(400.0, 225.0, geometry::kPi)),
+              1e-3);
+  EXPECT_EQ(cropper.endsFlipLogit(frame, 0.0, bus, &ends), SecondStageStatus::BadGsd);
+
+  // A vehicle the crop network does not take for Large is classified exactly as without.
+  SecondStageOptions withEnds = plain;
+  withEnds.applyFlip = true;
+  withEnds.largeVehicleEnds = true;
+  SecondStageOptions withoutEnds = withEnds;
+  withoutEnds.largeVehicleEnds = false;
+  VehicleCropper on;
+  VehicleCropper off;
+  ASSERT_TRUE(on.init(model, {}, withEnds));
+  ASSERT_TRUE(off.init(model, {}, withoutEnds));
+  Detection car;
+  car.box = {290.0, 356.0, 180.0, 72.0, 0.0};
+  Detection same = car;
+  ASSERT_EQ(off.classify(frame, kGsd, &car), SecondStageStatus::Ok);
+  ASSERT_NE(topTwoTypes(car).first, shape::VehicleType::Large);
+  ASSERT_EQ(on.classify(frame, kGsd, &same), SecondStageStatus::Ok);
+  EXPECT_EQ(same.box.angle, car.box.angle);
+  EXPECT_EQ(same.flipProbability, car.flipProbability);
+  EXPECT_EQ(same.typeProbabilities, car.typeProbabilities);
+}
+
 TEST(GroundSampleDistance, MedianBoxIsANominalCar) {
   std::array<Detection, 5> detections{};
   const double lengths[] = {150.0, 160.0, 400.0, 140.0, 155.0};  // a bus among cars

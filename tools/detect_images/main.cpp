@@ -71,6 +71,10 @@ options:
                         without a verifier)
   --refine-large-length apply the second stage's length to vehicles most likely large too
                         (default: they keep the first stage's length; the crop shows a part)
+  --no-large-vehicle-ends
+                        front/back of vehicles most likely large from the crop at the box's
+                        middle (default: from crops at its two ends, as the app's
+                        perception.crop_large_vehicle_ends)
   --help                this text
 )";
 
@@ -94,6 +98,7 @@ struct Options {
   bool mirrorAverage = true;
   bool mirrorRefine = true;
   bool refineLargeLength = false;
+  bool largeVehicleEnds = true;        // as the app's perception.crop_large_vehicle_ends
   double minVehicleProbability = 0.3;  // as the app's perception.crop_min_vehicle_probability
 };
 
@@ -143,7 +148,8 @@ Options parseArguments(int argc, char** argv) {
                     {"--no-refine", &o.applyRefine, false},
                     {"--no-mirror", &o.mirrorAverage, false},
                     {"--no-mirror-refine", &o.mirrorRefine, false},
-                    {"--refine-large-length", &o.refineLargeLength, true}};
+                    {"--refine-large-length", &o.refineLargeLength, true},
+                    {"--no-large-vehicle-ends", &o.largeVehicleEnds, false}};
     bool isSwitch = false;
     for (const auto& s : switches) {
       if (arg == s.name) {
@@ -245,6 +251,7 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
   stageOptions.secondStage.mirrorAverage = options.mirrorAverage;
   stageOptions.secondStage.mirrorRefine = options.mirrorRefine && options.mirrorAverage;
   stageOptions.secondStage.refineLargeVehicleLength = options.refineLargeLength;
+  stageOptions.secondStage.largeVehicleEnds = options.largeVehicleEnds;
   stageOptions.secondStage.minVehicleProbability =
       static_cast<float>(options.minVehicleProbability);
   return stage.init(stageOptions, vp::preprocess::kMaxTiles, why);
