@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -266,6 +267,15 @@ TEST(VehicleCropper, LargeVehicleKeepsTheFirstStageLength) {
   EXPECT_NEAR(car.box.length, 5.5 / gsd, 1e-4);
 }
 
+// A textured background for the crop network (uniform noise, blurred like a photo).
+cv::Mat blurredNoise(int rows, int cols, int seed) {
+  cv::Mat frame(rows, cols, CV_8UC3);
+  cv::RNG rng(static_cast<std::uint64_t>(seed));
+  rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(frame, frame, cv::Size(9, 9), 2.0);
+  return frame;
+}
+
 // mirrorAverage (+ mirrorRefine): the second run sees the crop mirrored across the vehicle's axis.
 // A frame mirrored about the box's axis (a horizontal box on the middle row, 1 crop px = 1 frame
 // px, so the crops are exact mirror images) gives the second run's outputs by itself: the averaged
@@ -273,10 +283,7 @@ TEST(VehicleCropper, LargeVehicleKeepsTheFirstStageLength) {
 // refinement the mean with the across-axis offset and angle turned back, the shape the mean;
 // front/back comes from the crop as cut.
 TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
-  cv::Mat frame(240, 320, CV_8UC3);
-  cv::RNG rng(7);
-  rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
-  cv::GaussianBlur(frame, frame, cv::Size(9, 9), 2.0);
+  cv::Mat frame = blurredNoise(240, 320, 7);
   cv::rectangle(frame, cv::Rect(130, 112, 60, 20), cv::Scalar(40, 60, 200), cv::FILLED);
   cv::rectangle(frame, cv::Rect(150, 104, 20, 10), cv::Scalar(220, 220, 220), cv::FILLED);
   cv::Mat mirrored;
@@ -367,10 +374,7 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
 // behind it looking back (each what classify() gives for a box there: flipProbability =
 // sigmoid(flip_logit)); turning the box by 180 deg negates it; a car is classified as before.
 TEST(VehicleCropper, LargeVehicleFrontBackFromCropsAtBothEnds) {
-  cv::Mat frame(400, 800, CV_8UC3);
-  cv::RNG rng(11);
-  rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
-  cv::GaussianBlur(frame, frame, cv::Size(9, 9), 2.0);
+  cv::Mat frame = blurredNoise(400, 800, 11);
   // A 12 m x 2.5 m "bus" along +u with a dark front end (windscreen) and a light car beside it.
   cv::rectangle(frame, cv::Rect(160, 175, 480, 100), cv::Scalar(200, 200, 190), cv::FILLED);
   cv::rectangle(frame, cv::Rect(600, 180, 30, 90), cv::Scalar(30, 30, 40), cv::FILLED);
