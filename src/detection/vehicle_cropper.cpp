@@ -317,8 +317,9 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
   }
   const auto top = std::max_element(typeLogits_.begin(), typeLogits_.end()) - typeLogits_.begin();
   if (options_.largeVehicleEnds && top == static_cast<std::ptrdiff_t>(shape::VehicleType::Large)) {
-    const geometry::RotatedBox firstStageBox = detection->box;
-    const SecondStageStatus status = endsFlipLogit(frame, gsd_m, firstStageBox, &outputs.flipLogit);
+    // The box is still the first stage's: applyCropOutputs() below refines it.
+    const SecondStageStatus status =
+        endsFlipLogit(frame, gsd_m, detection->box, &outputs.flipLogit);
     if (status != SecondStageStatus::Ok) {
       return status;
     }

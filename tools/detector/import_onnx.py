@@ -44,7 +44,6 @@ import numpy as np
 import onnx
 import torch
 import torch.nn as nn
-from onnx import numpy_helper
 
 from detector.asm import REPO_ROOT
 from detector.model import CROP_H, CROP_W, CropNet, Detector, normalize
@@ -56,25 +55,18 @@ MAX_RELATIVE_ERROR = 1e-3  # of an output's range; float rounding is ~1e-6
 
 
 def conv_weights(model: onnx.ModelProto) -> List[Tuple[onnx.NodeProto, np.ndarray, Optional[np.ndarray]]]:
-    """(Conv node, float weight, float bias or None) in graph order."""
-    init = {t.name: numpy_helper.to_array(t) for t in model.graph.initializer}
+    """(Conv node, float weight, float bias or None) in graph order. A weight or bias must be
+    constant: an initializer or a DequantizeLinear of one, evaluated by ``qdq.Evaluator``."""
+    init = {t.name for t in model.graph.initializer}
     producer = {o: n for n in model.graph.node for o in n.output}
+    env = qdq.Evaluator(model).run(
+        {model.graph.input[0].name: np.zeros(qdq.input_shape_of(model), np.float32)}, keep_all=True)
 
     def value(name: str, what: str, node: onnx.NodeProto) -> np.ndarray:
-        if name in init:
-            return init[name].astype(np.float32)
         src = producer.get(name)
-        if src is not None and src.op_type == "DequantizeLinear" and src.input[0] in init:
-            q = init[src.input[0]].astype(np.float32)
-            scale = init[src.input[1]].astype(np.float32)
-            zp = (init[src.input[2]].astype(np.float32) if len(src.input) > 2
-                  else np.zeros_like(scale))
-            axis = next((a.i for a in src.attribute if a.name == "axis"), 1)
-            if scale.ndim == 1 and scale.size > 1:
-                shape = [1] * q.ndim
-                shape[axis] = -1
-                scale, zp = scale.reshape(shape), zp.reshape(shape)
-            return (q - zp) * scale
+        if name in init or (src is not None and src.op_type == "DequantizeLinear"
+                            and src.input[0] in init):
+            return env[name].astype(np.float32)
         raise ValueError(f"Conv '{node.name or node.output[0]}': its {what} '{name}' is neither an "
                          "initializer nor a DequantizeLinear of one")
 
@@ -86,10 +78,6 @@ def conv_weights(model: onnx.ModelProto) -> List[Tuple[onnx.NodeProto, np.ndarra
         b = value(node.input[2], "bias", node) if len(node.input) > 2 and node.input[2] else None
         out.append((node, w, b))
     return out
-
-
-def _attrs(node: onnx.NodeProto) -> Dict[str, object]:
-    return {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
 
 
 def convs_in_order(module: nn.Module, input_hw: Tuple[int, int]) -> List[Tuple[str, nn.Conv2d]]:
@@ -133,8 +121,8 @@ def load_into(module: nn.Module, model: onnx.ModelProto, input_hw: Tuple[int, in
     folded: List[Tuple[nn.Conv2d, nn.BatchNorm2d, torch.Tensor]] = []
     with torch.no_grad():
         for (node, w, b), (name, conv) in zip(convs, order):
-            a = _attrs(node)
-            pads = list(a.get("pads", [0, 0, 0, 0]))
+            a = qdq._attrs(node)
+            pads = qdq._pads4(node, a)
             checks = {"weight shape": (tuple(w.shape), tuple(conv.weight.shape)),
                       "groups": (int(a.get("group", 1)), conv.groups),
                       "strides": (tuple(a.get("strides", [1, 1])), tuple(conv.stride)),
