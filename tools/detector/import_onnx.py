@@ -231,7 +231,10 @@ def import_files(detector_path: str, crop_path: Optional[str], n_s: int,
             raise ValueError(f"{crop_path}: input {input_hw_of(crop_model)}, the crop network "
                              f"takes {(CROP_H, CROP_W)}")
         outputs = {o.name for o in crop_model.graph.output}
-        crop = CropNet(n_s=n_s, verifier="vehicle_logit" in outputs)
+        verifier = "vehicle_logit" in outputs
+        n_convs = sum(node.op_type == "Conv" for node in crop_model.graph.node)
+        plain = len(convs_in_order(CropNet(n_s=n_s, verifier=verifier), (CROP_H, CROP_W)))
+        crop = CropNet(n_s=n_s, verifier=verifier, flip_branch=n_convs == plain + 1)
         x_crop = normalized(calib_crop) if calib_crop is not None and len(calib_crop) else None
         n = load_into(crop, crop_model, (CROP_H, CROP_W), x_crop)
         check_x = x_crop[:8] if x_crop is not None else torch.randn(4, 3, CROP_H, CROP_W)

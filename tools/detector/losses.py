@@ -170,8 +170,11 @@ def crop_loss(out: Dict[str, torch.Tensor], batch: Dict[str, torch.Tensor], shap
     # Verifier crops (batch["full"] False: a mined box, vehicle or not) train only the
     # verifier head; their type is -1 and gamma NaN, so those terms skip them already.
     full = batch["full"] if "full" in batch else torch.ones_like(t, dtype=torch.bool)
-    terms["flip"] = F.binary_cross_entropy_with_logits(out["flip_logit"].flatten()[full],
-                                                       batch["flip"].float()[full])
+    # Heading crops (real vehicles whose only label is the driving direction) train the flip
+    # output and nothing else of the full targets.
+    flip_known = full | batch["flip_known"] if "flip_known" in batch else full
+    terms["flip"] = F.binary_cross_entropy_with_logits(out["flip_logit"].flatten()[flip_known],
+                                                       batch["flip"].float()[flip_known])
     sc = torch.tensor(REFINE_SCALE, device=logits.device)
     of = torch.tensor(REFINE_OFFSET, device=logits.device)
     pred = out["refine"].flatten(1)[full] * sc + of

@@ -132,6 +132,17 @@ def parse_args(argv=None):
                         "vehicle (car-sized box, random angle)")
     p.add_argument("--verifier-negative-share", type=float, default=0.6,
                    help="share of the listed crops drawn from the background (label 0) rows")
+    p.add_argument("--heading-samples", nargs="+", default=[], metavar="CSV",
+                   help="real vehicles labelled with their driving direction only "
+                        "(real_headings.py lists): crops that train the front/back output")
+    p.add_argument("--heading-batch", type=int, default=16,
+                   help="heading crops added to every crop batch (with --heading-samples)")
+    p.add_argument("--flip-branch", action="store_true",
+                   help="give the crop network's front/back output its own fully connected "
+                        "layer, started as a copy of the shared one")
+    p.add_argument("--flip-head-only", action="store_true",
+                   help="train only the front/back branch (needs --flip-branch, --init-from and "
+                        "--crop-only): type, shape, refinement and verifier stay as they are")
     p.add_argument("--working-width", type=int, default=648)
     p.add_argument("--working-gsd-range", type=float, nargs=2, default=(0.08, 0.18))
     p.add_argument("--shape-loss", choices=["l1", "l2"], default="l1", help="V_L1 or V_L2")
@@ -301,6 +312,9 @@ class Data:
         self.verifier = [read_verifier_samples(p) for p in args.verifier_samples]
         self.verifier = {label: [r for rows in self.verifier for r in rows if r[-1] == label]
                          for label in (0, 1)} if self.verifier else {}
+        self.headings = [r for p in args.heading_samples for r in read_verifier_samples(p)]
+        if self.headings:
+            log(f"heading samples: {len(self.headings)} real vehicles with a driving direction")
         self.gsd_frames = [i for i, s in enumerate(self.seq) if np.isfinite(s.gsd_m).any()]
         self.verifier_images = collections.OrderedDict()  # path -> image, least recent first
         if self.verifier:
@@ -398,7 +412,19 @@ class Data:
             flips.append(flip)
             refines.append(refine)
         full = [True] * len(imgs)
+        flip_known = [True] * len(imgs)
         vehicle = [1.0] * len(imgs)
+        for _ in range(self.args.heading_batch if self.headings else 0):
+            patch, flip = self.heading_crop(rng)
+            tmp = Sample(image_path=None, image=patch, **{k: v for k, v in _empty(self.n_s).items()})
+            imgs.append(augment.photometric(tmp, rng).image)
+            types.append(-1)
+            gammas.append(np.full(self.n_s, np.nan, np.float32))
+            flips.append(float(flip))
+            refines.append(np.zeros(5, np.float32))
+            full.append(False)
+            flip_known.append(True)
+            vehicle.append(1.0)
         if self.verifier:
             for _ in range(self.args.verifier_batch):
                 patch, label = self.verifier_crop(rng)
@@ -409,10 +435,24 @@ class Data:
                 flips.append(0.0)
                 refines.append(np.zeros(5, np.float32))
                 full.append(False)
+                flip_known.append(False)
                 vehicle.append(float(label))
         return {"image": np.stack(imgs), "type": np.array(types), "gamma": np.stack(gammas),
                 "flip": np.array(flips), "refine": np.stack(refines),
-                "full": np.array(full), "vehicle": np.array(vehicle, np.float32)}
+                "full": np.array(full), "flip_known": np.array(flip_known),
+                "vehicle": np.array(vehicle, np.float32)}
+
+    def heading_crop(self, rng) -> Tuple[np.ndarray, int]:
+        """A crop of a listed real vehicle, posed as the detector would (jittered, reversed half
+        of the time), and its flip target (1: the crop's +x is the vehicle's rear)."""
+        path, cx, cy, length, width, angle, gsd, _ = self.headings[int(rng.integers(0, len(self.headings)))]
+        box = np.array([cx, cy, length, width, angle])
+        cen, ang, gsd_used, flip, _ = crops.jittered_crop_target(box, gsd, rng, center_sigma_m=0.15,
+                                                                 angle_sigma=math.radians(4))
+        patch = crops.extract_crop(self._verifier_image(path), cen, ang, gsd_used)
+        if rng.random() < 0.5:  # mirror about the length axis: front/back unchanged
+            patch = np.ascontiguousarray(patch[::-1])
+        return patch, flip
 
     def _verifier_image(self, path: str) -> np.ndarray:
         img = self.verifier_images.pop(path, None)
@@ -576,18 +616,27 @@ def train(args) -> dict:
         det = Detector(n_s=asm.n_s, single_stage=args.single_stage).to(device)
     if args.crop_only and args.no_crop:
         raise SystemExit("--crop-only and --no-crop exclude each other")
+    if args.heading_samples and (args.no_crop or args.heading_batch < 1):
+        raise SystemExit("--heading-samples needs the crop network (no --no-crop) and "
+                         "--heading-batch >= 1")
     crop_net = (None if args.no_crop
-                else CropNet(n_s=asm.n_s, verifier=bool(args.verifier_samples)).to(device))
+                else CropNet(n_s=asm.n_s, verifier=bool(args.verifier_samples),
+                             flip_branch=args.flip_branch).to(device))
     if args.init_from:
         ck0 = torch.load(args.init_from, map_location=device)
         missing, unexpected = det.load_state_dict(ck0["detector"], strict=False)
         if unexpected:
             raise SystemExit(f"--init-from {args.init_from}: unexpected detector weights {unexpected[:4]}")
         if crop_net is not None and ck0.get("crop") is not None:
+            if "vehicle_logit.weight" in ck0["crop"] and not crop_net.verifier:
+                crop_net = CropNet(n_s=asm.n_s, verifier=True, flip_branch=args.flip_branch).to(device)
             missing_c, unexpected_c = crop_net.load_state_dict(ck0["crop"], strict=False)
-            if unexpected_c or any(not k.startswith("vehicle_logit.") for k in missing_c):
+            if unexpected_c or any(not k.startswith(("vehicle_logit.", "flip_fc.")) for k in missing_c):
                 raise SystemExit(f"--init-from {args.init_from}: crop network weights do not fit "
                                  f"(missing {missing_c[:4]}, unexpected {unexpected_c[:4]})")
+            if any(k.startswith("flip_fc.") for k in missing_c):
+                crop_net.start_flip_branch_from_shared()
+                missing_c = [k for k in missing_c if not k.startswith("flip_fc.")]
             missing += missing_c
         log(f"initialised from {args.init_from}; new: {sorted({k.split('.')[0] for k in missing})}")
     head_names = ("type_head", "shape_head")
@@ -604,6 +653,11 @@ def train(args) -> dict:
                              "--crop-only")
         for name, prm in crop_net.named_parameters():
             prm.requires_grad = name.startswith("vehicle_logit.")
+    if args.flip_head_only:
+        if not (args.flip_branch and args.init_from and args.crop_only):
+            raise SystemExit("--flip-head-only needs --flip-branch, --init-from and --crop-only")
+        for name, prm in crop_net.named_parameters():
+            prm.requires_grad = name.startswith(("flip_fc.", "flip_logit."))
     opt_c = torch.optim.AdamW([q for q in crop_net.parameters() if q.requires_grad], lr=args.lr,
                               weight_decay=1e-4) if crop_net else None
     shape_loss = make_shape_loss(args.shape_loss, asm)
@@ -649,7 +703,7 @@ def train(args) -> dict:
     if crop_net:
         # Head only: the frozen layers keep their batch-norm statistics (eval mode), so the
         # other outputs stay exactly what --init-from gave.
-        crop_net.train(not args.verifier_head_only)
+        crop_net.train(not (args.verifier_head_only or args.flip_head_only))
     last_ckpt = time.monotonic()
     t_run = time.monotonic()
     elapsed0 = elapsed
