@@ -26,7 +26,7 @@ trk_val2      9200 6  60  1296x1024  tracker held-out, second set (used for diag
 trk_val3      9300 6  60  1296x1024  tracker held-out, third set
 sim_tune_full 5000 36 4  2592x2048  detector tuning at the camera's resolution (the seeds of sim_tune + sim_tune_b)
 sim_val_full  9000 13 4  2592x2048  detector held-out at the camera's resolution (the seeds of sim_val)
-sim_val2_full 9400 40 4  2592x2048  detector held-out, a second and larger set (session 12)"
+sim_val2_full 9400 40 4  2592x2048  detector held-out, a second and larger set"
 
 usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
 case "${1:-}" in
