@@ -3,7 +3,7 @@
 //
 // Contract: open() creates the topic and writer (start-up; may allocate, may fail). After
 // that, publish()/write()/remove()/endFrame() neither allocate in our code (samples and the
-// table of published tracks are preallocated; tests/dds measures it) nor throw: errors are
+// table of published tracks are preallocated; tests/platform/dds measures it) nor throw: errors are
 // returned as values. DDS source timestamps are the states' measurement times (frame capture
 // time, UTC ns), so receivers measure latency from capture.
 // Instance life cycle of VehicleStatePublisher: a track is written once it is Confirmed, and

@@ -8,7 +8,7 @@
 // blocking, converts it (platform/dds/telemetry_conversion.hpp) and hands each valid one to a
 // PoseSink; rejected samples are only counted, per reason. poll() and wait() return failures as
 // values, never throw, and our code does not allocate in them (samples are Cyclone's loans;
-// tests/dds measures it). A PoseRing is a caller-owned fixed-capacity sink that keeps the
+// tests/platform/dds measures it). A PoseRing is a caller-owned fixed-capacity sink that keeps the
 // newest samples. Not thread-safe: poll and consume on one thread (or guard the sink).
 #pragma once
 

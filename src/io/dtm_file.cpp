@@ -1,124 +1,40 @@
+// io/dtm_file (reading): loadDtm() — the float raster, the GeoTIFF georeferencing keys and
+// tags, a world file beside the image when there are none, and GDAL_NODATA. Writing is in
+// dtm_write.cpp, the libtiff plumbing both share in dtm_tiff.cpp.
 #include "io/dtm_file.hpp"
 
 #include <geotiff.h>
 #include <geovalues.h>
 #include <xtiffio.h>
 
-#include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <limits>
-#include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "io/dtm_tiff.hpp"
+
 namespace vp::io {
 namespace {
 
+using dtm_detail::fail;
+using dtm_detail::GtifPtr;
+using dtm_detail::kTagGdalNoData;
+using dtm_detail::registerTags;
+using dtm_detail::TiffDiagnostics;
+using dtm_detail::TiffPtr;
 using terrain::CrsSpec;
 using terrain::GeoTransform;
 using terrain::HorizontalCrs;
 using terrain::TerrainGrid;
 
-constexpr ttag_t kTagGdalNoData = 42113;  // GDAL_NODATA, ASCII
 constexpr std::uint64_t kMaxSamples = 1ULL << 30;
-
-// --- libtiff diagnostics ---------------------------------------------------------------
-// libtiff reports errors through one process-wide handler. Ours appends to a thread_local
-// buffer, so a failure's text ends up in the message of the call (on this thread) that
-// caused it. The guard installs the handlers for the duration of one of our calls and puts
-// back whatever was there before (OpenCV, for one, installs its own).
-thread_local std::string tiffErrors;
-
-void appendMessage(const char* module, const char* fmt, va_list ap) {
-  char text[512];
-  std::vsnprintf(text, sizeof(text), fmt, ap);
-  if (!tiffErrors.empty()) {
-    tiffErrors += "; ";
-  }
-  if (module != nullptr && module[0] != '\0') {
-    tiffErrors += module;
-    tiffErrors += ": ";
-  }
-  tiffErrors += text;
-}
-
-void errorHandler(const char* module, const char* fmt, va_list ap) {
-  appendMessage(module, fmt, ap);
-}
-
-// Warnings (unknown private tags and the like) are not failures; keep the log quiet.
-void warningHandler(const char*, const char*, va_list) {}
-
-class TiffDiagnostics {
- public:
-  TiffDiagnostics()
-      : previousError_(TIFFSetErrorHandler(errorHandler)),
-        previousWarning_(TIFFSetWarningHandler(warningHandler)) {
-    tiffErrors.clear();
-  }
-  ~TiffDiagnostics() {
-    TIFFSetErrorHandler(previousError_);
-    TIFFSetWarningHandler(previousWarning_);
-  }
-  TiffDiagnostics(const TiffDiagnostics&) = delete;
-  TiffDiagnostics& operator=(const TiffDiagnostics&) = delete;
-
-  // " (libtiff: ...)" when libtiff said something, else "".
-  static std::string detail() { return tiffErrors.empty() ? "" : " (libtiff: " + tiffErrors + ")"; }
-
- private:
-  TIFFErrorHandler previousError_;
-  TIFFErrorHandler previousWarning_;
-};
-
-// --- GDAL_NODATA tag registration --------------------------------------------------------
-// libtiff 4.5 does not know tag 42113; without a definition it cannot be written, and on
-// read it would only be seen as an anonymous field. An extender (chained to the previous
-// one, e.g. libgeotiff's) defines it on every TIFF opened after registration.
-TIFFExtendProc previousExtender = nullptr;
-
-void tagExtender(TIFF* tif) {
-  if (previousExtender != nullptr) {
-    previousExtender(tif);
-  }
-  if (TIFFFindField(tif, kTagGdalNoData, TIFF_ANY) == nullptr) {
-    static const TIFFFieldInfo kGdalNoData[] = {{kTagGdalNoData, -1, -1, TIFF_ASCII, FIELD_CUSTOM,
-                                                 1, 0, const_cast<char*>("GDALNoDataValue")}};
-    TIFFMergeFieldInfo(tif, kGdalNoData, 1);
-  }
-}
-
-void registerTags() {
-  static std::once_flag once;
-  std::call_once(once, [] { previousExtender = TIFFSetTagExtender(tagExtender); });
-}
-
-struct TiffCloser {
-  void operator()(TIFF* tif) const { XTIFFClose(tif); }
-};
-using TiffPtr = std::unique_ptr<TIFF, TiffCloser>;
-
-struct GtifCloser {
-  void operator()(GTIF* gtif) const { GTIFFree(gtif); }
-};
-using GtifPtr = std::unique_ptr<GTIF, GtifCloser>;
-
-bool fail(std::string* why, const std::string& path, const std::string& problem) {
-  if (why != nullptr) {
-    *why = path + ": " + problem;
-  }
-  return false;
-}
 
 std::string crsName(const CrsSpec& crs) {
   return terrain::toString(crs);
@@ -395,77 +311,6 @@ bool readWorldFile(const std::filesystem::path& file, GeoTransform& transform, s
   return true;
 }
 
-// --- Writing -----------------------------------------------------------------------------
-
-bool validateForWrite(const std::string& path, const TerrainGrid& grid, std::string* why) {
-  if (grid.cols <= 0 || grid.rows <= 0 ||
-      grid.heightsM.size() != static_cast<std::size_t>(grid.cols) * grid.rows) {
-    return fail(why, path,
-                "grid is inconsistent (" + std::to_string(grid.cols) + "x" +
-                    std::to_string(grid.rows) + ", " + std::to_string(grid.heightsM.size()) +
-                    " heights)");
-  }
-  if (grid.crs.kind == HorizontalCrs::Utm && (grid.crs.utmZone < 1 || grid.crs.utmZone > 60)) {
-    return fail(why, path, "invalid UTM zone " + std::to_string(grid.crs.utmZone));
-  }
-  return true;
-}
-
-std::string formatNoData(float value) {
-  if (std::isnan(value)) {
-    return "nan";
-  }
-  char text[64];
-  // 9 significant digits round-trip any float.
-  std::snprintf(text, sizeof(text), "%.9g", static_cast<double>(value));
-  return text;
-}
-
-// Opens `path` for writing and writes the float32 raster (plus GDAL_NODATA); `tags` adds
-// the georeferencing before the image data.
-template <class Tags>
-bool writeRaster(const std::string& path, const TerrainGrid& grid, Tags&& tags, std::string* why) {
-  registerTags();
-  TiffDiagnostics diagnostics;
-  TiffPtr tif(XTIFFOpen(path.c_str(), "w"));
-  if (!tif) {
-    return fail(why, path, "cannot create TIFF" + TiffDiagnostics::detail());
-  }
-  TIFF* t = tif.get();
-  TIFFSetField(t, TIFFTAG_IMAGEWIDTH, static_cast<std::uint32_t>(grid.cols));
-  TIFFSetField(t, TIFFTAG_IMAGELENGTH, static_cast<std::uint32_t>(grid.rows));
-  TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
-  TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 32);
-  TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
-  TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
-  TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
-  TIFFSetField(t, TIFFTAG_COMPRESSION, COMPRESSION_NONE);
-  TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, TIFFDefaultStripSize(t, 0));
-  if (grid.noData) {
-    const std::string text = formatNoData(*grid.noData);
-    TIFFSetField(t, kTagGdalNoData, text.c_str());
-  }
-  if (!tags(t)) {
-    return fail(why, path, "cannot write the GeoTIFF keys" + TiffDiagnostics::detail());
-  }
-  std::vector<float> row(static_cast<std::size_t>(grid.cols));
-  for (int r = 0; r < grid.rows; ++r) {
-    std::copy_n(grid.heightsM.begin() + static_cast<std::ptrdiff_t>(r) * grid.cols, grid.cols,
-                row.begin());
-    if (TIFFWriteScanline(t, row.data(), static_cast<std::uint32_t>(r), 0) < 0) {
-      return fail(why, path, "cannot write row " + std::to_string(r) + TiffDiagnostics::detail());
-    }
-  }
-  if (TIFFFlush(t) != 1) {
-    return fail(why, path, "cannot write TIFF" + TiffDiagnostics::detail());
-  }
-  tif.reset();
-  if (!tiffErrors.empty()) {
-    return fail(why, path, "cannot write TIFF" + TiffDiagnostics::detail());
-  }
-  return true;
-}
-
 }  // namespace
 
 bool loadDtm(const std::string& path, const std::optional<terrain::CrsSpec>& crsForWorldFile,
@@ -548,74 +393,6 @@ bool loadDtm(const std::string& path, const std::optional<terrain::CrsSpec>& crs
     loaded.noData = static_cast<float>(value);
   }
   grid = std::move(loaded);
-  return true;
-}
-
-bool writeDtmGeoTiff(const std::string& path, const terrain::TerrainGrid& grid, std::string* why) {
-  if (!validateForWrite(path, grid, why)) {
-    return false;
-  }
-  const GeoTransform& g = grid.transform;
-  // PixelIsArea: the tags place the outer corner of the first pixel, half a pixel from its
-  // centre along both axes.
-  const double cornerX = g.x0 - 0.5 * (g.dxCol + g.dxRow);
-  const double cornerY = g.y0 - 0.5 * (g.dyCol + g.dyRow);
-  const auto tags = [&](TIFF* t) {
-    // Tiepoint + scale only express a north-up, unflipped grid (scales are positive);
-    // anything else goes into a ModelTransformation.
-    if (g.dxRow == 0.0 && g.dyCol == 0.0 && g.dxCol > 0.0 && g.dyRow < 0.0) {
-      double tie[6] = {0.0, 0.0, 0.0, cornerX, cornerY, 0.0};
-      double scale[3] = {g.dxCol, -g.dyRow, 0.0};
-      TIFFSetField(t, TIFFTAG_GEOTIEPOINTS, 6, tie);
-      TIFFSetField(t, TIFFTAG_GEOPIXELSCALE, 3, scale);
-    } else {
-      double matrix[16] = {g.dxCol, g.dxRow, 0.0, cornerX,  //
-                           g.dyCol, g.dyRow, 0.0, cornerY,  //
-                           0.0,     0.0,     0.0, 0.0,      //
-                           0.0,     0.0,     0.0, 1.0};
-      TIFFSetField(t, TIFFTAG_GEOTRANSMATRIX, 16, matrix);
-    }
-    GtifPtr gtif(GTIFNew(t));
-    if (!gtif) {
-      return false;
-    }
-    GTIF* k = gtif.get();
-    if (grid.crs.kind == HorizontalCrs::Utm) {
-      GTIFKeySet(k, GTModelTypeGeoKey, TYPE_SHORT, 1, ModelTypeProjected);
-      GTIFKeySet(k, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsArea);
-      GTIFKeySet(k, ProjectedCSTypeGeoKey, TYPE_SHORT, 1,
-                 (grid.crs.utmNorth ? 32600 : 32700) + grid.crs.utmZone);
-    } else {
-      GTIFKeySet(k, GTModelTypeGeoKey, TYPE_SHORT, 1, ModelTypeGeographic);
-      GTIFKeySet(k, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsArea);
-      GTIFKeySet(k, GeographicTypeGeoKey, TYPE_SHORT, 1, 4326);
-    }
-    return GTIFWriteKeys(k) == 1;
-  };
-  return writeRaster(path, grid, tags, why);
-}
-
-bool writeDtmWithWorldFile(const std::string& path, const terrain::TerrainGrid& grid,
-                           std::string* why) {
-  if (!validateForWrite(path, grid, why)) {
-    return false;
-  }
-  if (!writeRaster(
-          path, grid, [](TIFF*) { return true; }, why)) {
-    return false;
-  }
-  std::filesystem::path world(path);
-  world.replace_extension(".tfw");
-  std::ofstream out(world);
-  const GeoTransform& g = grid.transform;
-  char text[256];
-  std::snprintf(text, sizeof(text), "%.17g\n%.17g\n%.17g\n%.17g\n%.17g\n%.17g\n", g.dxCol, g.dyCol,
-                g.dxRow, g.dyRow, g.x0, g.y0);
-  out << text;
-  out.close();
-  if (!out) {
-    return fail(why, world.string(), "cannot write world file");
-  }
   return true;
 }
 

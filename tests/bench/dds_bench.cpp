@@ -9,7 +9,7 @@
 //
 // Waits (up to 30 s) for --readers matched readers, publishes for --duration-s, then prints
 // one line per figure: samples written, write time per frame (median, p99, max), and heap
-// allocations per written sample (process-wide, as tests/dds measures them).
+// allocations per written sample (process-wide, as tests/platform/dds measures them).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>

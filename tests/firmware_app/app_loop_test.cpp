@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "../v4l2/fake_v4l2_device.hpp"
+#include "../platform/v4l2/fake_v4l2_device.hpp"
 #include "alloc_counter.hpp"
 #include "app.hpp"
 #include "app_test_support.hpp"

@@ -1,5 +1,5 @@
-// tests/dds/dds_test_support: loopback-only Cyclone DDS configuration and per-test domain and
-// partition, so that tests (and ctest -j) never hear each other or the network.
+// tests/platform/dds/dds_test_support: loopback-only Cyclone DDS configuration and per-test domain
+// and partition, so that tests (and ctest -j) never hear each other or the network.
 #pragma once
 
 #include <unistd.h>

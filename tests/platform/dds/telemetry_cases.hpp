@@ -1,5 +1,5 @@
-// tests/dds/telemetry_cases: known drone attitudes and positions, and how each flight stack
-// puts them on the wire, shared by the conversion tests and the ROS-typed writer process.
+// tests/platform/dds/telemetry_cases: known drone attitudes and positions, and how each flight
+// stack puts them on the wire, shared by the conversion tests and the ROS-typed writer process.
 //
 // The wire forms are built independently of platform/dds/telemetry_conversion: PX4 sends q_nb
 // as float32 (w, x, y, z); ArduPilot's AP_DDS builds its REP-103 GeoPose orientation from its

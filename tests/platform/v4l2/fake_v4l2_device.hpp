@@ -1,4 +1,5 @@
-// tests/v4l2/fake_v4l2_device: an emulated V4L2 capture driver behind the V4l2Device interface.
+// tests/platform/v4l2/fake_v4l2_device: an emulated V4L2 capture driver behind the V4l2Device
+// interface.
 //
 // It follows the kernel's protocol closely enough to catch misuse: S_FMT substitutes an
 // unsupported pixel format and clamps the size (as drivers do), REQBUFS clamps the count and

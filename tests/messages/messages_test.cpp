@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "dds_test_support.hpp"
+#include "../platform/dds/dds_test_support.hpp"
 #include "messages/occupancy.hpp"
 
 namespace vp::messages {
