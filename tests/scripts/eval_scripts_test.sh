@@ -51,6 +51,9 @@ set +e
 set -e
 [[ $rc -eq 2 ]] && grep -q "no set 'no_such_set'" "$work/err" || fail "unknown set: rc $rc"
 [[ $("$root/scripts/make_eval_data.sh" --list | tail -n +2 | wc -l) -eq 12 ]] || fail "--list"
-"$root/scripts/make_eval_data.sh" --list | grep -q "^trk_val3 *9300-9305 *60" || fail "trk_val3 seeds"
-"$root/scripts/make_eval_data.sh" --list | grep -q "^sim_val_full *9000-9012 *4 *2592x2048" || fail "sim_val_full seeds and size"
+# The list is read whole first: `grep -q` on a pipe closes it at the first match, and under
+# pipefail the writer's SIGPIPE would fail the check now and then.
+sets=$("$root/scripts/make_eval_data.sh" --list)
+grep -q "^trk_val3 *9300-9305 *60" <<< "$sets" || fail "trk_val3 seeds"
+grep -q "^sim_val_full *9000-9012 *4 *2592x2048" <<< "$sets" || fail "sim_val_full seeds and size"
 echo "eval scripts: ok"
