@@ -139,32 +139,9 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
     return false;
   }
 
-  tracking::TrackerConfig tracker;
-  const config::TrackingConfig& t = config_.tracking;
-  tracker.maxTracks = t.maxTracks;
+  // The `tracking:` section is the tracker's own options; the app adds what it owns.
+  tracking::TrackerConfig tracker = config_.tracking;
   tracker.maxDetections = detection::kMaxDetectionsPerFrame;
-  tracker.confirmHits = t.confirmHits;
-  tracker.maxTentativeGap_s = t.maxTentativeGap_s;
-  tracker.maxLost_s = t.maxLost_s;
-  tracker.maxLostAtFrameEdge_s = t.maxLostAtEdge_s;
-  tracker.maxCoast_s = t.coast_s;
-  tracker.movingSpeed_mps = t.movingSpeed_mps;
-  tracker.flipVotes = t.flipVotes;
-  tracker.typeEvidenceWeight = t.typeEvidenceWeight;
-  tracker.shapeMaxWeight = t.shapeMaxWeight;
-  tracker.association.maxDistance_m = t.maxDistance_m;
-  tracker.association.highScore = static_cast<float>(t.highScore);
-  tracker.association.lowScore = static_cast<float>(t.lowScore);
-  tracker.noise.measurementPosition_m = t.measurementPosition_m;
-  tracker.noise.measurementHeading_rad = t.measurementHeading_deg * (geometry::kPi / 180.0);
-  tracker.noise.steeringDecay_s = t.steeringDecay_s;
-  tracker.confirmWholeHits = t.confirmWholeHits;
-  tracker.confirmHitsAnyway = t.confirmHitsAnyway;
-  tracker.confirmHitsStanding = t.confirmHitsStanding;
-  tracker.confirmHitsLarge = t.confirmHitsLarge;
-  tracker.confirmMinScore = t.confirmMinScore;
-  tracker.partialInsideShare = t.partialInsideShare;
-  tracker.partialAlongNoiseFactor = t.partialAlongNoiseFactor;
   tracker.asmModel = &asm_;
   std::string problem;
   if (!tracker_.init(tracker, &problem)) {
@@ -174,8 +151,8 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
     return false;
   }
   worldDetections_.resize(detection::kMaxDetectionsPerFrame);
-  states_.resize(static_cast<std::size_t>(t.maxTracks));
-  published_.resize(static_cast<std::size_t>(t.maxTracks));
+  states_.resize(static_cast<std::size_t>(tracker.maxTracks));
+  published_.resize(static_cast<std::size_t>(tracker.maxTracks));
 
   if (config_.dds.enabled) {
     dds_ = std::make_unique<DdsWriters>();
@@ -302,9 +279,9 @@ bool App::initWorld(std::string* why) {
     }
     return false;
   }
-  if (!asm_.load(config_.perception.asmPath, &problem)) {
+  if (!asm_.load(config_.asmPath, &problem)) {
     if (why) {
-      *why = "perception.asm " + config_.perception.asmPath + ": " + problem;
+      *why = "perception.asm " + config_.asmPath + ": " + problem;
     }
     return false;
   }
@@ -325,11 +302,8 @@ bool App::initWorld(std::string* why) {
 }
 
 bool App::initPose(std::string* why) {
-  telemetry::PoseBufferConfig buffer;
-  buffer.capacity = static_cast<std::size_t>(config_.pose.bufferCapacity);
-  buffer.maxAgeNs = static_cast<std::int64_t>(config_.pose.maxAge_s * 1e9);
   std::string problem;
-  if (!poses_.init(buffer, &problem)) {
+  if (!poses_.init(config_.pose, &problem)) {
     if (why) {
       *why = "pose: " + problem;
     }

@@ -168,7 +168,9 @@ void applyCommandLine(const CommandLine& line, config::AppConfig& config) {
     config.dds.enabled = false;
   }
   if (line.threads) {
-    config.perception.threads = *line.threads;
+    // As perception.threads: the detector's and the preprocessing's threads.
+    config.perception.detection.engine.threads = *line.threads;
+    config.perception.preprocess.threads = *line.threads;
   }
   if (line.trajectoryCsv) {
     config.app.trajectoryCsv = absolute(*line.trajectoryCsv);

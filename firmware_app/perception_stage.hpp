@@ -6,8 +6,8 @@
 // Contract: process() is called on the processing thread once per frame after init, never
 // throws and allocates nothing; a refused frame returns a status other than Ok and lastError()
 // names the problem. The results stay valid until the next process(). PipelinePerception is
-// the product's stage: perception::FramePipeline (preprocess -> detect -> lift) built from the
-// `perception:` configuration.
+// the product's stage: perception::FramePipeline (preprocess -> detect -> lift) with the
+// `perception:` section's options.
 #pragma once
 
 #include <span>
@@ -36,12 +36,10 @@ class FramePerception {
   virtual const char* modelId() const = 0;  // for the drone status, e.g. "detector_int8"
 };
 
-// perception::PipelineOptions from the `perception:` section.
-perception::PipelineOptions pipelineOptions(const config::PerceptionConfig& config);
-
 class PipelinePerception final : public FramePerception {
  public:
-  bool init(const config::PerceptionConfig& config, const camera::CameraModel& rawCamera,
+  // options: the `perception:` section (config::AppConfig::perception).
+  bool init(const perception::PipelineOptions& options, const camera::CameraModel& rawCamera,
             const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
             const geodesy::LocalFrame& frame, const shape::ActiveShapeModel& shapeModel,
             std::string* why);

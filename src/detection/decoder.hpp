@@ -36,8 +36,11 @@
 
 namespace vp::detection {
 
+// Defaults are the shipped configuration's (perception.*, config/default.yaml).
 struct DecoderOptions {
-  float scoreThreshold = 0.3F;          // heatmap probability, [0, 1] (evaluate.decode: 0.3)
+  // Heatmap probability, [0, 1]. 0.4: chosen on the tuning seeds for detector v1, re-checked
+  // for v4 and v5 (docs/model_card.md); tools/detector/evaluate.py decodes at 0.3.
+  float scoreThreshold = 0.4F;
   int topKPerTile = 200;                // peaks kept per tile, >= 1 (evaluate.decode: 200)
   double nmsIou = 0.5;                  // rotated IoU above which the weaker box goes, (0, 1]
   double duplicateOverlap = 0.5;        // cross-tile intersection / smaller area, (0, 1]

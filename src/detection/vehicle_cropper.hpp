@@ -84,17 +84,20 @@ struct CropNetOutputs {
   float vehicleLogit = 0.0F;
 };
 
+// Defaults are the shipped configuration's (perception.*, config/default.yaml): the choices
+// of the tuning seeds (docs/model_card.md).
 struct SecondStageOptions {
   bool applyFlip = true;                  // turn the heading by 180 deg when flip prob > 0.5
   bool applyRefine = true;                // centre/axis/size refinement (see the contract)
   bool shapeForLargeVehicles = false;     // keep gamma when the top type is Large
   bool refineLargeVehicleLength = false;  // apply length and du when the top type is Large
-  bool mirrorAverage = false;             // type averaged with the mirrored crop's (see contract)
-  bool mirrorRefine = false;              // ... and the refinement (needs mirrorAverage)
-  bool largeVehicleEnds = false;          // Large: front/back from crops at both ends (contract)
+  bool mirrorAverage = true;              // type averaged with the mirrored crop's (see contract)
+  bool mirrorRefine = true;               // ... and the refinement (needs mirrorAverage)
+  bool largeVehicleEnds = true;           // Large: front/back from crops at both ends (contract)
   // Detections whose verifier probability is below this are dropped after the second stage;
-  // 0 keeps all, and so does a crop network without the verifier output. [0, 1]
-  float minVehicleProbability = 0.0F;
+  // 0 keeps all, and so does a crop network without the verifier output. [0, 1]. 0.3: chosen
+  // on the tuning seeds (docs/model_card.md, round 8).
+  float minVehicleProbability = 0.3F;
 };
 
 enum class SecondStageStatus {

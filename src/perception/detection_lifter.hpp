@@ -94,7 +94,7 @@ struct DetectionLifterOptions {
   // ASM shape of its most likely type, else nominalHeightM): 0 for boxes that outline the
   // footprint on the ground; 0.5 for a detector's boxes, which enclose the whole vehicle, so
   // their centre shows the vehicle's middle, about half its height up (Lifter::boxToGround).
-  double boxHeightShare = 0.0;  // [0, 1]
+  double boxHeightShare = 0.5;  // [0, 1]; the shipped detector's boxes
   double nominalHeightM = 1.5;  // vehicles without an ASM shape (large vehicles), m
 };
 

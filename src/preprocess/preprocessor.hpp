@@ -45,8 +45,12 @@ constexpr int kMaxTiles = 64;
 // resolution the detector is trained at (tools/detector/README.md).
 constexpr double kDefaultWorkingScale = 648.0 / 2592.0;
 
+// The preprocessing knobs (config: perception.*, docs/configuration.md). Defaults are the
+// shipped configuration's (config/default.yaml; a test keeps the two equal).
 struct PreprocessOptions {
-  bool undistort = true;      // remove lens distortion (no-op for a pinhole camera)
+  // Remove lens distortion (no-op for a pinhole camera). Off: the shipped detector is trained
+  // on raw (distorted) frames.
+  bool undistort = false;
   bool whiteBalance = false;  // seed 001 AWB (the detector is trained without it)
   WhiteBalanceOptions whiteBalanceOptions{};
   double workingScale = kDefaultWorkingScale;  // working px per frame px, (0, 1]
@@ -54,7 +58,7 @@ struct PreprocessOptions {
   int networkHeightPx = 512;
   int tileOverlapPx = 96;  // working px, >= the longest vehicle at the working scale
   int padValue = 128;      // 8-bit grey of the padding (the networks' mean: input 0)
-  int threads = 1;         // row-loop threads (1 = the caller's thread)
+  int threads = 1;         // row-loop threads (1 = the caller's thread), [1, 16]
 };
 
 // Checks ranges; false with a message naming the option otherwise.

@@ -29,8 +29,8 @@ struct AssociationParams {
   double mahalanobisGate = 13.82;  // gate 3: chi-square, 2 dof, 99.9 %
   double mahalanobisWeight = 1.0;
   double iouWeight = 1.0;
-  float highScore = 0.5f;  // first pass (and track birth) from here
-  float lowScore = 0.1f;   // second pass from here up to highScore
+  float highScore = 0.45f;  // first pass (and track birth) from here, [0, 1]
+  float lowScore = 0.1f;    // second pass from here up to highScore, [0, highScore]
 };
 
 struct TrackView {

@@ -28,6 +28,8 @@
 
 #include <Eigen/Core>
 
+#include "geometry/rotated_box.hpp"  // kPi
+
 namespace vp::tracking {
 
 enum MotionState : int { kX = 0, kY, kPsi, kV, kA, kDelta, kStateSize };
@@ -36,20 +38,23 @@ using StateVector = Eigen::Matrix<double, kStateSize, 1>;
 using StateMatrix = Eigen::Matrix<double, kStateSize, kStateSize>;
 
 // Process and measurement noise (1 sigma). Defaults tuned on synthetic seed 1 only
-// (docs/tracking.md).
+// (docs/tracking.md); the measurement noise and the steering decay (config: tracking.*) are the
+// shipped configuration's, tuned with detector v6 on the tuning seeds.
 struct MotionNoise {
   double positionDiffusion_mPerSqrtS = 0.05;   // model error on x, y
   double headingDiffusion_radPerSqrtS = 0.02;  // model error on psi
   double jerk_mPerS3 = 1.0;                    // white jerk drives a and v
   double steeringRate_radPerS = 0.15;          // white steering rate drives delta
   double accelerationDecay_s = 3.0;            // tauA: a relaxes to 0 (drivers stop accelerating)
-  double steeringDecay_s = 0.0;          // tauD: delta relaxes to 0 (drivers straighten); 0 = never
-  double maxSteering_rad = 0.6;          // |delta| is clamped (mechanical limit)
-  double standstillSpeed_mps = 0.3;      // below: the mean does not move (dead band)
-  double standstillDecay_s = 0.5;        // v, a relax to 0 inside the dead band
-  double measurementPosition_m = 0.10;   // detection centre, per axis
-  double measurementHeading_rad = 0.06;  // detection heading
-  double initialSpeed_mps = 20.0;        // prior spread of v at track birth
+  double steeringDecay_s =
+      2.0;  // tauD: delta relaxes to 0 (drivers straighten), [0, 60]; 0 = never
+  double maxSteering_rad = 0.6;         // |delta| is clamped (mechanical limit)
+  double standstillSpeed_mps = 0.3;     // below: the mean does not move (dead band)
+  double standstillDecay_s = 0.5;       // v, a relax to 0 inside the dead band
+  double measurementPosition_m = 0.30;  // lifted detection centre, per axis, (0, 10]
+  // Detection heading: 8 deg ((0, 90] deg in the configuration file).
+  double measurementHeading_rad = 8.0 * (geometry::kPi / 180.0);
+  double initialSpeed_mps = 20.0;  // prior spread of v at track birth
   double initialAcceleration_mps2 = 1.5;
   double initialSteering_rad = 0.15;
 };

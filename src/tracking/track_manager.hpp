@@ -93,7 +93,7 @@ struct TrackerConfig {
   // track was re-acquired by a vehicle driving in at the same place, which inherited its id and
   // its motion the wrong way round (tuning seeds: docs/tracking.md).
   double maxLostAtFrameEdge_s = 1.0;
-  double maxCoast_s = 0.0;  // a confirmed track unmatched this long stays confirmed, then lost
+  double maxCoast_s = 0.3;  // a confirmed track unmatched this long stays confirmed, then lost
   double movingSpeed_mps = 1.5;
   int flipVotes = 3;
   double typeEvidenceWeight = 0.5;

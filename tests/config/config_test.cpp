@@ -319,16 +319,15 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
 
   // The loop's sections: the shipped models of the repository, replay with recorded telemetry.
   const fs::path models = fs::path(VP_SOURCE_DIR) / "models";
-  EXPECT_EQ(config.perception.detectorModel,
+  EXPECT_EQ(config.perception.detection.detectorModelPath,
             (models / "detector/detector_int8.onnx").lexically_normal().string());
-  EXPECT_EQ(config.perception.cropModel,
+  EXPECT_EQ(config.perception.detection.cropModelPath,
             (models / "detector/crop_int8.onnx").lexically_normal().string());
-  EXPECT_EQ(config.perception.asmPath,
-            (models / "asm/default_asm.yaml").lexically_normal().string());
-  EXPECT_TRUE(fs::is_regular_file(config.perception.asmPath));
-  EXPECT_EQ(config.perception.backend, InferenceBackend::Int8);
-  EXPECT_EQ(config.perception.whiteBalanceRegionRows, 3);
-  EXPECT_EQ(config.perception.whiteBalanceRegionCols, 4);
+  EXPECT_EQ(config.asmPath, (models / "asm/default_asm.yaml").lexically_normal().string());
+  EXPECT_TRUE(fs::is_regular_file(config.asmPath));
+  EXPECT_EQ(config.perception.detection.engine.backend, inference::Backend::XnnpackInt8);
+  EXPECT_EQ(config.perception.preprocess.whiteBalanceOptions.regionRows, 3);
+  EXPECT_EQ(config.perception.preprocess.whiteBalanceOptions.regionCols, 4);
   EXPECT_EQ(config.source.kind, FrameSourceKind::Replay);
   EXPECT_EQ(config.telemetry.source, TelemetrySourceKind::Recording);
   EXPECT_EQ(config.app.queueDepth, 1);
@@ -1244,56 +1243,58 @@ TEST(ConfigDds, SectionAloneIgnoresTheOtherSections) {
 TEST(ConfigLoop, FullSectionsReadEveryKey) {
   const AppConfig config = parse(kFullConfig);
   EXPECT_TRUE(config.warnings.empty());
-  const PerceptionConfig& p = config.perception;
-  EXPECT_EQ(p.detectorModel, "/data/site/models/det.onnx");
-  EXPECT_EQ(p.cropModel, "/data/site/models/crop.onnx");
-  EXPECT_EQ(p.asmPath, "/data/site/models/asm.yaml");
-  EXPECT_EQ(p.backend, InferenceBackend::Fp32);
-  EXPECT_EQ(p.threads, 2);
-  EXPECT_EQ(p.cropThreads, 3);
-  EXPECT_FALSE(p.undistort);
-  EXPECT_TRUE(p.whiteBalance);
-  EXPECT_EQ(p.whiteBalanceRegionRows, 2);
-  EXPECT_EQ(p.whiteBalanceRegionCols, 5);
-  EXPECT_EQ(p.whiteBalanceSampleStridePx, 8);
-  EXPECT_DOUBLE_EQ(p.whiteBalanceWhiteShare, 0.2);
-  EXPECT_DOUBLE_EQ(p.whiteBalanceMaxGain, 3.0);
-  EXPECT_DOUBLE_EQ(p.workingScale, 0.5);
-  EXPECT_EQ(p.tileOverlapPx, 64);
-  EXPECT_DOUBLE_EQ(p.scoreThreshold, 0.35);
-  EXPECT_EQ(p.topKPerTile, 100);
-  EXPECT_DOUBLE_EQ(p.nmsIou, 0.45);
-  EXPECT_DOUBLE_EQ(p.duplicateOverlap, 0.6);
-  EXPECT_DOUBLE_EQ(p.cutEdgeMarginPx, 5.0);
-  EXPECT_EQ(p.maxCrops, 64);
-  EXPECT_FALSE(p.applyFlip);
-  EXPECT_FALSE(p.applyRefine);
-  EXPECT_FALSE(p.cropMirrorAverage);
-  EXPECT_FALSE(p.cropMirrorRefine);
-  EXPECT_FALSE(p.cropLargeVehicleEnds);
-  EXPECT_DOUBLE_EQ(p.cropMinVehicleProbability, 0.25);
-  EXPECT_DOUBLE_EQ(p.fixedGsd_m, 0.03);
-  EXPECT_DOUBLE_EQ(p.nominalCarLength_m, 4.4);
-  EXPECT_DOUBLE_EQ(p.liftHeightShare, 0.4);
-  EXPECT_DOUBLE_EQ(config.pose.maxAge_s, 0.3);
-  EXPECT_EQ(config.pose.bufferCapacity, 128);
-  const TrackingConfig& t = config.tracking;
+  const preprocess::PreprocessOptions& pre = config.perception.preprocess;
+  const detection::DetectionStageOptions& det = config.perception.detection;
+  EXPECT_EQ(det.detectorModelPath, "/data/site/models/det.onnx");
+  EXPECT_EQ(det.cropModelPath, "/data/site/models/crop.onnx");
+  EXPECT_EQ(config.asmPath, "/data/site/models/asm.yaml");
+  EXPECT_EQ(det.engine.backend, inference::Backend::XnnpackFp32);
+  EXPECT_EQ(det.engine.threads, 2);
+  EXPECT_EQ(pre.threads, 2);
+  EXPECT_EQ(det.cropEngineThreads, 3);
+  EXPECT_FALSE(pre.undistort);
+  EXPECT_TRUE(pre.whiteBalance);
+  EXPECT_EQ(pre.whiteBalanceOptions.regionRows, 2);
+  EXPECT_EQ(pre.whiteBalanceOptions.regionCols, 5);
+  EXPECT_EQ(pre.whiteBalanceOptions.sampleStridePx, 8);
+  EXPECT_DOUBLE_EQ(pre.whiteBalanceOptions.whitePointShare, 0.2);
+  EXPECT_DOUBLE_EQ(pre.whiteBalanceOptions.maxGain, 3.0);
+  EXPECT_DOUBLE_EQ(pre.workingScale, 0.5);
+  EXPECT_EQ(pre.tileOverlapPx, 64);
+  EXPECT_FLOAT_EQ(det.decoder.scoreThreshold, 0.35F);
+  EXPECT_EQ(det.decoder.topKPerTile, 100);
+  EXPECT_DOUBLE_EQ(det.decoder.nmsIou, 0.45);
+  EXPECT_DOUBLE_EQ(det.decoder.duplicateOverlap, 0.6);
+  EXPECT_DOUBLE_EQ(det.decoder.cutEdgeMarginPx, 5.0);
+  EXPECT_EQ(det.maxCrops, 64);
+  EXPECT_FALSE(det.secondStage.applyFlip);
+  EXPECT_FALSE(det.secondStage.applyRefine);
+  EXPECT_FALSE(det.secondStage.mirrorAverage);
+  EXPECT_FALSE(det.secondStage.mirrorRefine);
+  EXPECT_FALSE(det.secondStage.largeVehicleEnds);
+  EXPECT_FLOAT_EQ(det.secondStage.minVehicleProbability, 0.25F);
+  EXPECT_DOUBLE_EQ(det.gsd.fixedGsd_m, 0.03);
+  EXPECT_DOUBLE_EQ(det.gsd.nominalCarLength_m, 4.4);
+  EXPECT_DOUBLE_EQ(config.perception.lift.boxHeightShare, 0.4);
+  EXPECT_EQ(config.pose.maxAgeNs, 300'000'000);
+  EXPECT_EQ(config.pose.capacity, 128U);
+  const tracking::TrackerConfig& t = config.tracking;
   EXPECT_EQ(t.maxTracks, 300);
   EXPECT_EQ(t.confirmHits, 4);
   EXPECT_DOUBLE_EQ(t.maxTentativeGap_s, 0.3);
   EXPECT_DOUBLE_EQ(t.maxLost_s, 2.5);
-  EXPECT_DOUBLE_EQ(t.maxLostAtEdge_s, 0.7);
-  EXPECT_DOUBLE_EQ(t.coast_s, 0.4);
+  EXPECT_DOUBLE_EQ(t.maxLostAtFrameEdge_s, 0.7);
+  EXPECT_DOUBLE_EQ(t.maxCoast_s, 0.4);
   EXPECT_DOUBLE_EQ(t.movingSpeed_mps, 1.2);
   EXPECT_EQ(t.flipVotes, 5);
   EXPECT_DOUBLE_EQ(t.typeEvidenceWeight, 0.4);
   EXPECT_DOUBLE_EQ(t.shapeMaxWeight, 20.0);
-  EXPECT_DOUBLE_EQ(t.maxDistance_m, 5.0);
-  EXPECT_DOUBLE_EQ(t.highScore, 0.6);
-  EXPECT_DOUBLE_EQ(t.lowScore, 0.15);
-  EXPECT_DOUBLE_EQ(t.measurementPosition_m, 0.3);
-  EXPECT_DOUBLE_EQ(t.measurementHeading_deg, 5.0);
-  EXPECT_DOUBLE_EQ(t.steeringDecay_s, 2.0);
+  EXPECT_DOUBLE_EQ(t.association.maxDistance_m, 5.0);
+  EXPECT_FLOAT_EQ(t.association.highScore, 0.6F);
+  EXPECT_FLOAT_EQ(t.association.lowScore, 0.15F);
+  EXPECT_DOUBLE_EQ(t.noise.measurementPosition_m, 0.3);
+  EXPECT_DOUBLE_EQ(t.noise.measurementHeading_rad, 5.0 * (geometry::kPi / 180.0));
+  EXPECT_DOUBLE_EQ(t.noise.steeringDecay_s, 2.0);
   EXPECT_EQ(t.confirmWholeHits, 1);
   EXPECT_EQ(t.confirmHitsAnyway, 7);
   EXPECT_EQ(t.confirmHitsStanding, 4);
@@ -1340,21 +1341,22 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
 
 TEST(ConfigLoop, AbsentSectionsGiveTheDocumentedDefaults) {
   const AppConfig config = parse(kMinimalConfig);
-  const PerceptionConfig p = config.perception;
+  const preprocess::PreprocessOptions& pre = config.perception.preprocess;
+  const detection::DetectionStageOptions& det = config.perception.detection;
   // Model paths default to the repository's models/, beside the configuration's folder.
-  EXPECT_EQ(p.detectorModel, "/data/models/detector/detector_int8.onnx");
-  EXPECT_EQ(p.cropModel, "/data/models/detector/crop_int8.onnx");
-  EXPECT_EQ(p.asmPath, "/data/models/asm/default_asm.yaml");
-  EXPECT_EQ(p.backend, InferenceBackend::Int8);
-  EXPECT_EQ(p.threads, 1);
-  EXPECT_FALSE(p.undistort);
-  EXPECT_FALSE(p.whiteBalance);
-  EXPECT_DOUBLE_EQ(p.workingScale, 0.25);
-  EXPECT_EQ(p.tileOverlapPx, 96);
-  EXPECT_DOUBLE_EQ(p.scoreThreshold, 0.4);
-  EXPECT_EQ(p.maxCrops, 512);
-  EXPECT_DOUBLE_EQ(config.pose.maxAge_s, 0.2);
-  EXPECT_EQ(config.pose.bufferCapacity, 256);
+  EXPECT_EQ(det.detectorModelPath, "/data/models/detector/detector_int8.onnx");
+  EXPECT_EQ(det.cropModelPath, "/data/models/detector/crop_int8.onnx");
+  EXPECT_EQ(config.asmPath, "/data/models/asm/default_asm.yaml");
+  EXPECT_EQ(det.engine.backend, inference::Backend::XnnpackInt8);
+  EXPECT_EQ(det.engine.threads, 1);
+  EXPECT_FALSE(pre.undistort);
+  EXPECT_FALSE(pre.whiteBalance);
+  EXPECT_DOUBLE_EQ(pre.workingScale, 0.25);
+  EXPECT_EQ(pre.tileOverlapPx, 96);
+  EXPECT_FLOAT_EQ(det.decoder.scoreThreshold, 0.4F);
+  EXPECT_EQ(det.maxCrops, 512);
+  EXPECT_EQ(config.pose.maxAgeNs, 200'000'000);
+  EXPECT_EQ(config.pose.capacity, 256U);
   EXPECT_EQ(config.tracking.maxTracks, 256);
   EXPECT_EQ(config.tracking.confirmHits, 3);
   EXPECT_EQ(config.source.kind, FrameSourceKind::Replay);
@@ -1379,7 +1381,7 @@ TEST(ConfigLoop, AbsentSectionsGiveTheDocumentedDefaults) {
 
 TEST(ConfigLoop, NoneSwitchesAnOptionalFileOffAndDdsTelemetryNeedsAFlightStack) {
   const AppConfig config = parse(edited("crop_model: models/crop.onnx", "crop_model: none"));
-  EXPECT_TRUE(config.perception.cropModel.empty());
+  EXPECT_TRUE(config.perception.detection.cropModelPath.empty());
   EXPECT_TRUE(parse(edited("trajectory_csv: out/tracks.csv", "trajectory_csv: none"))
                   .app.trajectoryCsv.empty());
   // kFullConfig reads PX4 telemetry over DDS: dds is a valid pose source there.

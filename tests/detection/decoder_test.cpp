@@ -13,6 +13,14 @@
 namespace vp::detection {
 namespace {
 
+// tools/detector/evaluate.py's decoding (threshold 0.3, not the shipped 0.4), which these
+// tests were written against.
+DecoderOptions pythonDecode() {
+  DecoderOptions options;
+  options.scoreThreshold = 0.3F;
+  return options;
+}
+
 using test::SyntheticHeads;
 
 preprocess::TileView tileAt(int index, int x0, int y0, int width, int height, bool innerLeft,
@@ -75,7 +83,7 @@ TEST(DetectionDecoder, MatchesThePythonDecoderOnAHandMadeGrid) {
       {18.100000024, 1.900000006, 18.174146652, 4.481688976, 0.800000072, 0.5000000},
       {4.899999976, 1.900000006, 13.463736534, 4.481688976, 4.983185355, 0.3500000}};
 
-  DecoderOptions options;
+  DecoderOptions options = pythonDecode();
   options.nmsIou = 1.0;  // Python's decode has no box NMS: keep every peak
   DetectionDecoder decoder;
   std::string why;
@@ -121,7 +129,7 @@ TEST(DetectionDecoder, KnownVehiclesComeBackExactlyInFramePixels) {
                      v.width * 0.25, v.angle, v.score);
   }
   DetectionDecoder decoder;
-  ASSERT_TRUE(decoder.init(DecoderOptions{}, 168, 128, 4, 1));
+  ASSERT_TRUE(decoder.init(pythonDecode(), 168, 128, 4, 1));
   decoder.beginFrame();
   ASSERT_EQ(decoder.decodeTile(heads.heads(), tileAt(0, 0, 0, 672, 512, false, false), geometry),
             DecodeStatus::Ok);
@@ -147,7 +155,7 @@ TEST(DetectionDecoder, ThresholdTopKAndPlateaus) {
   heads.addVehicle(20, 80, 30, 12, 2.0, 0.7F);
   heads.addVehicle(80, 80, 30, 12, 3.0, 0.29F);  // below the 0.3 threshold
   const preprocess::FrameGeometry geometry = geometryFor(160, 120, 1.0);
-  DecoderOptions options;
+  DecoderOptions options = pythonDecode();
   options.topKPerTile = 2;
   DetectionDecoder decoder;
   ASSERT_TRUE(decoder.init(options, 40, 30, 4, 1));
@@ -168,7 +176,7 @@ TEST(DetectionDecoder, ThresholdTopKAndPlateaus) {
   std::copy_n(plateau.sizeAt(9, 9), 2, plateau.sizeAt(10, 9));
   std::copy_n(plateau.directionAt(9, 9), 2, plateau.directionAt(10, 9));
   DetectionDecoder second;
-  ASSERT_TRUE(second.init(DecoderOptions{}, 20, 20, 4, 1));
+  ASSERT_TRUE(second.init(pythonDecode(), 20, 20, 4, 1));
   second.beginFrame();
   ASSERT_EQ(second.decodeTile(plateau.heads(), tileAt(0, 0, 0, 80, 80, false, false),
                               geometryFor(80, 80, 1.0)),
@@ -182,7 +190,7 @@ TEST(DetectionDecoder, ThresholdTopKAndPlateaus) {
 // (72 px overlap), both 672 x 512.
 class CrossTile : public ::testing::Test {
  protected:
-  void SetUp() override { ASSERT_TRUE(decoder.init(DecoderOptions{}, 168, 128, 4, 2)); }
+  void SetUp() override { ASSERT_TRUE(decoder.init(pythonDecode(), 168, 128, 4, 2)); }
   std::size_t decode(const SyntheticHeads& a, const SyntheticHeads& b) {
     decoder.beginFrame();
     EXPECT_EQ(decoder.decodeTile(a.heads(), tileAt(0, 0, 0, 672, 512, false, true), geometry),
@@ -244,7 +252,7 @@ TEST(DetectionDecoder, OverlappingBoxesInOneTileKeepTheBest) {
   heads.addVehicle(108.0, 80.0, 40.0, 16.0, 0.1, 0.6F);   // IoU ~0.6 with the first
   heads.addVehicle(100.0, 100.0, 40.0, 16.0, 0.0, 0.7F);  // beside it: IoU 0
   DetectionDecoder decoder;
-  ASSERT_TRUE(decoder.init(DecoderOptions{}, 60, 40, 4, 1));
+  ASSERT_TRUE(decoder.init(pythonDecode(), 60, 40, 4, 1));
   decoder.beginFrame();
   ASSERT_EQ(decoder.decodeTile(heads.heads(), tileAt(0, 0, 0, 240, 160, false, false),
                                geometryFor(240, 160, 1.0)),
@@ -263,7 +271,7 @@ TEST(DetectionDecoder, CentresInThePaddingAreNotVehicles) {
   const preprocess::FrameGeometry geometry = geometryFor(2592, 2048, 0.25);
   std::array<Detection, 8> out{};
   for (const bool drop : {true, false}) {
-    DecoderOptions options;
+    DecoderOptions options = pythonDecode();
     options.dropCentresOutsideFrame = drop;
     DetectionDecoder decoder;
     ASSERT_TRUE(decoder.init(options, 168, 128, 4, 1));
@@ -283,7 +291,7 @@ TEST(DetectionDecoder, OutputCapacityAndStatuses) {
   const preprocess::TileView tile = tileAt(0, 0, 0, 160, 120, false, false);
   DetectionDecoder decoder;
   EXPECT_EQ(decoder.decodeTile(heads.heads(), tile, geometry), DecodeStatus::NotInitialised);
-  ASSERT_TRUE(decoder.init(DecoderOptions{}, 40, 30, 4, 1));
+  ASSERT_TRUE(decoder.init(pythonDecode(), 40, 30, 4, 1));
   decoder.beginFrame();
   HeadTensors broken = heads.heads();
   broken.size = nullptr;
@@ -299,11 +307,11 @@ TEST(DetectionDecoder, OutputCapacityAndStatuses) {
   EXPECT_EQ(two[1].score, 0.8F);
 
   std::string why;
-  DecoderOptions bad;
+  DecoderOptions bad = pythonDecode();
   bad.scoreThreshold = 1.5F;
   EXPECT_FALSE(decoder.init(bad, 40, 30, 4, 1, &why));
   EXPECT_NE(why.find("score_threshold"), std::string::npos) << why;
-  bad = DecoderOptions{};
+  bad = pythonDecode();
   bad.nmsIou = 0.0;
   EXPECT_FALSE(validate(bad, &why));
   EXPECT_NE(why.find("nms_iou"), std::string::npos) << why;

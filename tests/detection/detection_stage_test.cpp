@@ -54,13 +54,25 @@ DetectionStageOptions stageOptions(int threads) {
   options.decoder.scoreThreshold = 0.0F;
   options.decoder.topKPerTile = 64;
   options.maxCrops = 32;
+  // One crop per vehicle and no verifier, as these tests were written for.
+  options.secondStage.mirrorAverage = false;
+  options.secondStage.mirrorRefine = false;
+  options.secondStage.largeVehicleEnds = false;
+  options.secondStage.minVehicleProbability = 0.0F;
+  return options;
+}
+
+// Undistorted frames, as these tests were written for (the shipped default keeps them raw).
+preprocess::PreprocessOptions undistorting() {
+  preprocess::PreprocessOptions options;
+  options.undistort = true;
   return options;
 }
 
 TEST(DetectionStage, RunsTheShippedModelsOnAFullFrame) {
   preprocess::Preprocessor pre;
   std::string why;
-  ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}, &why)) << why;
+  ASSERT_TRUE(pre.init(undistorting(), camera2592(), {2592, 2048}, &why)) << why;
   DetectionStage stage;
   ASSERT_TRUE(stage.init(stageOptions(1), static_cast<int>(pre.tileCount()), &why)) << why;
   EXPECT_EQ(stage.detectorInputWidth(), 672);
@@ -118,7 +130,7 @@ TEST(DetectionStage, RunsTheShippedModelsOnAFullFrame) {
 TEST(DetectionStage, VerifierDropsOnlyDetectionsBelowTheMinimumVehicleProbability) {
   preprocess::Preprocessor pre;
   std::string why;
-  ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}, &why)) << why;
+  ASSERT_TRUE(pre.init(undistorting(), camera2592(), {2592, 2048}, &why)) << why;
   ASSERT_EQ(pre.process(sceneFrame()), preprocess::PreprocessStatus::Ok);
   DetectionStageOptions options = stageOptions(1);
   options.maxCrops = kMaxDetectionsPerFrame;  // every detection gets its crop run
@@ -164,7 +176,7 @@ TEST(DetectionStage, VerifierDropsOnlyDetectionsBelowTheMinimumVehicleProbabilit
 TEST(DetectionStage, CropBackendSwitchesOnlyTheSecondStage) {
   preprocess::Preprocessor pre;
   std::string why;
-  ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}, &why)) << why;
+  ASSERT_TRUE(pre.init(undistorting(), camera2592(), {2592, 2048}, &why)) << why;
   const cv::Mat frame = sceneFrame();
   auto runWith = [&](std::optional<inference::Backend> cropBackend,
                      std::array<Detection, kMaxDetectionsPerFrame>& out) {
@@ -204,7 +216,7 @@ class FixedGsd : public GsdProvider {
 
 TEST(DetectionStage, GsdProviderIsAskedPerDetection) {
   preprocess::Preprocessor pre;
-  ASSERT_TRUE(pre.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}));
+  ASSERT_TRUE(pre.init(undistorting(), camera2592(), {2592, 2048}));
   DetectionStage stage;
   DetectionStageOptions options = stageOptions(1);
   options.maxCrops = 8;
@@ -221,7 +233,7 @@ TEST(DetectionStage, GsdProviderIsAskedPerDetection) {
 TEST(DetectionStage, NoHeapAllocationPerFrame) {
   const cv::Mat frame = sceneFrame();
   for (const int threads : {1, 2}) {
-    preprocess::PreprocessOptions preOptions;
+    preprocess::PreprocessOptions preOptions = undistorting();
     preOptions.threads = threads;
     preOptions.whiteBalance = true;
     preprocess::Preprocessor pre;
@@ -259,7 +271,7 @@ TEST(DetectionStage, BadInputGivesStatuses) {
   EXPECT_EQ(stage.run(frame, out, &count), DetectionStatus::NoTiles);
 
   // A frame preprocessed for another network size: wrong tiles.
-  preprocess::PreprocessOptions small;
+  preprocess::PreprocessOptions small = undistorting();
   small.networkWidthPx = 320;
   small.networkHeightPx = 256;
   small.tileOverlapPx = 64;
@@ -273,7 +285,7 @@ TEST(DetectionStage, BadInputGivesStatuses) {
 
   // Tiles but no frame to crop from.
   preprocess::Preprocessor good;
-  ASSERT_TRUE(good.init(preprocess::PreprocessOptions{}, camera2592(), {2592, 2048}));
+  ASSERT_TRUE(good.init(undistorting(), camera2592(), {2592, 2048}));
   ASSERT_EQ(good.process(sceneFrame()), preprocess::PreprocessStatus::Ok);
   preprocess::PreprocessedFrame noFrame = good.output();
   noFrame.frame = cv::Mat();

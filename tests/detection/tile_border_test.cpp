@@ -97,6 +97,11 @@ void prepare(const vp::sim::SimOptions& sim, float scoreThreshold, double workin
   options.detectorModelPath = std::string(VP_SOURCE_DIR) + "/models/detector/detector_int8.onnx";
   options.cropModelPath = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
   options.decoder.scoreThreshold = scoreThreshold;
+  // One crop per vehicle and no verifier, as this test was written for.
+  options.secondStage.mirrorAverage = false;
+  options.secondStage.mirrorRefine = false;
+  options.secondStage.largeVehicleEnds = false;
+  options.secondStage.minVehicleProbability = 0.0F;
   ASSERT_TRUE(stage.init(options, vp::preprocess::kMaxTiles, &why)) << why;
   vp::preprocess::PreprocessOptions pre;
   pre.undistort = false;

@@ -17,6 +17,18 @@
 namespace vp::detection {
 namespace {
 
+// One crop per vehicle, no verifier: the second stage's plain rules, which these tests take
+// apart one by one (the shipped defaults add the mirrored crop, the large-vehicle ends and the
+// verifier).
+SecondStageOptions singleCrop() {
+  SecondStageOptions options;
+  options.mirrorAverage = false;
+  options.mirrorRefine = false;
+  options.largeVehicleEnds = false;
+  options.minVehicleProbability = 0.0F;
+  return options;
+}
+
 // Made with /usr/bin/python3 in tools/: print(crops.crop_affine(center, angle, gsd).tolist()).
 TEST(VehicleCropper, CropMapEqualsPythonCropAffine) {
   struct Case {
@@ -142,7 +154,7 @@ TEST(VehicleCropper, AppliedOutputsInvertThePythonTrainingTargets) {
     outputs.shape = gamma;
     outputs.flipLogit = c.flip != 0 ? 3.0F : -3.0F;
     outputs.refine = c.raw;
-    ASSERT_EQ(applyCropOutputs(outputs, c.gsd, SecondStageOptions{}, &d), SecondStageStatus::Ok);
+    ASSERT_EQ(applyCropOutputs(outputs, c.gsd, singleCrop(), &d), SecondStageStatus::Ok);
     EXPECT_NEAR(d.box.cx, c.box[0], 1e-4);
     EXPECT_NEAR(d.box.cy, c.box[1], 1e-4);
     EXPECT_NEAR(d.box.length, c.box[2], 1e-4);
@@ -160,17 +172,16 @@ TEST(VehicleCropper, VerifierLogitBecomesTheVehicleProbability) {
   Detection d;
   d.box = {100.0, 50.0, 150.0, 60.0, 0.5};
   // No verifier output: unknown, not "certainly a vehicle".
-  ASSERT_EQ(applyCropOutputs(outputs, 0.03, SecondStageOptions{}, &d), SecondStageStatus::Ok);
+  ASSERT_EQ(applyCropOutputs(outputs, 0.03, singleCrop(), &d), SecondStageStatus::Ok);
   EXPECT_TRUE(std::isnan(d.vehicleProbability));
   outputs.hasVehicleLogit = true;
   for (const float logit : {-2.0F, 0.0F, 3.0F}) {
     outputs.vehicleLogit = logit;
-    ASSERT_EQ(applyCropOutputs(outputs, 0.03, SecondStageOptions{}, &d), SecondStageStatus::Ok);
+    ASSERT_EQ(applyCropOutputs(outputs, 0.03, singleCrop(), &d), SecondStageStatus::Ok);
     EXPECT_NEAR(d.vehicleProbability, 1.0 / (1.0 + std::exp(-static_cast<double>(logit))), 1e-6);
   }
   outputs.vehicleLogit = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_EQ(applyCropOutputs(outputs, 0.03, SecondStageOptions{}, &d),
-            SecondStageStatus::BadOutputs);
+  EXPECT_EQ(applyCropOutputs(outputs, 0.03, singleCrop(), &d), SecondStageStatus::BadOutputs);
 }
 
 TEST(VehicleCropper, TypesShapeAndFlipOnly) {
@@ -180,7 +191,7 @@ TEST(VehicleCropper, TypesShapeAndFlipOnly) {
   Detection d;
   d.box = {100.0, 50.0, 150.0, 60.0, 0.5};
   CropNetOutputs outputs{logits, gamma, 0.2F, refine};
-  SecondStageOptions options;
+  SecondStageOptions options = singleCrop();
   options.applyRefine = false;  // = Predictor.run_crops' boxes_flip_corrected
   ASSERT_EQ(applyCropOutputs(outputs, 0.03, options, &d), SecondStageStatus::Ok);
   EXPECT_NEAR(d.box.angle, 0.5 + geometry::kPi, 1e-12);
@@ -241,14 +252,14 @@ TEST(VehicleCropper, LargeVehicleKeepsTheFirstStageLength) {
   Detection large;
   large.box = {500.0, 300.0, 200.0, 50.0, 0.0};  // a 10 m x 2.5 m bus along +u
   CropNetOutputs outputs{largeLogits, gamma, -3.0F, raw};
-  ASSERT_EQ(applyCropOutputs(outputs, gsd, SecondStageOptions{}, &large), SecondStageStatus::Ok);
+  ASSERT_EQ(applyCropOutputs(outputs, gsd, singleCrop(), &large), SecondStageStatus::Ok);
   EXPECT_NEAR(large.box.cx, 500.0, 1e-9);        // du not applied
   EXPECT_NEAR(large.box.cy, 300.0 + 5.0, 1e-9);  // dv 0.25 m = 5 px
   EXPECT_NEAR(large.box.length, 200.0, 1e-9);
   EXPECT_NEAR(large.box.width, 2.0 / gsd, 1e-4);
   EXPECT_NEAR(large.box.angle, 0.02, 1e-6);
 
-  SecondStageOptions options;
+  SecondStageOptions options = singleCrop();
   options.refineLargeVehicleLength = true;  // the crop's length after all
   Detection refined;
   refined.box = {500.0, 300.0, 200.0, 50.0, 0.0};
@@ -262,7 +273,7 @@ TEST(VehicleCropper, LargeVehicleKeepsTheFirstStageLength) {
   Detection car;
   car.box = {500.0, 300.0, 90.0, 36.0, 0.0};
   outputs.typeLogits = carLogits;
-  ASSERT_EQ(applyCropOutputs(outputs, gsd, SecondStageOptions{}, &car), SecondStageStatus::Ok);
+  ASSERT_EQ(applyCropOutputs(outputs, gsd, singleCrop(), &car), SecondStageStatus::Ok);
   EXPECT_NEAR(car.box.cx, 510.0, 1e-9);
   EXPECT_NEAR(car.box.length, 5.5 / gsd, 1e-4);
 }
@@ -295,7 +306,7 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
     return d;
   };
   const std::string model = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
-  SecondStageOptions single;
+  SecondStageOptions single = singleCrop();
   single.applyFlip = false;
   SecondStageOptions averaged = single;
   averaged.mirrorAverage = true;
@@ -381,7 +392,7 @@ TEST(VehicleCropper, LargeVehicleFrontBackFromCropsAtBothEnds) {
   cv::rectangle(frame, cv::Rect(200, 320, 180, 72), cv::Scalar(40, 60, 200), cv::FILLED);
   constexpr double kGsd = 0.025;  // 12 m = 480 px; the crop window 5.76 m = 230.4 px
   const std::string model = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
-  SecondStageOptions plain;
+  SecondStageOptions plain = singleCrop();
   plain.applyRefine = false;
   plain.applyFlip = false;
   VehicleCropper cropper;

@@ -44,7 +44,7 @@ config::AppConfig loopConfig(const std::string& sequenceDir) {
   config::AppConfig config = test::defaultConfigFor(sequenceDir);
   config.dds.enabled = false;
   config.source.paced = false;
-  config.perception.workingScale = 1.0;
+  config.perception.preprocess.workingScale = 1.0;
   config.app.statsPeriod_s = 3600.0;
   return config;
 }
@@ -441,7 +441,7 @@ TEST(AppFaults, CameraDisappearsAndComesBackAndProcessingResumes) {
   config.camera.distortion = camera::Distortion{};
   config.telemetry.source = config::TelemetrySourceKind::None;
   config.dds.enabled = false;
-  config.perception.workingScale = 1.0;
+  config.perception.preprocess.workingScale = 1.0;
   config.app.statsPeriod_s = 3600.0;
   UnpluggingCamera device;
   App app;

@@ -93,7 +93,9 @@ bool TruthPerception::init(const std::string& sequenceDir, std::string* why) {
       !camera_.init(rig.camera.intrinsics, rig.camera.distortion, why) ||
       !asm_.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", why) ||
       !lifter_.init(camera_, rig.mount.mount, terrain_, world_, why) ||
-      !detectionLifter_.init(terrain_, world_, asm_, why)) {
+      // The truth boxes are footprints: lifted on the ground.
+      !detectionLifter_.init(terrain_, world_, asm_,
+                             perception::DetectionLifterOptions{.boxHeightShare = 0.0}, why)) {
     return false;
   }
   for (const sequence::FrameRecord& frame : reader_.frames()) {

@@ -35,16 +35,15 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   ASSERT_TRUE(camera.init(rig.camera.intrinsics, rig.camera.distortion, &why)) << why;
   const config::AppConfig defaults = test::defaultConfigFor(dir);
   shape::ActiveShapeModel shapeModel;
-  ASSERT_TRUE(shapeModel.load(defaults.perception.asmPath, &why)) << why;
-  config::PerceptionConfig options = defaults.perception;
-  options.workingScale = 1.0;
+  ASSERT_TRUE(shapeModel.load(defaults.asmPath, &why)) << why;
+  perception::PipelineOptions options = defaults.perception;
+  options.preprocess.workingScale = 1.0;
   // The crop scale comes from the pose when there is one, else from the boxes: the verifier's
   // vote on a doubtful box may differ between the two, and this test compares the detections
   // with and without a pose.
-  options.cropMinVehicleProbability = 0.0;
+  options.detection.secondStage.minVehicleProbability = 0.0F;
   FramePipeline pipeline;
-  ASSERT_TRUE(pipeline.init(app::pipelineOptions(options), camera, rig.mount.mount, terrain, world,
-                            shapeModel, &why))
+  ASSERT_TRUE(pipeline.init(options, camera, rig.mount.mount, terrain, world, shapeModel, &why))
       << why;
 
   cv::Mat frame(rig.camera.intrinsics.heightPx, rig.camera.intrinsics.widthPx, CV_8UC3);

@@ -84,7 +84,10 @@ struct Scene {
     EXPECT_TRUE(lifter.init(camera, mount, terrain, frame, &why)) << why;
     EXPECT_TRUE(asmModel.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", &why))
         << why;
-    EXPECT_TRUE(detectionLifter.init(terrain, frame, asmModel, &why)) << why;
+    // The scenes' boxes are ground-truth footprints: lifted on the ground.
+    EXPECT_TRUE(detectionLifter.init(terrain, frame, asmModel,
+                                     DetectionLifterOptions{.boxHeightShare = 0.0}, &why))
+        << why;
   }
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;

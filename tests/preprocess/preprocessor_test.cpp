@@ -12,6 +12,13 @@
 namespace vp::preprocess {
 namespace {
 
+// Undistorted frames, as these tests were written for (the shipped default keeps them raw).
+PreprocessOptions undistorting() {
+  PreprocessOptions options;
+  options.undistort = true;
+  return options;
+}
+
 constexpr int kFrameWidthPx = 2592;  // the camera of seed 000
 constexpr int kFrameHeightPx = 2048;
 
@@ -47,7 +54,7 @@ TEST(Preprocessor, DefaultScaleGivesOnePaddedTile) {
   const camera::CameraModel camera = camera2592(camera::LensModel::BrownConrady);
   Preprocessor pre;
   std::string why;
-  ASSERT_TRUE(pre.init(PreprocessOptions{}, camera, {kFrameWidthPx, kFrameHeightPx}, &why)) << why;
+  ASSERT_TRUE(pre.init(undistorting(), camera, {kFrameWidthPx, kFrameHeightPx}, &why)) << why;
   EXPECT_TRUE(pre.undistorts());
   const cv::Mat frame = texturedFrame(1);
   ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok) << pre.lastError();
@@ -83,7 +90,7 @@ TEST(Preprocessor, DefaultScaleGivesOnePaddedTile) {
 
 TEST(Preprocessor, WithoutCorrectionsTheFrameIsTheCallersFrame) {
   const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
-  PreprocessOptions options;
+  PreprocessOptions options = undistorting();
   options.undistort = true;  // a pinhole needs none: no remap, no copy
   Preprocessor pre;
   ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}));
@@ -96,7 +103,7 @@ TEST(Preprocessor, WithoutCorrectionsTheFrameIsTheCallersFrame) {
 
 TEST(Preprocessor, WhiteBalanceNeverWritesTheCallersFrame) {
   const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
-  PreprocessOptions options;
+  PreprocessOptions options = undistorting();
   options.whiteBalance = true;
   Preprocessor pre;
   ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}));
@@ -116,7 +123,7 @@ TEST(Preprocessor, WhiteBalanceNeverWritesTheCallersFrame) {
 
 TEST(Preprocessor, FinerWorkingScaleIsTiled) {
   const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
-  PreprocessOptions options;
+  PreprocessOptions options = undistorting();
   options.workingScale = 0.5;
   options.tileOverlapPx = 96;
   Preprocessor pre;
@@ -147,7 +154,7 @@ TEST(Preprocessor, BadFramesAreStatusesNamingTheProblem) {
   Preprocessor pre;
   const cv::Mat frame = texturedFrame(5);
   EXPECT_EQ(pre.process(frame), PreprocessStatus::NotInitialised);
-  ASSERT_TRUE(pre.init(PreprocessOptions{}, camera, {kFrameWidthPx, kFrameHeightPx}));
+  ASSERT_TRUE(pre.init(undistorting(), camera, {kFrameWidthPx, kFrameHeightPx}));
   EXPECT_EQ(pre.process(cv::Mat()), PreprocessStatus::EmptyFrame);
   EXPECT_NE(std::strstr(pre.lastError(), "empty frame"), nullptr) << pre.lastError();
   const cv::Mat grey(kFrameHeightPx, kFrameWidthPx, CV_8UC1, cv::Scalar::all(0));
@@ -169,17 +176,17 @@ TEST(Preprocessor, InitNamesBadOptions) {
   const camera::CameraModel camera = camera2592(camera::LensModel::BrownConrady);
   Preprocessor pre;
   std::string why;
-  EXPECT_FALSE(pre.init(PreprocessOptions{}, camera, {1296, 1024}, &why));
+  EXPECT_FALSE(pre.init(undistorting(), camera, {1296, 1024}, &why));
   EXPECT_NE(why.find("differs from the camera model's 2592x2048"), std::string::npos) << why;
-  PreprocessOptions options;
+  PreprocessOptions options = undistorting();
   options.workingScale = 1.5;
   EXPECT_FALSE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why));
   EXPECT_NE(why.find("working_scale"), std::string::npos) << why;
-  options = PreprocessOptions{};
+  options = undistorting();
   options.tileOverlapPx = 400;
   EXPECT_FALSE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why));
   EXPECT_NE(why.find("tile_overlap_px"), std::string::npos) << why;
-  options = PreprocessOptions{};
+  options = undistorting();
   options.workingScale = 1.0;
   options.networkWidthPx = 64;
   options.networkHeightPx = 64;
@@ -194,7 +201,7 @@ TEST(Preprocessor, NoHeapAllocationPerFrame) {
   const cv::Mat frame = texturedFrame(6);
   for (const int threads : {1, 2}) {
     for (const double scale : {kDefaultWorkingScale, 0.3}) {
-      PreprocessOptions options;
+      PreprocessOptions options = undistorting();
       options.whiteBalance = true;
       options.threads = threads;
       options.workingScale = scale;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "geometry/rotated_box.hpp"
+#include "seed_one_options.hpp"
 #include "tracking/association.hpp"
 #include "tracking/hungarian.hpp"
 
@@ -105,7 +106,7 @@ TrackView trackAt(double x, double y, double heading, double sigma = 0.5) {
 
 TEST(Association, GatesRejectFarTurnedAndImprobablePairs) {
   Associator a;
-  ASSERT_TRUE(a.init(4, 4, AssociationParams{}));
+  ASSERT_TRUE(a.init(4, 4, test::seedOneAssociation()));
   const TrackView t = trackAt(0.0, 0.0, 0.0, 0.5);
   EXPECT_LT(a.pairCost(t, detectionAt(0.2, 0.1, 0.05)), 0.5f);
   EXPECT_EQ(a.pairCost(t, detectionAt(7.0, 0.0, 0.0)), kInfeasibleCost);  // distance
@@ -123,7 +124,7 @@ TEST(Association, GatesRejectFarTurnedAndImprobablePairs) {
 
 TEST(Association, OptimalNotGreedyAndSecondPassForLowScores) {
   Associator a;
-  ASSERT_TRUE(a.init(4, 4, AssociationParams{}));
+  ASSERT_TRUE(a.init(4, 4, test::seedOneAssociation()));
   // Two tracks 1 m apart in a queue, two detections: each goes to the track it fits.
   const std::vector<TrackView> tracks = {trackAt(0.0, 0.0, 0.0, 0.4), trackAt(1.0, 0.0, 0.0, 0.4)};
   std::vector<WorldDetection> dets = {detectionAt(0.6, 0.0, 0.0), detectionAt(-0.5, 0.0, 0.0)};

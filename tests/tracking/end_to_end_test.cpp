@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "geometry/rotated_box.hpp"
+#include "seed_one_options.hpp"
 #include "synthetic_scene.hpp"
 #include "tracking/mot_metrics.hpp"
 #include "tracking/track_manager.hpp"
@@ -38,7 +39,7 @@ RunFigures runScenario(unsigned seed, const shape::ActiveShapeModel* asmModel) {
   test::SceneParams params;
   params.seed = seed;
   const std::vector<test::SceneFrame> frames = test::makeIntersection(params, asmModel);
-  TrackerConfig config;
+  TrackerConfig config = test::seedOneTracker();
   config.asmModel = asmModel;
   TrackManager tracker;
   EXPECT_TRUE(tracker.init(config));

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "geometry/rotated_box.hpp"
+#include "seed_one_options.hpp"
 
 namespace vp::tracking {
 namespace {
@@ -16,7 +17,7 @@ namespace {
 // The model exposes no setter for v/delta (the filter owns its state); drive it with
 // perfect measurements of a known trajectory instead, then check pure prediction.
 TEST(MotionModel, StraightLineAtConstantSpeed) {
-  MotionNoise noise;
+  MotionNoise noise = test::seedOneNoise();
   MotionModel m;
   m.initialise({0.0, 0.0}, 0.3, 2.7, 1.3, noise);
   const double v = 12.0;
@@ -39,7 +40,7 @@ TEST(MotionModel, StraightLineAtConstantSpeed) {
 TEST(MotionModel, ConstantSteeringDrivesCircleOfRadiusWheelbaseOverTanDelta) {
   // Converge on a circle driven by the rear axle (d = 0 so centre = rear axle), then
   // predict a full revolution with no measurement: the bicycle must stay on the circle.
-  MotionNoise noise;
+  MotionNoise noise = test::seedOneNoise();
   const double wheelbase = 2.8;
   const double delta = 0.2;
   const double radius = wheelbase / std::tan(delta);
@@ -62,7 +63,7 @@ TEST(MotionModel, ConstantSteeringDrivesCircleOfRadiusWheelbaseOverTanDelta) {
 
 TEST(MotionModel, PredictionsCompose) {
   // The arc is exact for constant steering, so one 1 s step equals ten 0.1 s steps.
-  MotionNoise noise;
+  MotionNoise noise = test::seedOneNoise();
   MotionModel a;
   a.initialise({0.0, 0.0}, 0.0, 2.7, 1.3, noise);
   for (int k = 1; k <= 50; ++k) {
@@ -78,7 +79,7 @@ TEST(MotionModel, PredictionsCompose) {
 }
 
 TEST(MotionModel, ParkedVehicleStaysPut) {
-  MotionNoise noise;
+  MotionNoise noise = test::seedOneNoise();
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0.0, 0.05);
   MotionModel m;
@@ -101,7 +102,7 @@ TEST(MotionModel, ParkedVehicleStaysPut) {
 }
 
 TEST(MotionModel, GeometryChangeAndFlipKeepTheFootprintCentre) {
-  MotionNoise noise;
+  MotionNoise noise = test::seedOneNoise();
   MotionModel m;
   m.initialise({5.0, 5.0}, 0.7, 2.7, 1.3, noise);
   const Eigen::Vector2d c = m.centre();
@@ -116,7 +117,7 @@ TEST(MotionModel, GeometryChangeAndFlipKeepTheFootprintCentre) {
 // alongAxisFactor k: the position noise along the vehicle's axis is k sigma, across it sigma,
 // at birth (covariance) and in an update (gain).
 TEST(MotionModel, AlongAxisFactorWeakensPositionOnlyAlongTheAxis) {
-  MotionNoise noise;
+  MotionNoise noise = test::seedOneNoise();
   noise.measurementPosition_m = 0.3;
   const double psi = 0.6;
   const Eigen::Vector2d along(std::cos(psi), std::sin(psi));
@@ -141,7 +142,7 @@ TEST(MotionModel, AlongAxisFactorWeakensPositionOnlyAlongTheAxis) {
 }
 
 TEST(MotionModel, RejectsBadInput) {
-  MotionNoise noise;
+  MotionNoise noise = test::seedOneNoise();
   MotionModel m;
   m.initialise({0.0, 0.0}, 0.0, 2.7, 1.3, noise);
   EXPECT_FALSE(m.predict(-0.1, noise));

@@ -15,6 +15,7 @@
 
 #include "alloc_counter.hpp"
 #include "geometry/rotated_box.hpp"
+#include "seed_one_options.hpp"
 #include "synthetic_scene.hpp"
 #include "tracking/trajectory_csv.hpp"
 
@@ -36,7 +37,7 @@ WorldDetection car(double x, double y, double heading, std::int64_t t, float sco
 }
 
 TrackerConfig smallConfig() {
-  TrackerConfig c;
+  TrackerConfig c = test::seedOneTracker();
   c.maxTracks = 8;
   c.maxDetections = 8;
   return c;
@@ -556,7 +557,7 @@ TEST(TrajectoryCsv, HeaderAndRowCarrySeedColumnsFirst) {
 }
 
 TEST(TrackManager, NoHeapAllocationPerStepWith200Tracks) {
-  TrackerConfig c;
+  TrackerConfig c = test::seedOneTracker();
   c.maxTracks = 256;
   c.maxDetections = 256;
   TrackManager m;

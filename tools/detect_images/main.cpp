@@ -78,28 +78,20 @@ options:
   --help                this text
 )";
 
+// The detection stage's own options (the defaults the app's perception: section has too); the
+// switches override their fields.
 struct Options {
   std::string images;
   std::string sequence;
   std::string out;
   std::string list;
-  std::string detector;
-  std::string crop;
-  bool cropGiven = false;
-  std::string backend = "int8";
-  std::string cropBackend;  // empty: backend
+  std::string backend = "int8";  // as given, for the detections file's model line
+  std::string cropBackend;       // empty: backend
+  vp::detection::DetectionStageOptions stage{};
+  // Photos, unlike the app's camera frames (perception.working_scale 0.25 of a 2592 px
+  // frame), are ~4.8 cm/px: 0.4 brings them to the detector's ~12 cm/px.
   double workingScale = 0.4;
   bool workingScaleGiven = false;
-  double gsd = 0.0;
-  double scoreThreshold = 0.4;  // chosen on the tuning seeds (docs/model_card.md)
-  int threads = 1;
-  bool applyFlip = true;
-  bool applyRefine = true;
-  bool mirrorAverage = true;
-  bool mirrorRefine = true;
-  bool refineLargeLength = false;
-  bool largeVehicleEnds = true;        // as the app's perception.crop_large_vehicle_ends
-  double minVehicleProbability = 0.3;  // as the app's perception.crop_min_vehicle_probability
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -131,8 +123,10 @@ std::string repoPath(const char* relative) {
 
 Options parseArguments(int argc, char** argv) {
   Options o;
-  o.detector = repoPath("models/detector/detector_int8.onnx");
-  o.crop = repoPath("models/detector/crop_int8.onnx");
+  vp::detection::DetectionStageOptions& stage = o.stage;
+  vp::detection::SecondStageOptions& second = stage.secondStage;
+  stage.detectorModelPath = repoPath("models/detector/detector_int8.onnx");
+  stage.cropModelPath = repoPath("models/detector/crop_int8.onnx");
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
@@ -144,12 +138,12 @@ Options parseArguments(int argc, char** argv) {
       const char* name;
       bool* flag;
       bool value;
-    } switches[] = {{"--no-flip", &o.applyFlip, false},
-                    {"--no-refine", &o.applyRefine, false},
-                    {"--no-mirror", &o.mirrorAverage, false},
-                    {"--no-mirror-refine", &o.mirrorRefine, false},
-                    {"--refine-large-length", &o.refineLargeLength, true},
-                    {"--no-large-vehicle-ends", &o.largeVehicleEnds, false}};
+    } switches[] = {{"--no-flip", &second.applyFlip, false},
+                    {"--no-refine", &second.applyRefine, false},
+                    {"--no-mirror", &second.mirrorAverage, false},
+                    {"--no-mirror-refine", &second.mirrorRefine, false},
+                    {"--refine-large-length", &second.refineLargeVehicleLength, true},
+                    {"--no-large-vehicle-ends", &second.largeVehicleEnds, false}};
     bool isSwitch = false;
     for (const auto& s : switches) {
       if (arg == s.name) {
@@ -172,9 +166,9 @@ Options parseArguments(int argc, char** argv) {
     else if (arg == "--list")
       o.list = value;
     else if (arg == "--detector")
-      o.detector = value;
+      stage.detectorModelPath = value;
     else if (arg == "--crop")
-      o.crop = value;
+      stage.cropModelPath = value;
     else if (arg == "--backend")
       o.backend = value;
     else if (arg == "--crop-backend")
@@ -183,13 +177,13 @@ Options parseArguments(int argc, char** argv) {
       o.workingScale = parseDouble(arg, value, 1e-3, 1.0);
       o.workingScaleGiven = true;
     } else if (arg == "--gsd-m")
-      o.gsd = parseDouble(arg, value, 1e-4, 10.0);
+      stage.gsd.fixedGsd_m = parseDouble(arg, value, 1e-4, 10.0);
     else if (arg == "--score-threshold")
-      o.scoreThreshold = parseDouble(arg, value, 0.0, 1.0);
+      stage.decoder.scoreThreshold = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
     else if (arg == "--min-vehicle-probability")
-      o.minVehicleProbability = parseDouble(arg, value, 0.0, 1.0);
+      second.minVehicleProbability = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
     else if (arg == "--threads")
-      o.threads = static_cast<int>(parseDouble(arg, value, 1, 64));
+      stage.engine.threads = static_cast<int>(parseDouble(arg, value, 1, 64));
     else
       usageError("unknown option '" + arg + "'");
   }
@@ -197,6 +191,8 @@ Options parseArguments(int argc, char** argv) {
     usageError("give one of --images and --sequence");
   if (o.out.empty())
     usageError("--out is required");
+  // The refinement is averaged only over crops that were mirrored.
+  second.mirrorRefine = second.mirrorRefine && second.mirrorAverage;
   return o;
 }
 
@@ -235,32 +231,33 @@ std::set<std::string> readList(const std::string& path) {
   return stems;
 }
 
-// The detection stage of both modes (models, backend, thresholds from the options).
+// The detection stage of both modes (models, thresholds from the options; the backends are
+// checked here, after the arguments, as before).
 bool initStage(const Options& options, vp::detection::DetectionStage& stage, std::string* why) {
-  vp::detection::DetectionStageOptions stageOptions;
-  stageOptions.detectorModelPath = options.detector;
-  stageOptions.cropModelPath = options.crop;
+  vp::detection::DetectionStageOptions stageOptions = options.stage;
   stageOptions.engine.backend = parseBackend("--backend", options.backend);
   if (!options.cropBackend.empty())
     stageOptions.cropBackend = parseBackend("--crop-backend", options.cropBackend);
-  stageOptions.engine.threads = options.threads;
-  stageOptions.decoder.scoreThreshold = static_cast<float>(options.scoreThreshold);
-  stageOptions.gsd.fixedGsd_m = options.gsd;
-  stageOptions.secondStage.applyFlip = options.applyFlip;
-  stageOptions.secondStage.applyRefine = options.applyRefine;
-  stageOptions.secondStage.mirrorAverage = options.mirrorAverage;
-  stageOptions.secondStage.mirrorRefine = options.mirrorRefine && options.mirrorAverage;
-  stageOptions.secondStage.refineLargeVehicleLength = options.refineLargeLength;
-  stageOptions.secondStage.largeVehicleEnds = options.largeVehicleEnds;
-  stageOptions.secondStage.minVehicleProbability =
-      static_cast<float>(options.minVehicleProbability);
   return stage.init(stageOptions, vp::preprocess::kMaxTiles, why);
 }
 
+// The preprocessing of both modes: the module's defaults but for the image geometry.
+vp::preprocess::PreprocessOptions preprocessOptions(const vp::detection::DetectionStage& stage,
+                                                    double workingScale) {
+  vp::preprocess::PreprocessOptions pre;
+  // The detector is trained on raw frames and the labels are raw pixels (also the module's
+  // default; stated because the tool's boxes must be in the images' own pixels).
+  pre.undistort = false;
+  pre.workingScale = workingScale;
+  pre.networkWidthPx = stage.detectorInputWidth();
+  pre.networkHeightPx = stage.detectorInputHeight();
+  return pre;
+}
+
 std::string modelId(const Options& options) {
-  return fs::path(options.detector).filename().string() + " + " +
-         (options.crop.empty() ? std::string("no second stage")
-                               : fs::path(options.crop).filename().string()) +
+  const std::string& crop = options.stage.cropModelPath;
+  return fs::path(options.stage.detectorModelPath).filename().string() + " + " +
+         (crop.empty() ? std::string("no second stage") : fs::path(crop).filename().string()) +
          " (" + options.backend +
          (options.cropBackend.empty() ? std::string() : ", crops " + options.cropBackend) + ")";
 }
@@ -295,12 +292,10 @@ int runSequence(const Options& options) {
   vp::detection::DetectionStage stage;
   if (!initStage(options, stage, &why))
     return fail(why);
-  vp::preprocess::PreprocessOptions pre;
-  pre.undistort = false;  // the detector is trained on raw frames; the GT boxes are raw pixels
-  pre.workingScale =
-      options.workingScaleGiven ? options.workingScale : 648.0 / rig.camera.intrinsics.widthPx;
-  pre.networkWidthPx = stage.detectorInputWidth();
-  pre.networkHeightPx = stage.detectorInputHeight();
+  // A recording's frames are the app's: the training resolution unless told otherwise.
+  const vp::preprocess::PreprocessOptions pre =
+      preprocessOptions(stage, options.workingScaleGiven ? options.workingScale
+                                                         : 648.0 / rig.camera.intrinsics.widthPx);
   vp::preprocess::Preprocessor preprocessor;
   const cv::Size size(rig.camera.intrinsics.widthPx, rig.camera.intrinsics.heightPx);
   if (!preprocessor.init(pre, camera, size, &why))
@@ -419,11 +414,7 @@ int runImages(const Options& options) {
       vp::camera::CameraModel camera;
       if (!camera.init(k, vp::camera::Distortion{}, &why))
         return fail(file.string() + ": " + why);
-      vp::preprocess::PreprocessOptions pre;
-      pre.undistort = false;
-      pre.workingScale = options.workingScale;
-      pre.networkWidthPx = stage.detectorInputWidth();
-      pre.networkHeightPx = stage.detectorInputHeight();
+      const vp::preprocess::PreprocessOptions pre = preprocessOptions(stage, options.workingScale);
       if (!slot->preprocessor.init(pre, camera, image.size(), &why))
         return fail(file.string() + ": " + why);
     }

@@ -1,0 +1,73 @@
+// config/loop_config: the firmware app's own sections of the configuration: `source:` (replay
+// or V4L2 camera), `telemetry:` (where the drone pose comes from) and `app:` (frame pool,
+// queue, real-time settings, statistics, file outputs). The sections that configure modules
+// of src/ (perception, pose, tracking) are those modules' own options structs (config.hpp).
+//
+// Contract: plain values with the documented defaults (docs/configuration.md,
+// config/default.yaml); the app maps them onto its platform wrappers. The section readers
+// (source_section.cpp, telemetry_section.cpp, app_section.cpp) check them (ConfigError naming
+// the file and the full key path); paths are absolute after loading (relative ones resolved
+// against the configuration file's directory). Start-up only.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace vp::config {
+
+enum class FrameSourceKind : std::uint8_t { Replay, V4l2 };
+const char* toString(FrameSourceKind kind);  // "replay", "v4l2"
+
+enum class CameraPixelFormat : std::uint8_t { Yuyv, Nv12, Mjpeg };
+const char* toString(CameraPixelFormat format);         // "yuyv", "nv12", "mjpeg"
+std::vector<CameraPixelFormat> defaultCameraFormats();  // yuyv, nv12, mjpeg
+
+struct V4l2SourceConfig {
+  std::string device = "/dev/video0";
+  std::string busInfo;  // when set, the device whose VIDIOC_QUERYCAP bus_info matches
+  int widthPx = 2592;
+  int heightPx = 2048;
+  std::vector<CameraPixelFormat> formats = defaultCameraFormats();  // tried in order
+  int buffers = 4;
+  int dequeueTimeoutMs = 1000;
+};
+
+struct SourceConfig {
+  FrameSourceKind kind = FrameSourceKind::Replay;
+  std::string sequenceDir;  // replay: the recorded sequence (absolute); empty: --sequence
+  bool paced = true;        // replay at the recorded frame rate
+  bool loop = false;        // replay: start over after the last frame
+  V4l2SourceConfig v4l2{};
+};
+
+enum class TelemetrySourceKind : std::uint8_t { Recording, MavlinkUdp, MavlinkSerial, Dds, None };
+const char* toString(TelemetrySourceKind kind);
+
+struct TelemetryLinkConfig {
+  TelemetrySourceKind source = TelemetrySourceKind::Recording;
+  std::string udpBindAddress = "0.0.0.0";
+  int udpPort = 14550;
+  std::string serialDevice = "/dev/ttyACM0";
+  int serialBaud = 921600;
+  int systemId = 0;                // MAVLink system id of the autopilot; 0 = any
+  double geoidSeparation_m = 0;    // N of the flying area: ellipsoidal = MSL + N (MAVLink)
+  double linkLatency_s = 0.0;      // minimum transport delay subtracted from MAVLink times
+  double replayLookahead_s = 0.2;  // recording: samples pushed up to frame time + this
+};
+
+struct LoopConfig {
+  int queueDepth = 1;               // frames waiting between capture and processing, [1, 8]
+  int framePoolSize = 0;            // 0 = queueDepth + 2 (waiting + processing + capturing)
+  bool lockMemory = false;          // mlockall
+  int realtimePriority = 0;         // SCHED_FIFO priority of the processing thread; 0 = off
+  std::vector<int> captureCpus;     // CPU affinity of the capture thread; empty = any
+  std::vector<int> processingCpus;  // CPU affinity of the processing thread; empty = any
+  double statsPeriod_s = 5.0;       // one statistics line per period
+  std::string trajectoryCsv;        // absolute; empty = not written
+  std::string detectionsCsv;        // absolute; empty = not written
+  std::string annotatedVideo;       // absolute; empty = not written (MJPG AVI)
+  double annotatedVideoFps = 10.0;
+};
+
+}  // namespace vp::config
