@@ -205,11 +205,11 @@ bool App::initSource(std::string* why) {
       return false;
     }
     // The rig of a recording is the one it was recorded with (its rig.yaml).
-    const config::AppConfig& rig = replay->replay().reader().rig();
+    const sequence::Rig& rig = replay->replay().reader().rig();
     config_.origin = rig.origin;
-    config_.camera = rig.camera;
-    config_.mount = rig.mount;
-    config_.terrain = rig.terrain;
+    config_.camera = {rig.intrinsics, rig.distortion};
+    config_.mount = {rig.mount, rig.gimbal};
+    config_.terrain = {rig.dtmPath, rig.crs};
     replay_ = replay.get();
     source_ = std::move(replay);
   } else {

@@ -2,9 +2,9 @@
 
 namespace vp::app {
 
-sequence::LiftStatus toFileStatus(perception::LiftStatus status) {
+output_files::LiftStatus toFileStatus(perception::LiftStatus status) {
   using In = perception::LiftStatus;
-  using Out = sequence::LiftStatus;
+  using Out = output_files::LiftStatus;
   switch (status) {
     case In::Ok:
       return Out::Ok;
@@ -30,9 +30,9 @@ sequence::LiftStatus toFileStatus(perception::LiftStatus status) {
   return Out::NotLifted;
 }
 
-sequence::DetectionRecord toDetectionRecord(std::int64_t frameId, int detId,
-                                            const perception::VehicleObservation& observation) {
-  sequence::DetectionRecord record;
+output_files::DetectionRecord toDetectionRecord(std::int64_t frameId, int detId,
+                                                const perception::VehicleObservation& observation) {
+  output_files::DetectionRecord record;
   const detection::Detection& d = observation.detection;
   record.frameId = frameId;
   record.detId = detId;
@@ -68,15 +68,15 @@ void LoopOutputs::fail(const std::string& what) {
 bool LoopOutputs::open(const OutputSpec& spec, std::string* why) {
   spec_ = spec;
   if (!spec.trajectoryCsv.empty()) {
-    sequence::TrajectoryFileInfo info;
+    output_files::TrajectoryFileInfo info;
     info.gammaColumns = spec.gammaColumns;
     if (!trajectory_.open(spec.trajectoryCsv, info, why)) {
       return false;
     }
   }
   if (!spec.detectionsCsv.empty()) {
-    sequence::DetectionsFileInfo info;
-    info.key = sequence::DetectionsKey::FrameId;
+    output_files::DetectionsFileInfo info;
+    info.key = output_files::DetectionsKey::FrameId;
     info.gammaColumns = spec.gammaColumns;
     info.model = spec.model;
     info.source = spec.source;
@@ -131,7 +131,7 @@ void LoopOutputs::writeDetections(std::int64_t frameId,
   }
   int detId = 0;
   for (const perception::VehicleObservation& observation : observations) {
-    const sequence::DetectionRecord record = toDetectionRecord(frameId, detId++, observation);
+    const output_files::DetectionRecord record = toDetectionRecord(frameId, detId++, observation);
     if (!detections_.writeRow(record, nullptr)) {
       fail(spec_.detectionsCsv + ": row not written");
     }

@@ -24,16 +24,16 @@
 #include "annotation/annotator.hpp"
 #include "config/config.hpp"
 #include "messages/messages.hpp"
+#include "output_files/detections_file.hpp"
+#include "output_files/trajectory_file.hpp"
 #include "perception/detection_lifter.hpp"
-#include "sequence/detections_file.hpp"
-#include "sequence/trajectory_file.hpp"
 
 namespace vp::app {
 
-sequence::LiftStatus toFileStatus(perception::LiftStatus status);
+output_files::LiftStatus toFileStatus(perception::LiftStatus status);
 // One detections-file row from an observation (frame id and detection index given).
-sequence::DetectionRecord toDetectionRecord(std::int64_t frameId, int detId,
-                                            const perception::VehicleObservation& observation);
+output_files::DetectionRecord toDetectionRecord(std::int64_t frameId, int detId,
+                                                const perception::VehicleObservation& observation);
 
 struct OutputSpec {
   std::string trajectoryCsv;   // empty = off
@@ -73,9 +73,9 @@ class LoopOutputs {
   void fail(const std::string& what);
 
   OutputSpec spec_{};
-  sequence::TrajectoryFileWriter trajectory_;
+  output_files::TrajectoryFileWriter trajectory_;
   std::uint64_t trajectoryRows_ = 0;
-  sequence::DetectionsFileWriter detections_;
+  output_files::DetectionsFileWriter detections_;
   cv::VideoWriter video_;
   annotation::Annotator annotator_;
   cv::Mat annotated_;

@@ -65,8 +65,8 @@ class SequenceReplay {
   ReplayStatus next(Frame& out, std::string* why);
 
   const sequence::SequenceReader& reader() const { return reader_; }
-  int widthPx() const { return reader_.rig().camera.intrinsics.widthPx; }
-  int heightPx() const { return reader_.rig().camera.intrinsics.heightPx; }
+  int widthPx() const { return reader_.rig().intrinsics.widthPx; }
+  int heightPx() const { return reader_.rig().intrinsics.heightPx; }
   std::int64_t loopPeriodNs() const { return loopPeriodNs_; }
   std::size_t position() const { return next_; }  // index of the next frame in frames.csv
   const ReplayCounters& counters() const { return counters_; }

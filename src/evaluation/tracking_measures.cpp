@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "geometry/rotated_box.hpp"
-#include "tracking/hungarian.hpp"
 
 namespace vp::evaluation {
 namespace {
@@ -22,64 +21,10 @@ bool isFlip(double truthHeadingRad, double headingRad) {
 
 }  // namespace
 
-std::vector<int> matchByDistance(std::span<const Eigen::Vector2d> truth,
-                                 std::span<const Eigen::Vector2d> hypotheses,
-                                 std::span<const int> previous, double matchDistance_m) {
-  const std::size_t nt = truth.size();
-  const std::size_t nh = hypotheses.size();
-  const auto dist = [&](std::size_t g, std::size_t h) { return (truth[g] - hypotheses[h]).norm(); };
-  std::vector<int> gToH(nt, -1);
-  std::vector<int> hToG(nh, -1);
-  // 1. Keep last frame's pairs that are still within the distance.
-  for (std::size_t g = 0; g < nt && g < previous.size(); ++g) {
-    const int h = previous[g];
-    if (h >= 0 && static_cast<std::size_t>(h) < nh && hToG[static_cast<std::size_t>(h)] < 0 &&
-        dist(g, static_cast<std::size_t>(h)) <= matchDistance_m) {
-      gToH[g] = h;
-      hToG[static_cast<std::size_t>(h)] = static_cast<int>(g);
-    }
-  }
-  // 2. Pair the rest by minimum total distance (float costs, as tracking::MotAccumulator).
-  std::vector<std::size_t> rows;
-  std::vector<std::size_t> cols;
-  for (std::size_t g = 0; g < nt; ++g) {
-    if (gToH[g] < 0) {
-      rows.push_back(g);
-    }
-  }
-  for (std::size_t h = 0; h < nh; ++h) {
-    if (hToG[h] < 0) {
-      cols.push_back(h);
-    }
-  }
-  if (rows.empty() || cols.empty()) {
-    return gToH;
-  }
-  std::vector<float> costs(rows.size() * cols.size(), tracking::kInfeasibleCost);
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    for (std::size_t c = 0; c < cols.size(); ++c) {
-      const double d = dist(rows[r], cols[c]);
-      if (d <= matchDistance_m) {
-        costs[r * cols.size() + c] = static_cast<float>(d);
-      }
-    }
-  }
-  tracking::HungarianSolver solver;
-  solver.init(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
-  std::vector<int> assign(rows.size(), -1);
-  solver.solve(costs, static_cast<int>(rows.size()), static_cast<int>(cols.size()), assign);
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    if (assign[r] >= 0) {
-      gToH[rows[r]] = static_cast<int>(cols[static_cast<std::size_t>(assign[r])]);
-    }
-  }
-  return gToH;
-}
-
 TrackingEvaluator::TrackingEvaluator(const TrackingOptions& options)
     : options_(options),
-      mot_(tracking::MotParams{options.matchDistance_m, options.mostlyTrackedShare,
-                               options.mostlyLostShare}) {}
+      mot_(MotParams{options.matchDistance_m, options.mostlyTrackedShare,
+                     options.mostlyLostShare}) {}
 
 void TrackingEvaluator::beginSequence() {
   ++sequence_;
@@ -184,8 +129,8 @@ void TrackingEvaluator::addCountedFrame(std::span<const TruthVehicle> truth,
   std::vector<int> trackKeys(tracks.size());
   std::vector<Eigen::Vector2d> truthPositions(truth.size());
   std::vector<Eigen::Vector2d> trackPositions(tracks.size());
-  std::vector<tracking::MotObject> truthObjects(truth.size());
-  std::vector<tracking::MotObject> trackObjects(tracks.size());
+  std::vector<MotObject> truthObjects(truth.size());
+  std::vector<MotObject> trackObjects(tracks.size());
   for (std::size_t g = 0; g < truth.size(); ++g) {
     truthKeys[g] = truthKey(truth[g].id);
     truthType_.emplace(truthKeys[g], truth[g].type);

@@ -14,7 +14,7 @@
 //   - matching, per frame in world ENU: a truth/track pair counts when the footprint centres
 //     are at most matchDistance_m apart; a pair matched in the previous frame is kept while it
 //     stays within the distance, the rest are paired by minimum total distance (Hungarian) —
-//     the rule of tracking::MotAccumulator, which gives MOTA, MOTP, IDF1, id switches,
+//     the rule of MotAccumulator (matchByDistance), which gives MOTA, MOTP, IDF1, id switches,
 //     fragmentations and mostly tracked / lost. Detections are paired the same way without
 //     the previous frame (they have no identity);
 //   - moving: a truth vehicle with |speed| > movingSpeed_mps in that frame;
@@ -44,7 +44,7 @@
 
 #include <Eigen/Core>
 
-#include "tracking/mot_metrics.hpp"
+#include "evaluation/mot_metrics.hpp"
 
 namespace vp::evaluation {
 
@@ -95,8 +95,8 @@ struct TrackSpeedError {
 };
 
 struct TrackingSummary {
-  tracking::MotSummary mot{};  // MOTA, MOTP, IDF1, id switches, ... (its speed/heading/type
-                               // fields are unused: see the fields below)
+  MotSummary mot{};  // MOTA, MOTP, IDF1, id switches, ... (its speed/heading/type
+                     // fields are unused: see the fields below)
   int sequences = 0;
   int tracks = 0;             // distinct confirmed tracks
   int ignoredTruth = 0;       // truth vehicle-frames marked ignore (not in truthObjects)
@@ -166,7 +166,7 @@ class TrackingEvaluator {
                                std::span<const DetectionObservation> detections);
 
   TrackingOptions options_;
-  tracking::MotAccumulator mot_;
+  MotAccumulator mot_;
   int sequence_ = -1;
   std::map<std::pair<int, std::int64_t>, int> truthKeys_;  // (sequence, truth id) -> key
   std::map<std::pair<int, std::int64_t>, int> trackKeys_;  // (sequence, track id) -> key
@@ -194,11 +194,5 @@ class TrackingEvaluator {
   int detectorTypeSamples_ = 0;
   int detectorTypeCorrect_ = 0;
 };
-
-// The pairs of one frame under the rule above: for each truth, the index of its hypothesis or
-// -1. previous (truth index -> hypothesis index kept from the last frame, or -1) may be empty.
-std::vector<int> matchByDistance(std::span<const Eigen::Vector2d> truth,
-                                 std::span<const Eigen::Vector2d> hypotheses,
-                                 std::span<const int> previous, double matchDistance_m);
 
 }  // namespace vp::evaluation

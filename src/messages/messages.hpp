@@ -19,7 +19,7 @@
 
 #include "geodesy/geodesy.hpp"
 #include "shape/vehicle_model.hpp"
-#include "tracking/track_manager.hpp"
+#include "tracking/track_status.hpp"
 
 namespace vp::messages {
 

@@ -10,6 +10,10 @@
 // the file, line and field ("telemetry.csv:17: qw: not a number 'x'"); frame images are read
 // one at a time by loadFrame(), which reports a missing or corrupt image as an error value,
 // never an exception. SequenceWriter writes the same format (used by the simulator).
+// rig.yaml is read with the application configuration's parser (config::loadConfig, same
+// checks and messages), but the reader hands out only the rig sections as a Rig, so that a
+// reader of recordings (the replay frame source) needs none of the loop's configuration types;
+// a program that needs a config::AppConfig copies the Rig into one.
 #pragma once
 
 #include <cstdint>
@@ -23,11 +27,12 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
-#include "config/config.hpp"
+#include "camera/camera_model.hpp"
 #include "geodesy/attitude.hpp"
 #include "geodesy/geodesy.hpp"
 #include "geometry/rotated_box.hpp"
 #include "shape/vehicle_model.hpp"
+#include "terrain/terrain_model.hpp"
 
 namespace vp::sequence {
 
@@ -39,6 +44,20 @@ struct SequenceInfo {
   double frameRateHz = 10.0;
   std::string source;  // "simulator <version> seed <n> scene <name>", or a recorder's name
   std::string notes;   // optional free text; not written when empty
+};
+
+// What rig.yaml says (the sections origin, camera, mount and terrain of the configuration
+// schema, docs/configuration.md), in the types of the modules that use them.
+struct Rig {
+  std::string sourcePath;           // rig.yaml
+  geodesy::GeodeticPoint origin{};  // world ENU origin
+  camera::Intrinsics intrinsics{};  // camera
+  camera::Distortion distortion{};
+  geodesy::CameraMount mount{};         // mount
+  geodesy::GimbalState gimbal{};        // default gimbal state when telemetry has none
+  std::string dtmPath;                  // terrain: absolute, an existing file
+  std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
+  std::vector<std::string> warnings;    // unknown keys and other non-fatal remarks
 };
 
 struct FrameRecord {
@@ -87,7 +106,7 @@ class SequenceReader {
 
   const std::string& directory() const { return directory_; }
   const SequenceInfo& info() const { return info_; }
-  const config::AppConfig& rig() const { return rig_; }  // camera, mount, origin, DTM path
+  const Rig& rig() const { return rig_; }  // camera, mount, origin, DTM path
   const std::vector<FrameRecord>& frames() const { return frames_; }
   const std::vector<TelemetryRecord>& telemetry() const { return telemetry_; }
   bool hasGroundTruth() const { return hasGroundTruth_; }
@@ -101,7 +120,7 @@ class SequenceReader {
  private:
   std::string directory_;
   SequenceInfo info_{};
-  config::AppConfig rig_{};
+  Rig rig_{};
   std::vector<FrameRecord> frames_;
   std::vector<TelemetryRecord> telemetry_;
   bool hasGroundTruth_ = false;

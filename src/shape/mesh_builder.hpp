@@ -1,5 +1,6 @@
-// shape/mesh_builder (internal): the few triangle patterns the car and large-vehicle meshes
-// are made of, written once so that every mesh gets the same outward winding.
+// shape/mesh_builder (internal to shape and the simulator's car generator): the few triangle
+// patterns the car and large-vehicle meshes are made of, written once so that every mesh gets the
+// same outward winding.
 //
 // Contract: a body is a side profile (a simple polygon in the x-z plane, its vertices listed
 // counter-clockwise in (x, z), i.e. up the front, back over the roof, down the rear, forward

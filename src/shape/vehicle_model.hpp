@@ -12,7 +12,7 @@
 // on the wheel-centre keypoint and which extends kWheelWidth_m towards the car's centre line.
 // ActiveShapeModel::shape() evaluates Eq. 1 without allocating; fit() returns gamma for a
 // (possibly partial) set of observed 3D keypoints, also without allocating. Large vehicles
-// (bus/truck) have a type but no ASM shape (car_generator.hpp builds their meshes).
+// (bus/truck) have a type but no ASM shape (tools/simulator/car_generator.hpp builds their meshes).
 #pragma once
 
 #include <array>

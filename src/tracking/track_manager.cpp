@@ -42,18 +42,6 @@ bool valid(const WorldDetection& d) {
 
 }  // namespace
 
-const char* toString(TrackStatus status) {
-  switch (status) {
-    case TrackStatus::Tentative:
-      return "tentative";
-    case TrackStatus::Confirmed:
-      return "confirmed";
-    case TrackStatus::Lost:
-      return "lost";
-  }
-  return "?";
-}
-
 const char* toString(TrackError error) {
   switch (error) {
     case TrackError::NotInitialised:

@@ -47,12 +47,10 @@
 #include "shape/vehicle_model.hpp"
 #include "tracking/association.hpp"
 #include "tracking/motion_model.hpp"
+#include "tracking/track_status.hpp"
 #include "tracking/world_detection.hpp"
 
 namespace vp::tracking {
-
-enum class TrackStatus : std::uint8_t { Tentative, Confirmed, Lost };
-const char* toString(TrackStatus status);
 
 enum class TrackError : std::uint8_t {
   NotInitialised,

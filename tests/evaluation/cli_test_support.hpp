@@ -18,7 +18,7 @@
 #include <string>
 #include <utility>
 
-#include "sequence/detections_file.hpp"
+#include "output_files/detections_file.hpp"
 #include "sequence/recorded_sequence.hpp"
 
 namespace vp::evaluate {
@@ -41,9 +41,9 @@ inline std::string readText(const std::filesystem::path& path) {
 
 // A lifted detection exactly on the object (score 0.9, certain of its type, its shape), for
 // the tests to perturb.
-inline sequence::DetectionRecord perfectDetection(std::int64_t frameId, int detId,
-                                                  const sequence::ObjectTruth& object) {
-  sequence::DetectionRecord r;
+inline output_files::DetectionRecord perfectDetection(std::int64_t frameId, int detId,
+                                                      const sequence::ObjectTruth& object) {
+  output_files::DetectionRecord r;
   r.frameId = frameId;
   r.detId = detId;
   r.score = 0.9F;
@@ -52,7 +52,7 @@ inline sequence::DetectionRecord perfectDetection(std::int64_t frameId, int detI
   r.typeProbabilities.fill(0.0F);
   r.typeProbabilities[static_cast<std::size_t>(object.type)] = 1.0F;
   r.gamma = object.shape;
-  r.liftStatus = sequence::LiftStatus::Ok;
+  r.liftStatus = output_files::LiftStatus::Ok;
   r.positionEnu = object.positionEnu;
   r.latitudeDeg = 43.0731;
   r.longitudeDeg = -89.4012;

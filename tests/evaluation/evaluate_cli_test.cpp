@@ -15,7 +15,7 @@
 
 #include "cli_test_support.hpp"
 #include "evaluate_app.hpp"
-#include "sequence/detections_file.hpp"
+#include "output_files/detections_file.hpp"
 #include "sequence/recorded_sequence.hpp"
 
 namespace vp::evaluate {
@@ -35,8 +35,8 @@ class EvaluateCli : public EvaluateCliTest {
   std::string writeDetections(const std::string& name, Perturb perturb,
                               bool extraFalsePositive) const {
     const std::string path = (dir_ / name).string();
-    sequence::DetectionsFileWriter writer;
-    sequence::DetectionsFileInfo info;
+    output_files::DetectionsFileWriter writer;
+    output_files::DetectionsFileInfo info;
     info.model = "ground truth copy";
     std::string why;
     EXPECT_TRUE(writer.open(path, info, &why)) << why;
@@ -44,13 +44,13 @@ class EvaluateCli : public EvaluateCliTest {
     for (const sequence::FrameRecord& frame : reader_.frames()) {
       int detId = 0;
       for (const sequence::ObjectTruth& object : reader_.objects(frame.frameId)) {
-        sequence::DetectionRecord r = perfectDetection(frame.frameId, detId++, object);
+        output_files::DetectionRecord r = perfectDetection(frame.frameId, detId++, object);
         r.score = 0.9F - 0.1F * static_cast<float>(index);
         perturb(index++, r);
         EXPECT_TRUE(writer.writeRow(r, &why)) << why;
       }
       if (extraFalsePositive && frame.frameId == 0) {
-        sequence::DetectionRecord r;
+        output_files::DetectionRecord r;
         r.frameId = 0;
         r.detId = detId;
         r.score = 0.95F;
@@ -110,7 +110,7 @@ TEST_F(EvaluateCli, PerfectDetectionsGivePerfectMeasures) {
 TEST_F(EvaluateCli, KnownPerturbationsAreRecovered) {
   // Objects in file order: 0 = sedan frame 0 (box angle 3 pi / 2), 1 = sedan frame 1,
   // 2 = large frame 1 (angle 0).
-  const auto perturb = [](int index, sequence::DetectionRecord& r) {
+  const auto perturb = [](int index, output_files::DetectionRecord& r) {
     switch (index) {
       case 0:  // 0.1 px along the box, driving direction reversed, lifted 0.3 m east
         r.box.cy += 0.1;
@@ -206,8 +206,8 @@ TEST_F(EvaluateCli, ErrorsNameWhatAndWhere) {
 
   // A detection of a frame the sequence does not have.
   const std::string wrongFrame = writeDetections(
-      "wrong.csv", [](int index, sequence::DetectionRecord& r) { r.frameId += index == 2 ? 8 : 0; },
-      false);
+      "wrong.csv",
+      [](int index, output_files::DetectionRecord& r) { r.frameId += index == 2 ? 8 : 0; }, false);
   result = run("--sequence " + kSequence + " --detections " + wrongFrame + " --out " +
                (dir_ / "o").string());
   EXPECT_EQ(result.exitCode, 1);
@@ -240,14 +240,14 @@ class EvaluateYolo : public EvaluateCli {
                                                    "0 0.75 0.75 0.25 0.25\n1 0.5 0.5 0.1 0.1\n";
     // a_1's car: centre (0.5 * 64 - 0.5, 0.5 * 48 - 0.5), 16 x 24 px. The detection stands at
     // 90 degrees (length 24 along v), so its enclosing box is the label's box.
-    sequence::DetectionsFileInfo info;
-    info.key = sequence::DetectionsKey::Image;
+    output_files::DetectionsFileInfo info;
+    info.key = output_files::DetectionsKey::Image;
     info.gammaColumns = 0;
     info.model = "yolo-test";
-    sequence::DetectionsFileWriter writer;
+    output_files::DetectionsFileWriter writer;
     std::string why;
     ASSERT_TRUE(writer.open((dir_ / "yolo_dets.csv").string(), info, &why)) << why;
-    sequence::DetectionRecord r;
+    output_files::DetectionRecord r;
     r.typeProbabilities.fill(1.0F / 7.0F);
     r.score = 0.9F;
     r.setImageStem("a_1");

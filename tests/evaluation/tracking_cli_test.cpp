@@ -15,9 +15,9 @@
 #include "cli_test_support.hpp"
 #include "evaluate_app.hpp"
 #include "geometry/rotated_box.hpp"
-#include "sequence/detections_file.hpp"
+#include "output_files/detections_file.hpp"
+#include "output_files/trajectory_file.hpp"
 #include "sequence/recorded_sequence.hpp"
-#include "sequence/trajectory_file.hpp"
 
 namespace vp::evaluate {
 namespace {
@@ -37,9 +37,9 @@ class TrackingCli : public EvaluateCliTest {
   std::string writeTracks(const std::string& name,
                           const std::function<std::uint32_t(std::int64_t, int)>& trackId) const {
     const std::string path = (dir_ / name).string();
-    sequence::TrajectoryFileWriter writer;
+    output_files::TrajectoryFileWriter writer;
     std::string why;
-    EXPECT_TRUE(writer.open(path, sequence::TrajectoryFileInfo{3}, &why)) << why;
+    EXPECT_TRUE(writer.open(path, output_files::TrajectoryFileInfo{3}, &why)) << why;
     for (const sequence::FrameRecord& frame : reader_.frames()) {
       for (const sequence::ObjectTruth& object : reader_.objects(frame.frameId)) {
         tracking::TrackState t;
@@ -77,13 +77,13 @@ class TrackingCli : public EvaluateCliTest {
   // large vehicle called a van.
   std::string writeDetections(const std::string& name) const {
     const std::string path = (dir_ / name).string();
-    sequence::DetectionsFileWriter writer;
+    output_files::DetectionsFileWriter writer;
     std::string why;
-    EXPECT_TRUE(writer.open(path, sequence::DetectionsFileInfo{}, &why)) << why;
+    EXPECT_TRUE(writer.open(path, output_files::DetectionsFileInfo{}, &why)) << why;
     for (const sequence::FrameRecord& frame : reader_.frames()) {
       int detId = 0;
       for (const sequence::ObjectTruth& object : reader_.objects(frame.frameId)) {
-        sequence::DetectionRecord r = perfectDetection(frame.frameId, detId++, object);
+        output_files::DetectionRecord r = perfectDetection(frame.frameId, detId++, object);
         r.gamma = shape::ShapeParams{};  // no shape
         const bool large = object.type == shape::VehicleType::Large;
         if (large) {
@@ -223,9 +223,9 @@ TEST_F(TrackingCli, BadTrackFilesAndArgumentsAreNamed) {
   // A row of a frame the sequence does not have.
   const std::string foreign = (dir_ / "foreign.csv").string();
   {
-    sequence::TrajectoryFileWriter writer;
+    output_files::TrajectoryFileWriter writer;
     std::string why;
-    ASSERT_TRUE(writer.open(foreign, sequence::TrajectoryFileInfo{0}, &why)) << why;
+    ASSERT_TRUE(writer.open(foreign, output_files::TrajectoryFileInfo{0}, &why)) << why;
     tracking::TrackState t;
     t.id = 1;
     t.status = tracking::TrackStatus::Confirmed;

@@ -1,6 +1,6 @@
 // The tracking measures (docs/evaluation.md, "Tracking"): hand-made truth/track cases with known
 // MOTA, IDF1, id switches, fragmentations, speed RMSE, heading-flip shares and type OA-1, the
-// matching rule against tracking::MotAccumulator, and sequences kept apart.
+// matching rule against MotAccumulator, and sequences kept apart.
 #include <gtest/gtest.h>
 
 #include <cmath>

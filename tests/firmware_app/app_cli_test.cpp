@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "app_test_support.hpp"
-#include "sequence/trajectory_file.hpp"
+#include "output_files/trajectory_file.hpp"
 
 extern char** environ;
 
@@ -126,9 +126,9 @@ TEST(AppCli, DefaultConfigurationRunsTheFixtureSequence) {
   EXPECT_NE(r.output.find("summary: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("frames_in=2 processed=2 dropped=0 bad=0"), std::string::npos)
       << r.output;
-  sequence::TrajectoryFile tracks;
+  output_files::TrajectoryFile tracks;
   std::string why;
-  EXPECT_TRUE(sequence::readTrajectoryFile(dir + "/tracks.csv", &tracks, &why)) << why;
+  EXPECT_TRUE(output_files::readTrajectoryFile(dir + "/tracks.csv", &tracks, &why)) << why;
   EXPECT_TRUE(fs::exists(dir + "/detections.csv"));
 }
 

@@ -22,8 +22,8 @@
 #include "alloc_counter.hpp"
 #include "app.hpp"
 #include "app_test_support.hpp"
-#include "sequence/detections_file.hpp"
-#include "sequence/trajectory_file.hpp"
+#include "output_files/detections_file.hpp"
+#include "output_files/trajectory_file.hpp"
 
 namespace vp::app {
 namespace {
@@ -150,8 +150,8 @@ TEST(AppLoop, ZeroAllocationsWithInjectedVehiclesAndTracksAndTheFigureWithDds) {
         static_cast<unsigned long long>(c.detections), static_cast<unsigned long long>(c.lifted),
         kFrames, window.count());
     EXPECT_EQ(window.count(), 0U);
-    sequence::TrajectoryFile tracks;
-    ASSERT_TRUE(sequence::readTrajectoryFile(out + "/tracks.csv", &tracks, &why)) << why;
+    output_files::TrajectoryFile tracks;
+    ASSERT_TRUE(output_files::readTrajectoryFile(out + "/tracks.csv", &tracks, &why)) << why;
     EXPECT_GT(tracks.rows.size(), 0U);
   }
   // DDS on (no reader; a unique domain on loopback): Cyclone's write path allocates per sample
@@ -254,12 +254,12 @@ class NanPoseInput final : public PoseInput {
 
 // Lift statuses per frame from the detections file.
 std::map<std::int64_t, std::map<std::string, int>> liftStatusesByFrame(const std::string& path) {
-  sequence::DetectionsFile file;
+  output_files::DetectionsFile file;
   std::string why;
-  EXPECT_TRUE(sequence::readDetectionsFile(path, &file, &why)) << why;
+  EXPECT_TRUE(output_files::readDetectionsFile(path, &file, &why)) << why;
   std::map<std::int64_t, std::map<std::string, int>> byFrame;
-  for (const sequence::DetectionRecord& row : file.rows) {
-    ++byFrame[row.frameId][sequence::toString(row.liftStatus)];
+  for (const output_files::DetectionRecord& row : file.rows) {
+    ++byFrame[row.frameId][output_files::toString(row.liftStatus)];
   }
   return byFrame;
 }

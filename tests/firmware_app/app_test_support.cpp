@@ -85,14 +85,14 @@ bool TruthPerception::init(const std::string& sequenceDir, std::string* why) {
   if (!reader_.open(sequenceDir, why)) {
     return false;
   }
-  const config::AppConfig& rig = reader_.rig();
+  const sequence::Rig& rig = reader_.rig();
   world_ = geodesy::LocalFrame(rig.origin);
   terrain::TerrainGrid grid;
-  if (!io::loadDtm(rig.terrain.dtmPath, rig.terrain.crs, grid, why) ||
+  if (!io::loadDtm(rig.dtmPath, rig.crs, grid, why) ||
       !terrain_.init(std::move(grid), world_, why) ||
-      !camera_.init(rig.camera.intrinsics, rig.camera.distortion, why) ||
+      !camera_.init(rig.intrinsics, rig.distortion, why) ||
       !asm_.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", why) ||
-      !lifter_.init(camera_, rig.mount.mount, terrain_, world_, why) ||
+      !lifter_.init(camera_, rig.mount, terrain_, world_, why) ||
       // The truth boxes are footprints: lifted on the ground.
       !detectionLifter_.init(terrain_, world_, asm_,
                              perception::DetectionLifterOptions{.boxHeightShare = 0.0}, why)) {

@@ -25,14 +25,14 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   sequence::SequenceReader reader;
   std::string why;
   ASSERT_TRUE(reader.open(dir, &why)) << why;
-  const config::AppConfig& rig = reader.rig();
+  const sequence::Rig& rig = reader.rig();
   const geodesy::LocalFrame world(rig.origin);
   terrain::TerrainGrid grid;
   terrain::TerrainModel terrain;
-  ASSERT_TRUE(io::loadDtm(rig.terrain.dtmPath, rig.terrain.crs, grid, &why)) << why;
+  ASSERT_TRUE(io::loadDtm(rig.dtmPath, rig.crs, grid, &why)) << why;
   ASSERT_TRUE(terrain.init(std::move(grid), world, &why)) << why;
   camera::CameraModel camera;
-  ASSERT_TRUE(camera.init(rig.camera.intrinsics, rig.camera.distortion, &why)) << why;
+  ASSERT_TRUE(camera.init(rig.intrinsics, rig.distortion, &why)) << why;
   const config::AppConfig defaults = test::defaultConfigFor(dir);
   shape::ActiveShapeModel shapeModel;
   ASSERT_TRUE(shapeModel.load(defaults.asmPath, &why)) << why;
@@ -43,10 +43,10 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   // with and without a pose.
   options.detection.secondStage.minVehicleProbability = 0.0F;
   FramePipeline pipeline;
-  ASSERT_TRUE(pipeline.init(options, camera, rig.mount.mount, terrain, world, shapeModel, &why))
+  ASSERT_TRUE(pipeline.init(options, camera, rig.mount, terrain, world, shapeModel, &why))
       << why;
 
-  cv::Mat frame(rig.camera.intrinsics.heightPx, rig.camera.intrinsics.widthPx, CV_8UC3);
+  cv::Mat frame(rig.intrinsics.heightPx, rig.intrinsics.widthPx, CV_8UC3);
   ASSERT_TRUE(reader.loadFrame(0, frame, &why)) << why;
   const std::int64_t t = reader.frames()[0].timestampNs;
 

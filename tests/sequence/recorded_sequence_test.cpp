@@ -298,9 +298,9 @@ TEST(RecordedSequence, WriterReaderRoundTripIsExact) {
   EXPECT_EQ(reader.info().source, sample.info.source);
   EXPECT_EQ(reader.info().notes, sample.info.notes);
   EXPECT_TRUE(reader.rig().warnings.empty());
-  EXPECT_EQ(reader.rig().camera.intrinsics.widthPx, 32);
-  EXPECT_EQ(fs::path(reader.rig().terrain.dtmPath).filename(), "dtm.tif");
-  EXPECT_EQ(readText(reader.rig().terrain.dtmPath), readText(kSampleDtm));
+  EXPECT_EQ(reader.rig().intrinsics.widthPx, 32);
+  EXPECT_EQ(fs::path(reader.rig().dtmPath).filename(), "dtm.tif");
+  EXPECT_EQ(readText(reader.rig().dtmPath), readText(kSampleDtm));
   EXPECT_EQ(readText(directory / "rig.yaml"), kRigYaml);
 
   ASSERT_EQ(reader.frames().size(), sample.frames.size());
@@ -410,7 +410,7 @@ TEST(RecordedSequence, OpensTheShippedFixture) {
   EXPECT_EQ(reader.info().frameRateHz, 10.0);
   EXPECT_TRUE(reader.info().notes.empty());
   EXPECT_TRUE(reader.rig().warnings.empty());
-  EXPECT_EQ(fs::path(reader.rig().terrain.dtmPath).filename(), "sloped_utm16n.tif");
+  EXPECT_EQ(fs::path(reader.rig().dtmPath).filename(), "sloped_utm16n.tif");
   ASSERT_EQ(reader.frames().size(), 2U);
   EXPECT_EQ(reader.frames()[1].timestampNs, 1'700'000'000'100'000'000);
   ASSERT_EQ(reader.telemetry().size(), 4U);

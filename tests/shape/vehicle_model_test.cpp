@@ -18,7 +18,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "alloc_counter.hpp"
-#include "shape/car_generator.hpp"
+#include "car_generator.hpp"
 
 namespace vp::shape {
 namespace {

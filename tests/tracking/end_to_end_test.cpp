@@ -14,14 +14,18 @@
 #include <string>
 #include <vector>
 
+#include "evaluation/mot_metrics.hpp"
 #include "geometry/rotated_box.hpp"
 #include "seed_one_options.hpp"
 #include "synthetic_scene.hpp"
-#include "tracking/mot_metrics.hpp"
 #include "tracking/track_manager.hpp"
 
 namespace vp::tracking {
 namespace {
+
+using evaluation::MotAccumulator;
+using evaluation::MotObject;
+using evaluation::MotSummary;
 
 constexpr double kCoast_s = 1.0;
 

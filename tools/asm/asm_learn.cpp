@@ -1,12 +1,12 @@
 // vp_asm_learn: learns the Active Shape Model of seed 000 (Eq. 1) from generated cars.
 //
 // Draws --models-per-type keypoint models of each of the six car types with the parametric
-// generator (shape/car_generator.hpp, seeded with --seed), keeps the last --holdout share of
-// each type aside, computes the mean and the principal components of the training models
-// (the 3 x 36 keypoints as one 108-vector), keeps --components of them, fits every training
-// model to get the per-type gamma priors, and writes the versioned ASM file (docs/asm.md).
-// It prints the explained variance share and the held-out reconstruction errors for
-// n_s = 1..8 so that the choice of n_s can be judged.
+// generator (tools/simulator/car_generator.hpp, seeded with --seed), keeps the last --holdout share
+// of each type aside, computes the mean and the principal components of the training models (the 3
+// x 36 keypoints as one 108-vector), keeps --components of them, fits every training model to get
+// the per-type gamma priors, and writes the versioned ASM file (docs/asm.md). It prints the
+// explained variance share and the held-out reconstruction errors for n_s = 1..8 so that the choice
+// of n_s can be judged.
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -21,7 +21,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "shape/car_generator.hpp"
+#include "car_generator.hpp"
 #include "shape/vehicle_model.hpp"
 
 namespace {

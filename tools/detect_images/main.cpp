@@ -25,8 +25,8 @@
 #include "detection/detection.hpp"
 #include "detection/detection_stage.hpp"
 #include "inference/engine.hpp"
+#include "output_files/detections_file.hpp"
 #include "preprocess/preprocessor.hpp"
-#include "sequence/detections_file.hpp"
 #include "sequence/recorded_sequence.hpp"
 
 namespace fs = std::filesystem;
@@ -263,15 +263,15 @@ std::string modelId(const Options& options) {
 }
 
 // Image-space row of one detection (never lifted here).
-vp::sequence::DetectionRecord toRecord(const vp::detection::Detection& d, int id) {
-  vp::sequence::DetectionRecord row;
+vp::output_files::DetectionRecord toRecord(const vp::detection::Detection& d, int id) {
+  vp::output_files::DetectionRecord row;
   row.detId = id;
   row.score = d.score;
   row.box = d.box;
   row.directionKnown = d.directionKnown;
   row.typeProbabilities = d.typeProbabilities;
   row.gamma = d.gamma;
-  row.liftStatus = vp::sequence::LiftStatus::NotLifted;
+  row.liftStatus = vp::output_files::LiftStatus::NotLifted;
   return row;
 }
 
@@ -285,9 +285,9 @@ int runSequence(const Options& options) {
   std::string why;
   if (!reader.open(options.sequence, &why))
     return fail(why);
-  const vp::config::AppConfig& rig = reader.rig();
+  const vp::sequence::Rig& rig = reader.rig();
   vp::camera::CameraModel camera;
-  if (!camera.init(rig.camera.intrinsics, rig.camera.distortion, &why))
+  if (!camera.init(rig.intrinsics, rig.distortion, &why))
     return fail(options.sequence + "/rig.yaml: camera: " + why);
   vp::detection::DetectionStage stage;
   if (!initStage(options, stage, &why))
@@ -295,18 +295,18 @@ int runSequence(const Options& options) {
   // A recording's frames are the app's: the training resolution unless told otherwise.
   const vp::preprocess::PreprocessOptions pre =
       preprocessOptions(stage, options.workingScaleGiven ? options.workingScale
-                                                         : 648.0 / rig.camera.intrinsics.widthPx);
+                                                         : 648.0 / rig.intrinsics.widthPx);
   vp::preprocess::Preprocessor preprocessor;
-  const cv::Size size(rig.camera.intrinsics.widthPx, rig.camera.intrinsics.heightPx);
+  const cv::Size size(rig.intrinsics.widthPx, rig.intrinsics.heightPx);
   if (!preprocessor.init(pre, camera, size, &why))
     return fail(why);
 
-  vp::sequence::DetectionsFileInfo info;
-  info.key = vp::sequence::DetectionsKey::FrameId;
+  vp::output_files::DetectionsFileInfo info;
+  info.key = vp::output_files::DetectionsKey::FrameId;
   info.gammaColumns = 3;
   info.model = modelId(options);
   info.source = "vp_detect_images --sequence " + options.sequence;
-  vp::sequence::DetectionsFileWriter writer;
+  vp::output_files::DetectionsFileWriter writer;
   if (!writer.open(options.out, info, &why))
     return fail(why);
 
@@ -333,7 +333,7 @@ int runSequence(const Options& options) {
       continue;
     }
     for (std::size_t i = 0; i < count; ++i) {
-      vp::sequence::DetectionRecord row = toRecord(detections[i], static_cast<int>(i));
+      vp::output_files::DetectionRecord row = toRecord(detections[i], static_cast<int>(i));
       row.frameId = frameId;
       if (!writer.writeRow(row, &why))
         return fail(why);
@@ -381,13 +381,13 @@ int runImages(const Options& options) {
   std::string why;
   if (!initStage(options, stage, &why))
     return fail(why);
-  vp::sequence::DetectionsFileInfo info;
-  info.key = vp::sequence::DetectionsKey::Image;
+  vp::output_files::DetectionsFileInfo info;
+  info.key = vp::output_files::DetectionsKey::Image;
   info.gammaColumns = 3;
   info.model = modelId(options);
   info.source = "vp_detect_images " + folder.string() + " working_scale " +
                 std::to_string(options.workingScale);
-  vp::sequence::DetectionsFileWriter writer;
+  vp::output_files::DetectionsFileWriter writer;
   if (!writer.open(options.out, info, &why))
     return fail(why);
 
@@ -433,10 +433,10 @@ int runImages(const Options& options) {
       continue;
     }
     for (std::size_t i = 0; i < count; ++i) {
-      vp::sequence::DetectionRecord row = toRecord(detections[i], static_cast<int>(i));
+      vp::output_files::DetectionRecord row = toRecord(detections[i], static_cast<int>(i));
       if (!row.setImageStem(file.stem().string()))
         return fail(file.string() + ": file stem longer than " +
-                    std::to_string(vp::sequence::kMaxImageStemChars) + " characters");
+                    std::to_string(vp::output_files::kMaxImageStemChars) + " characters");
       if (!writer.writeRow(row, &why))
         return fail(why);
     }

@@ -14,10 +14,10 @@
 #include <yaml-cpp/yaml.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "output_files/detections_file.hpp"
+#include "output_files/trajectory_file.hpp"
 #include "report.hpp"
-#include "sequence/detections_file.hpp"
 #include "sequence/recorded_sequence.hpp"
-#include "sequence/trajectory_file.hpp"
 #include "shape/vehicle_model.hpp"
 
 #ifndef VP_SOURCE_DIR
@@ -67,7 +67,7 @@ std::int64_t parseFrameId(const std::string& option, std::string_view text) {
   return value;
 }
 
-evaluation::PredictedObject toPrediction(const sequence::DetectionRecord& r) {
+evaluation::PredictedObject toPrediction(const output_files::DetectionRecord& r) {
   evaluation::PredictedObject p;
   p.box = r.box;
   p.score = r.score;
@@ -75,7 +75,7 @@ evaluation::PredictedObject toPrediction(const sequence::DetectionRecord& r) {
   p.hasTypeProbabilities = true;
   p.typeProbabilities = r.typeProbabilities;
   p.shape = r.gamma;
-  p.lifted = r.liftStatus == sequence::LiftStatus::Ok;
+  p.lifted = r.liftStatus == output_files::LiftStatus::Ok;
   p.positionEnu = r.positionEnu;
   p.headingEnuRad = r.headingEnuRad;
   p.dimensionsM = r.dimensionsM;
@@ -277,11 +277,11 @@ bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& optio
   if (!openWithGroundTruth(input.sequenceDir, &reader, why)) {
     return false;
   }
-  sequence::DetectionsFile detections;
-  if (!sequence::readDetectionsFile(input.detectionsFile, &detections, why)) {
+  output_files::DetectionsFile detections;
+  if (!output_files::readDetectionsFile(input.detectionsFile, &detections, why)) {
     return false;
   }
-  if (detections.info.key != sequence::DetectionsKey::FrameId) {
+  if (detections.info.key != output_files::DetectionsKey::FrameId) {
     *why = input.detectionsFile +
            ": header: a sequence needs the 'frame_id' key column (this file has 'image')";
     return false;
@@ -338,7 +338,7 @@ bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& optio
     sequenceFrames.insert(frame.frameId);
   }
   for (std::size_t i = 0; i < detections.rows.size(); ++i) {
-    const sequence::DetectionRecord& row = detections.rows[i];
+    const output_files::DetectionRecord& row = detections.rows[i];
     if (sequenceFrames.count(row.frameId) == 0) {
       *why = input.detectionsFile + ":" + std::to_string(detections.lines[i]) +
              ": frame_id: no frame " + std::to_string(row.frameId) + " in " + input.sequenceDir +
@@ -365,8 +365,8 @@ bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& opt
   if (!openWithGroundTruth(input.sequenceDir, &reader, why)) {
     return false;
   }
-  sequence::TrajectoryFile tracks;
-  if (!sequence::readTrajectoryFile(input.tracksFile, &tracks, why)) {
+  output_files::TrajectoryFile tracks;
+  if (!output_files::readTrajectoryFile(input.tracksFile, &tracks, why)) {
     return false;
   }
   std::map<std::int64_t, std::size_t> indexOfFrame;
@@ -406,7 +406,7 @@ bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& opt
   };
   try {
     for (std::size_t i = 0; i < tracks.rows.size(); ++i) {
-      const sequence::TrajectoryRecord& row = tracks.rows[i];
+      const output_files::TrajectoryRecord& row = tracks.rows[i];
       TrackingFrame* frame = frameOf(row.frameId, input.tracksFile, tracks.lines[i]);
       if (frame == nullptr) {
         ++out->skippedRows;  // outside --frames
@@ -426,23 +426,23 @@ bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& opt
       frame->tracks.push_back(track);
     }
     if (!input.detectionsFile.empty()) {
-      sequence::DetectionsFile detections;
+      output_files::DetectionsFile detections;
       std::string problem;
-      if (!sequence::readDetectionsFile(input.detectionsFile, &detections, &problem)) {
+      if (!output_files::readDetectionsFile(input.detectionsFile, &detections, &problem)) {
         throw InputError(problem);
       }
-      if (detections.info.key != sequence::DetectionsKey::FrameId) {
+      if (detections.info.key != output_files::DetectionsKey::FrameId) {
         throw InputError(input.detectionsFile +
                          ": header: a sequence needs the 'frame_id' key column (this file has "
                          "'image')");
       }
       for (std::size_t i = 0; i < detections.rows.size(); ++i) {
-        const sequence::DetectionRecord& row = detections.rows[i];
+        const output_files::DetectionRecord& row = detections.rows[i];
         TrackingFrame* frame = frameOf(row.frameId, input.detectionsFile, detections.lines[i]);
         if (frame == nullptr) {
           continue;
         }
-        if (row.liftStatus != sequence::LiftStatus::Ok) {
+        if (row.liftStatus != output_files::LiftStatus::Ok) {
           ++out->unliftedDetections;
           continue;
         }
@@ -548,12 +548,12 @@ bool loadYoloImages(const EvaluateOptions& options, LoadedInput* out, std::strin
         stems.push_back(stem);
       }
     }
-    sequence::DetectionsFile detections;
+    output_files::DetectionsFile detections;
     std::string problem;
-    if (!sequence::readDetectionsFile(out->detectionsFile, &detections, &problem)) {
+    if (!output_files::readDetectionsFile(out->detectionsFile, &detections, &problem)) {
       throw InputError(problem);
     }
-    if (detections.info.key != sequence::DetectionsKey::Image) {
+    if (detections.info.key != output_files::DetectionsKey::Image) {
       throw InputError(out->detectionsFile +
                        ": header: an image folder needs the 'image' key column (this file has "
                        "'frame_id')");
@@ -612,7 +612,7 @@ bool loadYoloImages(const EvaluateOptions& options, LoadedInput* out, std::strin
       out->images.push_back(std::move(image));
     }
     for (std::size_t i = 0; i < detections.rows.size(); ++i) {
-      const sequence::DetectionRecord& row = detections.rows[i];
+      const output_files::DetectionRecord& row = detections.rows[i];
       const std::string stem(row.imageStem());
       if (imageOfStem.count(stem) == 0) {
         throw InputError(out->detectionsFile + ":" + std::to_string(detections.lines[i]) +

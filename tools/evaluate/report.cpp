@@ -12,9 +12,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "evaluation/mot_metrics.hpp"
 #include "evaluation/seed_reference.hpp"
 #include "shape/vehicle_model.hpp"
-#include "tracking/mot_metrics.hpp"
 
 namespace vp::evaluate {
 namespace {
@@ -205,7 +205,7 @@ std::string seedSource(const std::string& key) {
 }
 
 std::vector<Row> trackingRows(const evaluation::TrackingSummary& t) {
-  const tracking::MotSummary& m = t.mot;
+  const evaluation::MotSummary& m = t.mot;
   const char* mot = "Tracking";
   const char* versus = "Tracks vs detector";
   return {

@@ -6,7 +6,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
-#include "shape/car_generator.hpp"
+#include "car_generator.hpp"
 
 namespace vp::sim {
 

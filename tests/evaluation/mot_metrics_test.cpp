@@ -1,11 +1,11 @@
-// Tests for tracking/mot_metrics on hand-made sequences with known answers.
-#include "tracking/mot_metrics.hpp"
+// Tests for evaluation/mot_metrics on hand-made sequences with known answers.
+#include "evaluation/mot_metrics.hpp"
 
 #include <gtest/gtest.h>
 
 #include <vector>
 
-namespace vp::tracking {
+namespace vp::evaluation {
 namespace {
 
 MotObject obj(int id, double x, double y = 0.0) {
@@ -95,4 +95,4 @@ TEST(MotMetrics, MostlyLostSpeedHeadingAndType) {
 }
 
 }  // namespace
-}  // namespace vp::tracking
+}  // namespace vp::evaluation

@@ -1,4 +1,4 @@
-// tracking/mot_metrics: multi-object tracking measures against ground truth, in the world.
+// evaluation/mot_metrics: multi-object tracking measures against ground truth, in the world.
 //
 // Contract: an offline evaluation helper (it allocates; never call it in the loop).
 // MotAccumulator takes, frame by frame, the true objects and the tracker's hypotheses (id +
@@ -6,7 +6,8 @@
 // (Bernardin & Stiefelhagen 2008) and identity measures (Ristani et al. 2016):
 //   match: a truth/hypothesis pair closer than matchDistance_m; a pair matched in the
 //          previous frame is kept while it stays within the distance, the rest are paired by
-//          minimum total distance (Hungarian);
+//          minimum total distance (Hungarian): matchByDistance(), the one matcher that
+//          evaluation/tracking_measures uses too;
 //   MOTA = 1 - (misses + false positives + id switches) / truth objects;
 //   MOTP = mean distance of the matched pairs, m (lower is better);
 //   id switch: a truth object matched to a hypothesis other than the one it was last matched
@@ -28,7 +29,13 @@
 
 #include <Eigen/Core>
 
-namespace vp::tracking {
+namespace vp::evaluation {
+
+// The pairs of one frame under the rule above: for each truth, the index of its hypothesis or
+// -1. previous (truth index -> hypothesis index kept from the last frame, or -1) may be empty.
+std::vector<int> matchByDistance(std::span<const Eigen::Vector2d> truth,
+                                 std::span<const Eigen::Vector2d> hypotheses,
+                                 std::span<const int> previous, double matchDistance_m);
 
 struct MotObject {
   int id = 0;
@@ -94,4 +101,4 @@ class MotAccumulator {
   std::map<int, int> hypothesisCount_;             // hyp id -> frames present
 };
 
-}  // namespace vp::tracking
+}  // namespace vp::evaluation

@@ -1,4 +1,4 @@
-#include "shape/car_generator.hpp"
+#include "car_generator.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,5 +1,6 @@
-// sequence/csv_io: the mechanics that the detections file and the trajectory file share
-// (internal to vp_sequence; the formats themselves live in detections_file / trajectory_file).
+// csv/csv_io: the CSV mechanics that the recorded-sequence reader (input) and the output files
+// (detections file, trajectory file) share; the formats themselves live with their modules
+// (sequence/recorded_sequence, output_files/detections_file, output_files/trajectory_file).
 //
 // Contract: CsvFileWriter is a small RAII writer for the real-time loop: open() allocates once
 // (the stdio buffer and a row buffer of the size asked for) and creates the file; the owner
@@ -21,7 +22,7 @@
 #include <string_view>
 #include <vector>
 
-namespace vp::sequence::csv {
+namespace vp::csv {
 
 // ---- writing -------------------------------------------------------------------------------
 
@@ -35,9 +36,11 @@ class CsvFileWriter {
   CsvFileWriter(const CsvFileWriter&) = delete;
   CsvFileWriter& operator=(const CsvFileWriter&) = delete;
 
-  // Both file formats' writers take a gamma column count in [0, shape::kMaxShapeComponents]
-  // and refuse a second open(): the checks they make before anything else.
-  bool checkOpen(const std::string& path, int gammaColumns, std::string* why) const;
+  // Both output files' writers take a gamma column count in [0, maxGammaColumns] (the ASM's
+  // largest shape count, which this layer does not know) and refuse a second open(): the
+  // checks they make before anything else.
+  bool checkOpen(const std::string& path, int gammaColumns, int maxGammaColumns,
+                 std::string* why) const;
   // Allocates the buffers and creates (truncates) path. Start-up.
   bool open(const std::string& path, std::size_t rowBytes, std::string* why);
   // Writes the lines before the rows; an empty text (a formatter that failed) fails too.
@@ -85,6 +88,9 @@ struct Problem {
 std::string quote(std::string_view text);
 // "<file>:<line>", the start of every message about a line.
 std::string location(const std::string& file, int line);
+
+// Splits `line` at commas into `fields` (views into `line`; quotes are not special).
+void splitFields(std::string_view line, std::vector<std::string_view>& fields);
 
 // The whole file; throws ReadError "<file>: cannot open (missing or unreadable)".
 std::string readWholeFile(const std::string& path);
@@ -151,4 +157,4 @@ class RowParser {
 extern template float RowParser::real<float>(int i) const;
 extern template double RowParser::real<double>(int i) const;
 
-}  // namespace vp::sequence::csv
+}  // namespace vp::csv

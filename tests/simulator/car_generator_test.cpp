@@ -1,6 +1,6 @@
-// Tests of shape/car_generator: documented ranges, determinism, valid closed meshes for every
+// Tests of simulator/car_generator: documented ranges, determinism, valid closed meshes for every
 // drawn car, types that differ the way real ones do, and the bus/truck meshes.
-#include "shape/car_generator.hpp"
+#include "car_generator.hpp"
 
 #include <gtest/gtest.h>
 

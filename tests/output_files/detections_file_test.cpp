@@ -10,9 +10,9 @@
 #include <string>
 
 #include "alloc_counter.hpp"
-#include "sequence/detections_file.hpp"
+#include "output_files/detections_file.hpp"
 
-namespace vp::sequence {
+namespace vp::output_files {
 namespace {
 
 namespace fs = std::filesystem;
@@ -309,4 +309,4 @@ TEST(LiftStatusWords, RoundTripEveryStatus) {
 }
 
 }  // namespace
-}  // namespace vp::sequence
+}  // namespace vp::output_files

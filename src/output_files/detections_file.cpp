@@ -1,4 +1,4 @@
-#include "sequence/detections_file.hpp"
+#include "output_files/detections_file.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -8,7 +8,7 @@
 #include <set>
 #include <utility>
 
-namespace vp::sequence {
+namespace vp::output_files {
 namespace {
 
 using csv::Problem;
@@ -441,7 +441,7 @@ DetectionsFileWriter::~DetectionsFileWriter() = default;
 
 bool DetectionsFileWriter::open(const std::string& path, const DetectionsFileInfo& info,
                                 std::string* why) {
-  if (!writer_.checkOpen(path, info.gammaColumns, why)) {
+  if (!writer_.checkOpen(path, info.gammaColumns, shape::kMaxShapeComponents, why)) {
     return false;
   }
   for (const std::string* text : {&info.model, &info.source}) {
@@ -560,4 +560,4 @@ bool readDetectionsFile(const std::string& path, DetectionsFile* out, std::strin
   });
 }
 
-}  // namespace vp::sequence
+}  // namespace vp::output_files

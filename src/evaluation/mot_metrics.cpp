@@ -1,4 +1,4 @@
-#include "tracking/mot_metrics.hpp"
+#include "evaluation/mot_metrics.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,61 @@
 #include "geometry/rotated_box.hpp"
 #include "tracking/hungarian.hpp"
 
-namespace vp::tracking {
+namespace vp::evaluation {
+
+std::vector<int> matchByDistance(std::span<const Eigen::Vector2d> truth,
+                                 std::span<const Eigen::Vector2d> hypotheses,
+                                 std::span<const int> previous, double matchDistance_m) {
+  const std::size_t nt = truth.size();
+  const std::size_t nh = hypotheses.size();
+  const auto dist = [&](std::size_t g, std::size_t h) { return (truth[g] - hypotheses[h]).norm(); };
+  std::vector<int> gToH(nt, -1);
+  std::vector<int> hToG(nh, -1);
+  // 1. Keep last frame's pairs that are still within the distance.
+  for (std::size_t g = 0; g < nt && g < previous.size(); ++g) {
+    const int h = previous[g];
+    if (h >= 0 && static_cast<std::size_t>(h) < nh && hToG[static_cast<std::size_t>(h)] < 0 &&
+        dist(g, static_cast<std::size_t>(h)) <= matchDistance_m) {
+      gToH[g] = h;
+      hToG[static_cast<std::size_t>(h)] = static_cast<int>(g);
+    }
+  }
+  // 2. Pair the rest by minimum total distance (float costs).
+  std::vector<std::size_t> rows;
+  std::vector<std::size_t> cols;
+  for (std::size_t g = 0; g < nt; ++g) {
+    if (gToH[g] < 0) {
+      rows.push_back(g);
+    }
+  }
+  for (std::size_t h = 0; h < nh; ++h) {
+    if (hToG[h] < 0) {
+      cols.push_back(h);
+    }
+  }
+  if (rows.empty() || cols.empty()) {
+    return gToH;
+  }
+  std::vector<float> costs(rows.size() * cols.size(), tracking::kInfeasibleCost);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      const double d = dist(rows[r], cols[c]);
+      if (d <= matchDistance_m) {
+        costs[r * cols.size() + c] = static_cast<float>(d);
+      }
+    }
+  }
+  tracking::HungarianSolver solver;
+  solver.init(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
+  std::vector<int> assign(rows.size(), -1);
+  solver.solve(costs, static_cast<int>(rows.size()), static_cast<int>(cols.size()), assign);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    if (assign[r] >= 0) {
+      gToH[rows[r]] = static_cast<int>(cols[static_cast<std::size_t>(assign[r])]);
+    }
+  }
+  return gToH;
+}
 
 void MotAccumulator::addFrame(std::span<const MotObject> truth,
                               std::span<const MotObject> hypotheses) {
@@ -30,54 +84,33 @@ void MotAccumulator::addFrame(std::span<const MotObject> truth,
     }
   }
 
-  std::vector<int> gToH(nt, -1);
-  std::vector<int> hToG(nh, -1);
-  // 1. Keep last frame's correspondences that are still valid.
+  // Last frame's pairs as indices of this frame (ids are unique within a frame).
+  std::vector<int> previous(nt, -1);
   for (std::size_t g = 0; g < nt; ++g) {
     const auto prev = previousMatch_.find(truth[g].id);
     if (prev == previousMatch_.end()) {
       continue;
     }
     for (std::size_t h = 0; h < nh; ++h) {
-      if (hypotheses[h].id == prev->second && hToG[h] < 0 && dist(g, h) <= tau) {
-        gToH[g] = static_cast<int>(h);
-        hToG[h] = static_cast<int>(g);
+      if (hypotheses[h].id == prev->second) {
+        previous[g] = static_cast<int>(h);
         break;
       }
     }
   }
-  // 2. Pair the rest by minimum total distance.
-  std::vector<std::size_t> rows, cols;
+  std::vector<Eigen::Vector2d> truthPositions(nt);
+  std::vector<Eigen::Vector2d> hypothesisPositions(nh);
   for (std::size_t g = 0; g < nt; ++g) {
-    if (gToH[g] < 0) {
-      rows.push_back(g);
-    }
+    truthPositions[g] = truth[g].position;
   }
   for (std::size_t h = 0; h < nh; ++h) {
-    if (hToG[h] < 0) {
-      cols.push_back(h);
-    }
+    hypothesisPositions[h] = hypotheses[h].position;
   }
-  if (!rows.empty() && !cols.empty()) {
-    std::vector<float> costs(rows.size() * cols.size(), kInfeasibleCost);
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-      for (std::size_t c = 0; c < cols.size(); ++c) {
-        const double d = dist(rows[r], cols[c]);
-        if (d <= tau) {
-          costs[r * cols.size() + c] = static_cast<float>(d);
-        }
-      }
-    }
-    HungarianSolver solver;
-    solver.init(static_cast<int>(rows.size()), static_cast<int>(cols.size()));
-    std::vector<int> assign(rows.size(), -1);
-    solver.solve(costs, static_cast<int>(rows.size()), static_cast<int>(cols.size()), assign);
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-      if (assign[r] >= 0) {
-        const std::size_t h = cols[static_cast<std::size_t>(assign[r])];
-        gToH[rows[r]] = static_cast<int>(h);
-        hToG[h] = static_cast<int>(rows[r]);
-      }
+  const std::vector<int> gToH = matchByDistance(truthPositions, hypothesisPositions, previous, tau);
+  std::vector<int> hToG(nh, -1);
+  for (std::size_t g = 0; g < nt; ++g) {
+    if (gToH[g] >= 0) {
+      hToG[static_cast<std::size_t>(gToH[g])] = static_cast<int>(g);
     }
   }
 
@@ -167,7 +200,7 @@ MotSummary MotAccumulator::summary() const {
       costs[static_cast<std::size_t>(g) * hypIds.size() + static_cast<std::size_t>(h)] =
           -static_cast<float>(frames);
     }
-    HungarianSolver solver;
+    tracking::HungarianSolver solver;
     solver.init(static_cast<int>(truthIds.size()), static_cast<int>(hypIds.size()));
     std::vector<int> assign(truthIds.size(), -1);
     solver.solve(costs, static_cast<int>(truthIds.size()), static_cast<int>(hypIds.size()), assign);
@@ -184,4 +217,4 @@ MotSummary MotAccumulator::summary() const {
   return s;
 }
 
-}  // namespace vp::tracking
+}  // namespace vp::evaluation

@@ -1,4 +1,4 @@
-// sequence/trajectory_file: the trajectory file, one CSV row per track per frame, which the
+// output_files/trajectory_file: the trajectory file, one CSV row per track per frame, which the
 // firmware app writes (--trajectory-csv) and the evaluation tool (vp_evaluate --tracks) reads.
 // The columns are tracking/trajectory_csv's (seed 002's eight first, then ours), documented in
 // docs/tracking.md.
@@ -27,12 +27,12 @@
 
 #include <Eigen/Core>
 
-#include "sequence/csv_io.hpp"
+#include "csv/csv_io.hpp"
 #include "shape/vehicle_model.hpp"
 #include "tracking/track_manager.hpp"
 #include "tracking/trajectory_csv.hpp"
 
-namespace vp::sequence {
+namespace vp::output_files {
 
 // Columns before the gamma columns: 21 fixed + 7 type probabilities.
 constexpr int kTrajectoryFixedColumns = 28;
@@ -109,4 +109,4 @@ struct TrajectoryFile {
 // file:line:column on the first problem.
 bool readTrajectoryFile(const std::string& path, TrajectoryFile* out, std::string* why);
 
-}  // namespace vp::sequence
+}  // namespace vp::output_files

@@ -1,5 +1,6 @@
-// shape/car_generator: parametric, realistic-looking vehicles for learning the ASM and for the
-// simulator: cars of the six seed types as keypoint models over the fixed topology of
+// simulator/car_generator: parametric, realistic-looking vehicles for learning the ASM and for
+// the simulator (offline: the product does not ship it; its namespace stays shape, whose types
+// it builds): cars of the six seed types as keypoint models over the fixed topology of
 // vehicle_model.hpp, and large vehicles (buses, trucks) as their own closed meshes.
 //
 // Contract: pure functions, deterministic for a given std::mt19937_64 state on every platform

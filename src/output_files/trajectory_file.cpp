@@ -1,4 +1,4 @@
-#include "sequence/trajectory_file.hpp"
+#include "output_files/trajectory_file.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "geometry/rotated_box.hpp"
 
-namespace vp::sequence {
+namespace vp::output_files {
 namespace {
 
 using csv::Problem;
@@ -306,7 +306,7 @@ TrajectoryFileWriter::~TrajectoryFileWriter() = default;
 
 bool TrajectoryFileWriter::open(const std::string& path, const TrajectoryFileInfo& info,
                                 std::string* why) {
-  if (!writer_.checkOpen(path, info.gammaColumns, why) ||
+  if (!writer_.checkOpen(path, info.gammaColumns, shape::kMaxShapeComponents, why) ||
       !writer_.open(path, tracking::kTrajectoryCsvMaxLine, why)) {
     return false;
   }
@@ -393,4 +393,4 @@ bool readTrajectoryFile(const std::string& path, TrajectoryFile* out, std::strin
   });
 }
 
-}  // namespace vp::sequence
+}  // namespace vp::output_files

@@ -1,4 +1,4 @@
-// sequence/detections_file: the detections file, one CSV row per detection per frame (or per
+// output_files/detections_file: the detections file, one CSV row per detection per frame (or per
 // image), which the perception runner writes and the evaluation tool (vp_evaluate) reads. The
 // format is documented in docs/detections_file.md.
 //
@@ -27,11 +27,11 @@
 
 #include <Eigen/Core>
 
+#include "csv/csv_io.hpp"
 #include "geometry/rotated_box.hpp"
-#include "sequence/csv_io.hpp"
 #include "shape/vehicle_model.hpp"
 
-namespace vp::sequence {
+namespace vp::output_files {
 
 constexpr int kDetectionsFormatVersion = 1;
 constexpr std::size_t kMaxImageStemChars = 127;  // longest `image` key (file stem), bytes
@@ -125,4 +125,4 @@ struct DetectionsFile {
 // Reads and checks a whole detections file. False + *why naming file:line:column on a problem.
 bool readDetectionsFile(const std::string& path, DetectionsFile* out, std::string* why);
 
-}  // namespace vp::sequence
+}  // namespace vp::output_files

@@ -14,9 +14,9 @@
 
 #include "alloc_counter.hpp"
 #include "geometry/rotated_box.hpp"
-#include "sequence/trajectory_file.hpp"
+#include "output_files/trajectory_file.hpp"
 
-namespace vp::sequence {
+namespace vp::output_files {
 namespace {
 
 namespace fs = std::filesystem;
@@ -357,4 +357,4 @@ TEST_F(TrajectoryFileTest, MalformedRowsNameFileLineAndColumn) {
 }
 
 }  // namespace
-}  // namespace vp::sequence
+}  // namespace vp::output_files

@@ -1,4 +1,4 @@
-#include "sequence/csv_io.hpp"
+#include "csv/csv_io.hpp"
 
 #include <cerrno>
 #include <charconv>
@@ -7,9 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "shape/vehicle_model.hpp"
-
-namespace vp::sequence::csv {
+namespace vp::csv {
 namespace {
 
 constexpr std::size_t kIoBufferBytes = 64 * 1024;  // stdio buffer: a few hundred rows
@@ -31,14 +29,14 @@ CsvFileWriter::~CsvFileWriter() {
   }
 }
 
-bool CsvFileWriter::checkOpen(const std::string& path, int gammaColumns, std::string* why) const {
+bool CsvFileWriter::checkOpen(const std::string& path, int gammaColumns, int maxGammaColumns,
+                              std::string* why) const {
   if (file_ != nullptr) {
     return failWith(why, path + ": writer already open on " + path_);
   }
-  if (gammaColumns < 0 || gammaColumns > shape::kMaxShapeComponents) {
-    return failWith(why, path + ": gammaColumns must be in [0, " +
-                             std::to_string(shape::kMaxShapeComponents) + "], got " +
-                             std::to_string(gammaColumns));
+  if (gammaColumns < 0 || gammaColumns > maxGammaColumns) {
+    return failWith(why, path + ": gammaColumns must be in [0, " + std::to_string(maxGammaColumns) +
+                             "], got " + std::to_string(gammaColumns));
   }
   return true;
 }
@@ -124,6 +122,20 @@ std::string location(const std::string& file, int line) {
   return file + ":" + std::to_string(line);
 }
 
+void splitFields(std::string_view line, std::vector<std::string_view>& fields) {
+  fields.clear();
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    if (comma == std::string_view::npos) {
+      fields.push_back(line.substr(start));
+      return;
+    }
+    fields.push_back(line.substr(start, comma - start));
+    start = comma + 1;
+  }
+}
+
 std::string readWholeFile(const std::string& path) {
   std::ifstream stream(path, std::ios::binary);
   if (!stream) {
@@ -203,4 +215,4 @@ T RowParser::real(int i) const {
 template float RowParser::real<float>(int i) const;
 template double RowParser::real<double>(int i) const;
 
-}  // namespace vp::sequence::csv
+}  // namespace vp::csv
