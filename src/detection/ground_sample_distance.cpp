@@ -26,6 +26,13 @@ bool validate(const GsdOptions& options, std::string* why) {
   return true;
 }
 
+double workingScaleForGsd(double gsd_m) {
+  if (!(gsd_m > 0.0) || !std::isfinite(gsd_m)) {
+    return 0.0;
+  }
+  return std::min(1.0, gsd_m / kDetectorWorkingGsd_m);
+}
+
 double nadirGsd(double heightAboveGround_m, double focalLengthPx) {
   if (!(heightAboveGround_m > 0.0) || !(focalLengthPx > 0.0)) {
     return 0.0;

@@ -34,6 +34,15 @@ struct GsdOptions {
 
 bool validate(const GsdOptions& options, std::string* why);
 
+// The first stage's working resolution: it was trained on frames brought to about this many
+// metres per working pixel (a 2592 px frame from ~90 m downscaled 4x; tools/detector, model card).
+inline constexpr double kDetectorWorkingGsd_m = 0.12;
+
+// Working scale (working px per frame px) that brings a frame of gsd_m metres per pixel to the
+// detector's resolution: gsd_m / kDetectorWorkingGsd_m, at most 1 (the preprocessor only
+// downscales: coarser frames are run as they are). 0 for a non-positive or non-finite gsd_m.
+double workingScaleForGsd(double gsd_m);
+
 // GSD of a nadir pinhole camera at heightAboveGround_m with focal length fPx.
 double nadirGsd(double heightAboveGround_m, double focalLengthPx);
 

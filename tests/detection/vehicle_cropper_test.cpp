@@ -470,5 +470,13 @@ TEST(GroundSampleDistance, MedianBoxIsANominalCar) {
   EXPECT_NE(why.find("min_gsd_m"), std::string::npos) << why;
 }
 
+TEST(GroundSampleDistance, WorkingScaleBringsAFrameToTheDetectorsResolution) {
+  EXPECT_NEAR(workingScaleForGsd(0.068), 0.068 / 0.12, 1e-15);  // bev-intersection-de photos
+  EXPECT_NEAR(workingScaleForGsd(0.03), 0.25, 1e-15);  // the 2592 px camera at ~90 m: the app's
+  EXPECT_EQ(workingScaleForGsd(0.2), 1.0);             // coarser than the detector: as it is
+  EXPECT_EQ(workingScaleForGsd(0.0), 0.0);
+  EXPECT_EQ(workingScaleForGsd(std::nan("")), 0.0);
+}
+
 }  // namespace
 }  // namespace vp::detection

@@ -26,6 +26,16 @@ for k in ("precision", "recall", "f1"):
 assert m["f1"] > 0.5, m["f1"]  # the shipped detector finds most of these vehicles
 PY
 
+# vp_detect_images on photos: --gsd-m G sets the working scale G / 0.12 unless it is given.
+mkdir -p "$work/photos"
+cp "$seq/frames/$(ls "$seq/frames" | head -1)" "$work/photos/"
+"$build/tools/detect_images/vp_detect_images" --images "$work/photos" --gsd-m 0.06 \
+  --out "$work/photos.csv" > /dev/null 2>&1 || fail "vp_detect_images --gsd-m"
+grep -q "^# source: .* working_scale 0.5" "$work/photos.csv" || fail "--gsd-m 0.06: working scale not 0.5"
+"$build/tools/detect_images/vp_detect_images" --images "$work/photos" --gsd-m 0.06 \
+  --working-scale 0.3 --out "$work/photos.csv" > /dev/null 2>&1 || fail "vp_detect_images --working-scale"
+grep -q "^# source: .* working_scale 0.3" "$work/photos.csv" || fail "--working-scale 0.3 not kept"
+
 # Tracking: the app per sequence, then the tracking section with the largest speed errors.
 "$root/scripts/eval_tracking.sh" --build "$build" --set perception.working_scale=1.0 \
   "$work/trk" "$seq" > "$work/trk.out"

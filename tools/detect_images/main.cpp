@@ -4,8 +4,8 @@
 // split (vp_evaluate --yolo). No pose, no DTM: nothing is lifted (lift_status not_lifted).
 //
 // Images may have any size; each gets its own pinhole camera of that size (no undistortion).
-// The working scale maps image pixels to the detector's training resolution (~12 cm/px), so
-// it must be chosen from the images' ground sample distance: working_scale = gsd / 0.12.
+// The working scale maps image pixels to the detector's training resolution (~12 cm/px): with
+// --gsd-m G it is G / 0.12 (detection::workingScaleForGsd), unless --working-scale is given.
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
@@ -24,6 +24,7 @@
 #include "camera/camera_model.hpp"
 #include "detection/detection.hpp"
 #include "detection/detection_stage.hpp"
+#include "detection/ground_sample_distance.hpp"
 #include "inference/engine.hpp"
 #include "output_files/detections_file.hpp"
 #include "preprocess/preprocessor.hpp"
@@ -52,10 +53,13 @@ options:
   --backend B           int8 | fp32 | opencv (default int8)
   --crop-backend B      the second stage's backend when it should differ from --backend
                         (e.g. int8 detector + fp32 crops: which stage carries the int8 error)
-  --working-scale S     working px per image px, (0, 1] (default 0.4: ~4.8 cm/px photos;
-                        with --sequence: 648 / frame width, the training resolution)
-  --gsd-m G             metres per image pixel for the second stage's crops (default: the
-                        image's median box length taken as a 4.5 m car)
+  --working-scale S     working px per image px, (0, 1] (default for images: G / 0.12 with
+                        --gsd-m G, which brings them to the detector's ~12 cm/px, else 0.4 for
+                        ~4.8 cm/px photos; with --sequence: 648 / frame width, the training
+                        resolution)
+  --gsd-m G             metres per image pixel: the second stage's crops, and for images the
+                        working scale (default: the image's median box length taken as a 4.5 m
+                        car, working scale 0.4)
   --score-threshold T   detection score threshold, [0, 1] (default 0.4)
   --threads N           detector threads (default 1)
   --no-flip             keep the detector's front/back (the second stage's flip is not applied)
@@ -193,6 +197,10 @@ Options parseArguments(int argc, char** argv) {
     usageError("--out is required");
   // The refinement is averaged only over crops that were mirrored.
   second.mirrorRefine = second.mirrorRefine && second.mirrorAverage;
+  // A photo set's GSD says how far to shrink it for the detector: nobody should have to
+  // compute gsd / 0.12 by hand.
+  if (!o.images.empty() && !o.workingScaleGiven && stage.gsd.fixedGsd_m > 0.0)
+    o.workingScale = vp::detection::workingScaleForGsd(stage.gsd.fixedGsd_m);
   return o;
 }
 
