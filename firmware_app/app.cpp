@@ -721,23 +721,8 @@ void App::periodic(std::int64_t nowNs, const telemetry::PoseEstimate& pose) {
       nextStatusNs_ = nowNs + static_cast<std::int64_t>(period_s * 1e9);
     }
     if (config_.dds.occupancyRate_hz > 0.0 && nowNs >= nextOccupancyNs_) {
-      // The observed area: the frame's corners on the ground (nothing when one misses the DTM).
-      std::array<Eigen::Vector2d, 4> corners{};
-      std::size_t cornerCount = 0;
-      const perception::FrameLiftSummary& lift = perception_->liftSummary();
-      if (lift.poseStatus == perception::LiftStatus::Ok) {
-        const double w = pool_.widthPx() - 1.0;
-        const double h = pool_.heightPx() - 1.0;
-        for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0),
-                                             Eigen::Vector2d(w, h), Eigen::Vector2d(0, h)}) {
-          const auto ground = perception_->lifter().pixelToWorld(lift.cameraPose, pixel);
-          if (!ground) {
-            cornerCount = 0;
-            break;
-          }
-          corners[cornerCount++] = ground->head<2>();
-        }
-      }
+      // The observed area: the frame's ground footprint, as perception computed it.
+      const std::span<const Eigen::Vector2d> corners = perception_->footprint().corners();
       const config::OccupancyGridSpec& spec = config_.dds.grid;
       grid_.droneId = config_.dds.droneId;
       grid_.time_ns = lastTimestampNs_ + toUtcNs_;
@@ -745,8 +730,7 @@ void App::periodic(std::int64_t nowNs, const telemetry::PoseEstimate& pose) {
       grid_.originNorth_m = spec.originNorth_m;
       grid_.resolution_m = static_cast<float>(spec.resolution_m);
       messages::rasterizeOccupancy(
-          std::span<const Eigen::Vector2d>(corners.data(), cornerCount),
-          std::span<const messages::VehicleState>(states_.data(), stateCount_), grid_);
+          corners, std::span<const messages::VehicleState>(states_.data(), stateCount_), grid_);
       if (!dds_->occupancy().write(grid_).ok()) {
         ++counters_.publishErrors;
       }
