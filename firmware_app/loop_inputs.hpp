@@ -50,6 +50,8 @@ class FrameSource {
   virtual SourceEvents events() const { return {}; }
   virtual bool capturesOnMonotonicClock() const = 0;  // frame stamps are CLOCK_MONOTONIC
   virtual double nominalFrameRateHz() const = 0;
+  virtual int widthPx() const = 0;  // the size of every frame it delivers (after open())
+  virtual int heightPx() const = 0;
 };
 
 class ReplayFrameSource final : public FrameSource {
@@ -60,6 +62,8 @@ class ReplayFrameSource final : public FrameSource {
   const char* message() const override { return message_.c_str(); }
   bool capturesOnMonotonicClock() const override { return false; }
   double nominalFrameRateHz() const override { return replay_.reader().info().frameRateHz; }
+  int widthPx() const override { return replay_.widthPx(); }
+  int heightPx() const override { return replay_.heightPx(); }
   const platform::replay::SequenceReplay& replay() const { return replay_; }
 
  private:
@@ -77,6 +81,8 @@ class CameraFrameSource final : public FrameSource {
   SourceEvents events() const override;
   bool capturesOnMonotonicClock() const override { return true; }
   double nominalFrameRateHz() const override { return 10.0; }  // seed 000's camera
+  int widthPx() const override { return camera_.format().widthPx; }
+  int heightPx() const override { return camera_.format().heightPx; }
   const platform::v4l2::V4l2Camera& camera() const { return camera_; }
 
  private:

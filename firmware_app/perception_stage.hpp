@@ -27,10 +27,12 @@ class FramePerception {
                                              const telemetry::PoseEstimate& pose) = 0;
   virtual std::span<const perception::VehicleObservation> observations() const = 0;
   virtual const perception::FrameLiftSummary& liftSummary() const = 0;
+  // The ground the frame shows (perception::frameFootprint; empty without a camera pose): the
+  // occupancy grid's observed area, computed by perception so the loop never lifts itself.
+  virtual const perception::FrameFootprint& footprint() const = 0;
   virtual const perception::PipelineTimings& timings() const = 0;
   virtual const char* lastError() const = 0;
-  // The frame the observations' pixels refer to, and the Lifter on its camera (annotation,
-  // the camera's ground footprint for the occupancy grid).
+  // The frame the observations' pixels refer to, and the Lifter on its camera (annotation).
   virtual const cv::Mat& correctedFrame() const = 0;
   virtual const lifting::Lifter& lifter() const = 0;
   virtual const char* modelId() const = 0;  // for the drone status, e.g. "detector_int8"
@@ -54,6 +56,7 @@ class PipelinePerception final : public FramePerception {
   const perception::FrameLiftSummary& liftSummary() const override {
     return pipeline_.liftSummary();
   }
+  const perception::FrameFootprint& footprint() const override { return pipeline_.footprint(); }
   const perception::PipelineTimings& timings() const override { return pipeline_.timings(); }
   const char* lastError() const override { return pipeline_.lastError(); }
   const cv::Mat& correctedFrame() const override { return pipeline_.correctedFrame(); }

@@ -115,6 +115,26 @@ bool DetectionLifter::init(const terrain::TerrainModel& terrain, const geodesy::
   return true;
 }
 
+FrameFootprint frameFootprint(const lifting::Lifter& lifter, const FrameLiftSummary& summary,
+                              int widthPx, int heightPx) {
+  FrameFootprint footprint;
+  if (summary.poseStatus != LiftStatus::Ok) {
+    return footprint;
+  }
+  const double w = widthPx - 1.0;
+  const double h = heightPx - 1.0;
+  for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0),
+                                       Eigen::Vector2d(w, h), Eigen::Vector2d(0, h)}) {
+    const auto ground = lifter.pixelToWorld(summary.cameraPose, pixel);
+    if (!ground) {
+      footprint.count = 0;
+      return footprint;
+    }
+    footprint.cornersEnu[footprint.count++] = ground->head<2>();
+  }
+  return footprint;
+}
+
 FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
                                             const telemetry::PoseEstimate& pose,
                                             std::span<const detection::Detection> detections,

@@ -17,9 +17,12 @@
 // axle whose ground lies off the DTM are left out (hasKeypoints / hasRearAxle false) while
 // the footprint stays lifted. The terrain, frame and ASM given to init() must be the ones the
 // Lifter was built with; all are borrowed and must outlive the DetectionLifter.
-// liftFrame() is const, never allocates and never throws.
+// liftFrame() is const, never allocates and never throws. frameFootprint() gives the ground
+// the whole frame shows (its corner pixels lifted to the DTM), e.g. the observed area of an
+// occupancy grid; it is pure and allocation-free too.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -76,6 +79,20 @@ struct FrameLiftSummary {
   std::size_t lifted = 0;   // of those, with liftStatus Ok
   std::size_t dropped = 0;  // detections beyond the output's capacity
 };
+
+// The ground a frame shows: its corner pixels (0, 0), (w-1, 0), (w-1, h-1), (0, h-1) lifted to
+// the DTM, as east/north (m) in that order. Either all four corners or none (count 0): a
+// partial outline would mark a wrong area as observed.
+struct FrameFootprint {
+  std::array<Eigen::Vector2d, 4> cornersEnu{};
+  std::size_t count = 0;  // 4, or 0 without a camera pose or when a corner misses the DTM
+  std::span<const Eigen::Vector2d> corners() const { return {cornersEnu.data(), count}; }
+};
+
+// The footprint of a widthPx x heightPx frame seen with the summary's camera pose (empty when
+// summary.poseStatus is not Ok). The Lifter is the one the summary was lifted with.
+FrameFootprint frameFootprint(const lifting::Lifter& lifter, const FrameLiftSummary& summary,
+                              int widthPx, int heightPx);
 
 // The camera's pose for one frame, or the status saying why there is none (computed once per
 // frame; the pipeline also uses it for the second stage's ground sample distance).

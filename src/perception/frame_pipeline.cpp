@@ -89,6 +89,7 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
                                       const telemetry::PoseEstimate& pose) {
   timings_ = PipelineTimings{};
   liftSummary_ = FrameLiftSummary{};
+  footprint_ = FrameFootprint{};
   if (!initialised_) {
     setError("pipeline", "process() before a successful init()");
     return PipelineStatus::NotInitialised;
@@ -128,6 +129,7 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
   liftSummary_ = detectionLifter_.liftFrame(
       lifter_, timestampNs, camera,
       std::span<const detection::Detection>(detections_.data(), count), observations_);
+  footprint_ = frameFootprint(lifter_, liftSummary_, bgrFrame.cols, bgrFrame.rows);
   timings_.lift_ms = msSince(liftStart);
   timings_.total_ms = msSince(start);
   lastError_[0] = '\0';

@@ -10,9 +10,10 @@
 // cut at the ground sample distance computed from that pose and the DTM at each detection
 // (PoseGsdProvider; without a usable pose the detection stage's own estimate) -> lifting.
 // Every detection is kept as a VehicleObservation, lifted or with the status saying why not
-// (no/stale/invalid pose, off the DTM, ...). process() never throws and performs no heap
-// allocation after init(); a refused frame (wrong size/type, engine failure) returns a status
-// and lastError() names the problem, and the next frame is processed normally. The terrain,
+// (no/stale/invalid pose, off the DTM, ...); with a camera pose the frame's ground footprint
+// (frameFootprint(): its corners on the DTM) is computed too. process() never throws and performs
+// no heap allocation after init(); a refused frame (wrong size/type, engine failure) returns a
+// status and lastError() names the problem, and the next frame is processed normally. The terrain,
 // world frame and ASM are borrowed and must outlive the pipeline; the pipeline itself must
 // not move after init() (its parts point at each other). Not thread-safe: one loop thread.
 #pragma once
@@ -100,6 +101,8 @@ class FramePipeline {
     return {observations_.data(), liftSummary_.written};
   }
   const FrameLiftSummary& liftSummary() const { return liftSummary_; }
+  // The ground the last processed frame shows (empty without a camera pose).
+  const FrameFootprint& footprint() const { return footprint_; }
   const detection::DetectionStats& detectionStats() const { return detection_.stats(); }
   const PipelineTimings& timings() const { return timings_; }
   // The corrected full-resolution frame of the last process() (what the detections' pixels
@@ -121,6 +124,7 @@ class FramePipeline {
   std::array<detection::Detection, detection::kMaxDetectionsPerFrame> detections_{};
   std::array<VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
   FrameLiftSummary liftSummary_{};
+  FrameFootprint footprint_{};
   PipelineTimings timings_{};
   std::array<char, 256> lastError_{};
 };

@@ -112,6 +112,7 @@ perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
                                                     const telemetry::PoseEstimate& pose) {
   frame_ = bgrFrame;  // a header: shares the pool's pixels, no copy
   summary_ = perception::FrameLiftSummary{};
+  footprint_ = perception::FrameFootprint{};
   if (timestamps_.empty()) {
     return perception::PipelineStatus::DetectionFailed;
   }
@@ -144,6 +145,7 @@ perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
   summary_ = detectionLifter_.liftFrame(
       lifter_, timestampNs, pose, std::span<const detection::Detection>(detections_.data(), count),
       observations_);
+  footprint_ = perception::frameFootprint(lifter_, summary_, bgrFrame.cols, bgrFrame.rows);
   return perception::PipelineStatus::Ok;
 }
 

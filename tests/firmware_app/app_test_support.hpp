@@ -49,6 +49,7 @@ class TruthPerception final : public app::FramePerception {
     return {observations_.data(), summary_.written};
   }
   const perception::FrameLiftSummary& liftSummary() const override { return summary_; }
+  const perception::FrameFootprint& footprint() const override { return footprint_; }
   const perception::PipelineTimings& timings() const override { return timings_; }
   const char* lastError() const override { return "truth perception"; }
   const cv::Mat& correctedFrame() const override { return frame_; }
@@ -68,6 +69,7 @@ class TruthPerception final : public app::FramePerception {
   std::vector<detection::Detection> detections_;
   std::vector<perception::VehicleObservation> observations_;
   perception::FrameLiftSummary summary_{};
+  perception::FrameFootprint footprint_{};
   perception::PipelineTimings timings_{};
   cv::Mat frame_;
 };

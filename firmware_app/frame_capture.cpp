@@ -1,0 +1,245 @@
+#include "frame_capture.hpp"
+
+#include <utility>
+
+#include "core/spsc_queue.hpp"
+#include "loop_log.hpp"
+#include "platform/system/realtime.hpp"
+#include "platform/system/stop_signals.hpp"
+
+namespace vp::app {
+
+namespace {
+
+constexpr std::int64_t kNsPerMs = 1'000'000;
+constexpr int kMaxQueueDepth = 8;                     // app.queue_depth's upper bound
+constexpr std::int64_t kCaptureBackoffNs = kNsPerMs;  // capture waits this long on a retry
+
+void sleepNs(platform::Clock& clock, std::int64_t ns) {
+  clock.sleepUntilNs(clock.nowNs() + ns);
+}
+
+}  // namespace
+
+// The FrameChannel's depth is a template argument; the configured depth picks one instance.
+class FrameQueue {
+ public:
+  virtual ~FrameQueue() = default;
+  virtual void publish(FrameIndex index) = 0;
+  virtual std::optional<FrameIndex> take() = 0;
+  virtual std::size_t drain() = 0;
+  virtual std::uint64_t dropped() const = 0;
+  virtual std::size_t waiting() const = 0;
+
+  // Wakes the processing thread: bumped after every publish and when capture ends.
+  void notify() {
+    wake_.fetch_add(1, std::memory_order_release);
+    wake_.notify_one();
+  }
+  std::uint32_t wakeCount() const { return wake_.load(std::memory_order_acquire); }
+  void waitFor(std::uint32_t seen) const { wake_.wait(seen, std::memory_order_acquire); }
+
+  static std::unique_ptr<FrameQueue> make(int depth, FramePool& pool);
+
+ private:
+  std::atomic<std::uint32_t> wake_{0};
+};
+
+namespace {
+
+template <std::size_t kDepth>
+class FrameQueueOf final : public FrameQueue {
+ public:
+  explicit FrameQueueOf(FramePool& pool) : channel_(pool) {}
+  void publish(FrameIndex index) override { channel_.publish(index); }
+  std::optional<FrameIndex> take() override { return channel_.take(); }
+  std::size_t drain() override { return channel_.drain(); }
+  std::uint64_t dropped() const override { return channel_.droppedFrames(); }
+  std::size_t waiting() const override { return channel_.waiting(); }
+
+ private:
+  FrameChannel<kDepth> channel_;
+};
+
+template <std::size_t... kDepths>
+std::unique_ptr<FrameQueue> makeQueue(int depth, FramePool& pool, std::index_sequence<kDepths...>) {
+  std::unique_ptr<FrameQueue> queue;
+  ((depth == static_cast<int>(kDepths + 1)
+        ? (void)(queue = std::make_unique<FrameQueueOf<kDepths + 1>>(pool))
+        : (void)0),
+   ...);
+  return queue;
+}
+
+}  // namespace
+
+std::unique_ptr<FrameQueue> FrameQueue::make(int depth, FramePool& pool) {
+  return makeQueue(depth, pool, std::make_index_sequence<kMaxQueueDepth>{});
+}
+
+std::unique_ptr<FrameSource> openFrameSource(const config::SourceConfig& source,
+                                             platform::Clock& clock,
+                                             platform::v4l2::V4l2Device* device, std::string* why) {
+  if (source.kind == config::FrameSourceKind::Replay) {
+    if (source.sequenceDir.empty()) {
+      if (why) {
+        *why =
+            "source.sequence_dir: no recorded sequence to replay (give --sequence DIR, "
+            "or --camera for a V4L2 camera)";
+      }
+      return nullptr;
+    }
+    auto replay = std::make_unique<ReplayFrameSource>(clock);
+    std::string problem;
+    if (!replay->open(source.sequenceDir, source.paced, source.loop, &problem)) {
+      if (why) {
+        *why = "sequence " + source.sequenceDir + ": " + problem;
+      }
+      return nullptr;
+    }
+    return replay;
+  }
+  auto camera = std::make_unique<CameraFrameSource>(*device, clock);
+  if (!camera->open(source.v4l2, why)) {
+    return nullptr;
+  }
+  return camera;
+}
+
+FrameCapture::FrameCapture() = default;
+
+FrameCapture::~FrameCapture() {
+  requestStop();
+  if (thread_.joinable()) {
+    thread_.join();
+  }
+}
+
+bool FrameCapture::open(std::unique_ptr<FrameSource> source, platform::Clock& clock, int poolSize,
+                        int depth, std::string* why) {
+  source_ = std::move(source);
+  clock_ = &clock;
+  std::string problem;
+  if (!pool_.init(static_cast<std::size_t>(poolSize), source_->widthPx(), source_->heightPx(),
+                  &problem)) {
+    if (why) {
+      *why = "frame pool: " + problem;
+    }
+    return false;
+  }
+  queue_ = FrameQueue::make(depth, pool_);
+  depth_ = static_cast<std::size_t>(depth);
+  if (!queue_) {
+    if (why) {
+      *why = "app.queue_depth: " + std::to_string(depth) + " is not in [1, 8]";
+    }
+    return false;
+  }
+  return true;
+}
+
+void FrameCapture::start(const CaptureSettings& settings) {
+  settings_ = settings;
+  thread_ = std::thread(&FrameCapture::captureLoop, this);
+}
+
+bool FrameCapture::stopRequested() const {
+  return stop_.load(std::memory_order_relaxed) || platform::StopSignals::stopRequested();
+}
+
+void FrameCapture::stop() {
+  requestStop();
+  if (thread_.joinable()) {
+    thread_.join();
+  }
+  queue_->drain();  // every waiting frame back in the pool
+}
+
+std::optional<FrameIndex> FrameCapture::take() {
+  return queue_->take();
+}
+
+std::uint32_t FrameCapture::wakeCount() const {
+  return queue_->wakeCount();
+}
+
+void FrameCapture::waitFor(std::uint32_t seen) const {
+  queue_->waitFor(seen);
+}
+
+void FrameCapture::addCounters(LoopCounters& c) const {
+  c.framesIn = counters_.framesIn.load(std::memory_order_relaxed);
+  c.badFrames = counters_.badFrames.load(std::memory_order_relaxed);
+  c.sourceTimeouts = counters_.timeouts.load(std::memory_order_relaxed);
+  c.deviceLosses = counters_.deviceLosses.load(std::memory_order_relaxed);
+  c.deviceReopens = counters_.reopens.load(std::memory_order_relaxed);
+  c.framesDropped = queue_ ? queue_->dropped() : 0;
+}
+
+void FrameCapture::captureLoop() {
+  platform::setCurrentThreadName("vp-capture");
+  std::string problem;
+  if (!settings_.cpus.empty() && !platform::setCurrentThreadAffinity(settings_.cpus, &problem)) {
+    logLine("app.capture_cpus: %s (capture thread runs unpinned)", problem.c_str());
+  }
+  std::int64_t taken = 0;
+  SourceEvents seen{};
+  const std::size_t depth = depth_;
+  while (!stopRequested()) {
+    if (settings_.maxFrames > 0 && taken >= settings_.maxFrames) {
+      break;
+    }
+    if (settings_.everyFrame) {
+      // Offline runs: wait for room instead of dropping (the source is not a live camera).
+      while (queue_->waiting() >= depth && !stopRequested()) {
+        sleepNs(*clock_, kCaptureBackoffNs);
+      }
+    }
+    const std::optional<FrameIndex> index = pool_.acquire();
+    if (!index) {
+      counters_.poolEmpty.fetch_add(1, std::memory_order_relaxed);
+      sleepNs(*clock_, kCaptureBackoffNs);
+      continue;
+    }
+    Frame& frame = pool_.frame(*index);
+    const SourceStatus status = source_->next(frame);
+    const SourceEvents events = source_->events();
+    if (events.deviceLosses != seen.deviceLosses || events.reopens != seen.reopens) {
+      logLine("%s (device losses %llu, reopens %llu)", source_->message(),
+              static_cast<unsigned long long>(events.deviceLosses),
+              static_cast<unsigned long long>(events.reopens));
+    }
+    counters_.timeouts.store(events.timeouts, std::memory_order_relaxed);
+    counters_.deviceLosses.store(events.deviceLosses, std::memory_order_relaxed);
+    counters_.reopens.store(events.reopens, std::memory_order_relaxed);
+    seen = events;
+    switch (status) {
+      case SourceStatus::Frame:
+        ++taken;
+        captureNs_[*index] =
+            source_->capturesOnMonotonicClock() ? frame.timestampNs : clock_->nowNs();
+        counters_.framesIn.fetch_add(1, std::memory_order_relaxed);
+        queue_->publish(*index);
+        queue_->notify();
+        continue;
+      case SourceStatus::BadFrame:
+        ++taken;
+        pool_.release(*index);
+        counters_.badFrames.fetch_add(1, std::memory_order_relaxed);
+        logLine("bad frame skipped: %s", source_->message());
+        continue;
+      case SourceStatus::Retry:
+        pool_.release(*index);
+        sleepNs(*clock_, kCaptureBackoffNs);
+        continue;
+      case SourceStatus::End:
+        pool_.release(*index);
+        break;
+    }
+    break;
+  }
+  done_.store(true, std::memory_order_release);
+  queue_->notify();
+}
+
+}  // namespace vp::app

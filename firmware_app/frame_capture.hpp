@@ -1,0 +1,98 @@
+// firmware_app/frame_capture: the capture side of the loop: the frame source, the frame pool,
+// the frame channel between the two threads and the capture thread that fills it.
+//
+// Contract: openFrameSource() builds the configured source (a replay of source.sequence_dir
+// or the V4L2 camera on the given device) and fails naming the key or the file. open() takes
+// that source over (unique_ptr: FrameCapture owns it, its pool and its channel from then on)
+// and allocates the pool (poolSize frames of the source's size) and the channel of `depth`
+// (in [1, 8]); it fails naming the key. start() runs the capture thread: a free pool frame ->
+// source.next() -> the channel (drop-oldest when the processing thread falls behind, counted;
+// with everyFrame it waits for room instead), until the source ends, maxFrames were taken or
+// a stop is requested (requestStop() or a stop signal). The processing thread takes frames
+// with take(), reads them with frame() and captureNs() (capture time on the loop clock),
+// gives them back with release(), and sleeps on waitFor(wakeCount()) between frames; done()
+// says the capture thread has ended. stop() ends and joins the capture thread and returns
+// every waiting frame to the pool (the destructor only ends and joins it). Bad frames and
+// device events are counted (addCounters()), logged once where they happen, and capture goes
+// on. The clock given to open() is borrowed and must outlive the FrameCapture.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "config/config.hpp"
+#include "core/frame_pool.hpp"
+#include "loop_inputs.hpp"
+#include "loop_stats.hpp"
+#include "platform/clock/monotonic_clock.hpp"
+#include "platform/v4l2/v4l2_camera.hpp"
+
+namespace vp::app {
+
+class FrameQueue;  // the FrameChannel of the configured depth (frame_capture.cpp)
+
+// The source of source.kind: a ReplayFrameSource or a CameraFrameSource on device (used
+// only for a camera); nullptr
+// (and *why) when it cannot be opened.
+std::unique_ptr<FrameSource> openFrameSource(const config::SourceConfig& config,
+                                             platform::Clock& clock,
+                                             platform::v4l2::V4l2Device* device, std::string* why);
+
+struct CaptureSettings {
+  std::int64_t maxFrames = 0;  // frames taken from the source; 0 = unlimited
+  bool everyFrame = false;     // the source waits for the loop instead of dropping
+  std::vector<int> cpus;       // affinity of the capture thread; empty = any
+};
+
+class FrameCapture {
+ public:
+  FrameCapture();
+  ~FrameCapture();
+  FrameCapture(const FrameCapture&) = delete;
+  FrameCapture& operator=(const FrameCapture&) = delete;
+
+  bool open(std::unique_ptr<FrameSource> source, platform::Clock& clock, int poolSize, int depth,
+            std::string* why);
+  void start(const CaptureSettings& settings);
+  void requestStop() { stop_.store(true, std::memory_order_relaxed); }
+  bool stopRequested() const;
+  void stop();
+
+  // Processing thread.
+  std::optional<FrameIndex> take();
+  bool done() const { return done_.load(std::memory_order_acquire); }
+  std::uint32_t wakeCount() const;
+  void waitFor(std::uint32_t seen) const;
+  const Frame& frame(FrameIndex index) const { return pool_.frame(index); }
+  std::int64_t captureNs(FrameIndex index) const { return captureNs_[index]; }
+  void release(FrameIndex index) { pool_.release(index); }
+
+  const FrameSource& source() const { return *source_; }
+  const FramePool& pool() const { return pool_; }
+  // The capture thread's counts and the channel's drops into c (framesIn, badFrames,
+  // sourceTimeouts, deviceLosses, deviceReopens, framesDropped).
+  void addCounters(LoopCounters& c) const;
+
+ private:
+  void captureLoop();
+
+  platform::Clock* clock_ = nullptr;
+  CaptureSettings settings_{};
+  std::unique_ptr<FrameSource> source_;
+  FramePool pool_;
+  std::unique_ptr<FrameQueue> queue_;
+  std::size_t depth_ = 0;
+  std::array<std::int64_t, FramePool::kMaxFrames> captureNs_{};  // loop clock, per pool frame
+  CaptureCounters counters_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+}  // namespace vp::app

@@ -1,0 +1,230 @@
+#include "frame_step.hpp"
+
+#include <utility>
+
+#include "detection/detection.hpp"
+#include "loop_log.hpp"
+#include "tracking/from_perception.hpp"
+#include "vehicle_state.hpp"
+
+namespace vp::app {
+
+namespace {
+
+bool isOffDtm(perception::LiftStatus status) {
+  return status == perception::LiftStatus::OutsideDtm || status == perception::LiftStatus::NoData ||
+         status == perception::LiftStatus::NoIntersection;
+}
+
+}  // namespace
+
+bool FrameStep::initPoseBuffer(const telemetry::PoseBufferConfig& config, std::string* why) {
+  std::string problem;
+  if (!poses_.init(config, &problem)) {
+    if (why) {
+      *why = "pose: " + problem;
+    }
+    return false;
+  }
+  return true;
+}
+
+bool FrameStep::init(const FrameStepWiring& wiring, std::unique_ptr<FramePerception> perception,
+                     std::unique_ptr<PoseInput> poseInput, const tracking::TrackerConfig& tracker,
+                     std::string* why) {
+  wiring_ = wiring;
+  perception_ = std::move(perception);
+  poseInput_ = std::move(poseInput);
+  std::string problem;
+  if (!tracker_.init(tracker, &problem)) {
+    if (why) {
+      *why = "tracking: " + problem;
+    }
+    return false;
+  }
+  worldDetections_.resize(detection::kMaxDetectionsPerFrame);
+  states_.resize(static_cast<std::size_t>(tracker.maxTracks));
+  published_.resize(static_cast<std::size_t>(tracker.maxTracks));
+  return true;
+}
+
+bool FrameStep::openOutputs(const OutputSpec& spec, std::string* why) {
+  return outputs_.open(spec, why);
+}
+
+FrameOutcome FrameStep::process(const Frame& frame, std::int64_t captureNs) {
+  platform::Clock& clock = *wiring_.clock;
+  LoopCounters& counters = *wiring_.counters;
+  LoopStats& stats = *wiring_.stats;
+  const std::int64_t startNs = clock.nowNs();
+  const std::int64_t t = frame.timestampNs;
+  stats.record(Stage::Queue, startNs - captureNs);
+  if (!haveUtcOffset_) {
+    // Camera stamps are CLOCK_MONOTONIC; a replay's are the recording's, mapped so that its
+    // first frame is "now" (see the contract).
+    toUtcNs_ = wiring_.sourceOnMonotonicClock ? wiring_.monotonicToUtcNs : realtimeNowNs() - t;
+    haveUtcOffset_ = true;
+  } else if (t <= lastTimestampNs_) {
+    ++counters.pipelineErrors;
+    logLine("frame %lld skipped: timestamp %lld ns is not after the previous frame's %lld ns",
+            static_cast<long long>(frame.frameId), static_cast<long long>(t),
+            static_cast<long long>(lastTimestampNs_));
+    return {};
+  }
+  lastTimestampNs_ = t;
+
+  poseInput_->poll(t, poses_);
+  const telemetry::PoseEstimate pose = poses_.poseAt(t);
+  switch (pose.status) {
+    case telemetry::PoseStatus::Ok:
+      break;
+    case telemetry::PoseStatus::NoPose:
+      ++counters.noPose;
+      break;
+    case telemetry::PoseStatus::Stale:
+      ++counters.stalePose;
+      break;
+    case telemetry::PoseStatus::Invalid:
+      ++counters.invalidPose;
+      break;
+  }
+  logPoseEpisode(pose.status, frame.frameId, pose);
+
+  const perception::PipelineStatus status = perception_->process(frame.image, t, pose);
+  const perception::PipelineTimings& timings = perception_->timings();
+  if (status != perception::PipelineStatus::Ok) {
+    ++counters.pipelineErrors;
+    logLine("frame %lld not processed: %s", static_cast<long long>(frame.frameId),
+            perception_->lastError());
+    return {};
+  }
+  stats.recordMs(Stage::Preprocess, timings.preprocess_ms);
+  stats.recordMs(Stage::Detector, timings.detector_ms);
+  stats.recordMs(Stage::Decode, timings.decode_ms);
+  stats.recordMs(Stage::Crops, timings.crops_ms);
+  stats.recordMs(Stage::Lift, timings.lift_ms);
+  countObservations();
+
+  const std::int64_t trackStartNs = clock.nowNs();
+  const std::size_t detections =
+      tracking::toWorldDetections(perception_->observations(), worldDetections_);
+  const auto report = tracker_.step(
+      t, std::span<const tracking::WorldDetection>(worldDetections_.data(), detections));
+  if (!report) {
+    ++counters.trackerErrors;
+    logLine("frame %lld: tracker: %s", static_cast<long long>(frame.frameId),
+            tracking::toString(report.error()));
+  }
+  const std::int64_t publishStartNs = clock.nowNs();
+  stats.record(Stage::Track, publishStartNs - trackStartNs);
+  const std::span<const messages::VehicleState> states = publish(t, frame.frameId);
+  const std::int64_t publishedNs = clock.nowNs();
+  stats.record(Stage::Publish, publishedNs - publishStartNs);
+  stats.record(Stage::EndToEnd, publishedNs - captureNs);
+
+  outputs_.writeDetections(frame.frameId, perception_->observations());
+  if (outputs_.wantsVideo()) {
+    const perception::FrameLiftSummary& lift = perception_->liftSummary();
+    const bool posed = lift.poseStatus == perception::LiftStatus::Ok;
+    outputs_.writeVideo(perception_->correctedFrame(), perception_->observations(),
+                        posed ? &perception_->lifter() : nullptr,
+                        posed ? &lift.cameraPose : nullptr);
+  }
+  counters.outputErrors = outputs_.errors();
+  ++counters.framesProcessed;
+  return {true, t + toUtcNs_, pose, states, perception_->footprint().corners()};
+}
+
+void FrameStep::countObservations() {
+  LoopCounters& counters = *wiring_.counters;
+  const std::span<const perception::VehicleObservation> observations = perception_->observations();
+  counters.detections += observations.size();
+  for (const perception::VehicleObservation& observation : observations) {
+    if (observation.liftStatus == perception::LiftStatus::Ok) {
+      ++counters.lifted;
+    } else if (isOffDtm(observation.liftStatus)) {
+      ++counters.outsideDtm;
+    }
+  }
+}
+
+void FrameStep::logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameId,
+                               const telemetry::PoseEstimate& pose) {
+  // Once per episode: when the pose goes bad (with its context) and when it is good again.
+  if (status == lastPoseStatus_) {
+    ++poseEpisodeFrames_;
+    return;
+  }
+  if (status == telemetry::PoseStatus::Ok) {
+    logLine("pose ok again at frame %lld after %llu frame(s) with pose %s",
+            static_cast<long long>(frameId), static_cast<unsigned long long>(poseEpisodeFrames_),
+            telemetry::toString(lastPoseStatus_));
+  } else {
+    logLine(
+        "pose %s from frame %lld (nearest sample %.3f s away; telemetry %s: %llu samples, "
+        "%llu refused): detections are kept image-only",
+        telemetry::toString(status), static_cast<long long>(frameId),
+        pose.ageNs >= 0 ? static_cast<double>(pose.ageNs) / 1e9 : -1.0, poseInput_->name(),
+        static_cast<unsigned long long>(poseInput_->counters().received),
+        static_cast<unsigned long long>(poseInput_->counters().linkRejected +
+                                        poseInput_->counters().bufferRejected));
+  }
+  lastPoseStatus_ = status;
+  poseEpisodeFrames_ = 1;
+}
+
+std::span<const messages::VehicleState> FrameStep::publish(std::int64_t timestampNs,
+                                                           std::int64_t frameId) {
+  LoopCounters& counters = *wiring_.counters;
+  std::size_t count = 0;
+  for (const tracking::TrackState& track : tracker_.tracks()) {
+    // Tentative tracks are never published (the publisher would skip them too).
+    if (track.status == tracking::TrackStatus::Tentative || count >= states_.size()) {
+      continue;
+    }
+    states_[count] = toVehicleState(track, wiring_.droneId, toUtcNs_, *wiring_.world,
+                                    wiring_.terrain, wiring_.shapeModel);
+    published_[count] = track;
+    ++count;
+  }
+  const std::span<const messages::VehicleState> states(states_.data(), count);
+  if (DdsWriters* dds = wiring_.dds) {
+    for (const messages::VehicleState& state : states) {
+      const platform::dds::PublishResult result = dds->states().publish(state);
+      if (!result.ok()) {
+        if (counters.publishErrors++ == 0) {
+          logLine("publishing track %u failed: %s (further failures are only counted)",
+                  static_cast<unsigned>(state.trackId), platform::dds::toString(result.outcome));
+        }
+        continue;
+      }
+      ++counters.statesPublished;
+      if (wiring_.observer != nullptr) {
+        wiring_.observer->onPublished(state);
+      }
+    }
+    const platform::dds::FrameSummary summary = dds->states().endFrame(timestampNs + toUtcNs_);
+    counters.tracksDisposed += summary.disposed;
+    counters.publishErrors += summary.errors;
+  }
+  outputs_.writeTracks(frameId, std::span<const tracking::TrackState>(published_.data(), count),
+                       states);
+  return states;
+}
+
+void FrameStep::finish() {
+  LoopCounters& counters = *wiring_.counters;
+  if (DdsWriters* dds = wiring_.dds) {
+    // A frame without tracks: endFrame() disposes every published instance.
+    const platform::dds::FrameSummary summary = dds->states().endFrame(realtimeNowNs());
+    counters.tracksDisposed += summary.disposed;
+    counters.publishErrors += summary.errors;
+  }
+  std::string problem;
+  if (!outputs_.close(&problem)) {
+    ++counters.outputErrors;
+    logLine("closing outputs: %s", problem.c_str());
+  }
+}
+
+}  // namespace vp::app

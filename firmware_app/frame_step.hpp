@@ -1,0 +1,113 @@
+// firmware_app/frame_step: the work of one frame on the processing thread: pose -> perception
+// -> tracker -> outputs (DDS vehicle states, trajectory and detections rows, annotated frame).
+//
+// Contract: start-up runs in the order its errors are reported: initPoseBuffer() ("pose:
+// ..."), init() (takes the perception stage and the pose input over: FrameStep owns them, the
+// PoseBuffer, the tracker, the files and the per-frame arrays; "tracking: ..."), then, once
+// the app has opened DDS, openOutputs() (names the file). Everything in FrameStepWiring is
+// borrowed and must outlive the FrameStep. process() is the real-time path: it never throws
+// and allocates nothing (Cyclone's write path aside, docs/dds.md); a frame it cannot use (a
+// timestamp not after the previous one, a frame perception refuses) is logged, counted and
+// reported as not processed, the caller gives the frame back to the pool either way. A
+// tracker error or a failed write is logged once where it happens, counted, and the frame
+// goes on. The FrameOutcome stays valid until the next process(). finish() (shutdown)
+// disposes every published DDS instance and closes the files.
+//
+// Time: the first frame fixes the UTC offset of its source (camera: CLOCK_REALTIME -
+// CLOCK_MONOTONIC; replay: the wall clock at that frame minus its recorded time).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/frame_pool.hpp"
+#include "dds_link.hpp"
+#include "geodesy/geodesy.hpp"
+#include "loop_inputs.hpp"
+#include "loop_outputs.hpp"
+#include "loop_stats.hpp"
+#include "messages/messages.hpp"
+#include "perception_stage.hpp"
+#include "shape/vehicle_model.hpp"
+#include "telemetry/pose_buffer.hpp"
+#include "terrain/terrain_model.hpp"
+#include "tracking/track_manager.hpp"
+
+namespace vp::app {
+
+// Called on the processing thread; implementations must not allocate when the caller counts.
+class LoopObserver {
+ public:
+  virtual ~LoopObserver() = default;
+  virtual void onPublished(const messages::VehicleState& /*state*/) {}
+  virtual void onFrameDone(std::uint64_t /*framesProcessed*/) {}
+};
+
+// What one frame leaves for the periodic reports.
+struct FrameOutcome {
+  bool processed = false;                          // false: skipped (logged and counted)
+  std::int64_t timeUtcNs = 0;                      // the frame's time on the DDS (UTC) clock
+  telemetry::PoseEstimate pose{};                  // the pose at the frame time
+  std::span<const messages::VehicleState> states;  // the published (confirmed, lost) tracks
+  std::span<const Eigen::Vector2d> footprint;      // the ground the frame shows (perception's)
+};
+
+// What FrameStep borrows (all outlive it; dds and observer may be null).
+struct FrameStepWiring {
+  platform::Clock* clock = nullptr;
+  LoopCounters* counters = nullptr;  // the processing thread's counts (the app's)
+  LoopStats* stats = nullptr;
+  DdsWriters* dds = nullptr;  // null with DDS off
+  LoopObserver* observer = nullptr;
+  const geodesy::LocalFrame* world = nullptr;
+  const terrain::TerrainModel* terrain = nullptr;
+  const shape::ActiveShapeModel* shapeModel = nullptr;
+  std::uint32_t droneId = 0;
+  bool sourceOnMonotonicClock = false;  // camera stamps: CLOCK_MONOTONIC
+  std::int64_t monotonicToUtcNs = 0;
+};
+
+class FrameStep {
+ public:
+  bool initPoseBuffer(const telemetry::PoseBufferConfig& config, std::string* why);
+  bool init(const FrameStepWiring& wiring, std::unique_ptr<FramePerception> perception,
+            std::unique_ptr<PoseInput> poseInput, const tracking::TrackerConfig& tracker,
+            std::string* why);
+  bool openOutputs(const OutputSpec& spec, std::string* why);
+
+  FrameOutcome process(const Frame& frame, std::int64_t captureNs);
+  void finish();
+
+  const PoseInput* poseInput() const { return poseInput_.get(); }  // null before init()
+  const FramePerception& perception() const { return *perception_; }
+
+ private:
+  void countObservations();
+  void logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameId,
+                      const telemetry::PoseEstimate& pose);
+  std::span<const messages::VehicleState> publish(std::int64_t timestampNs, std::int64_t frameId);
+
+  FrameStepWiring wiring_{};
+  std::unique_ptr<FramePerception> perception_;
+  telemetry::PoseBuffer poses_;
+  std::unique_ptr<PoseInput> poseInput_;
+  tracking::TrackManager tracker_;
+  LoopOutputs outputs_;
+
+  // Per-frame arrays, sized at init.
+  std::vector<tracking::WorldDetection> worldDetections_;
+  std::vector<messages::VehicleState> states_;   // this frame's published (confirmed, lost) tracks
+  std::vector<tracking::TrackState> published_;  // the same tracks as the tracker has them
+
+  std::int64_t toUtcNs_ = 0;
+  bool haveUtcOffset_ = false;
+  std::int64_t lastTimestampNs_ = 0;
+  telemetry::PoseStatus lastPoseStatus_ = telemetry::PoseStatus::Ok;
+  std::uint64_t poseEpisodeFrames_ = 0;
+};
+
+}  // namespace vp::app

@@ -1,0 +1,108 @@
+#include "periodic_reports.hpp"
+
+#include <array>
+
+#include "loop_log.hpp"
+#include "messages/occupancy.hpp"
+
+namespace vp::app {
+
+void PeriodicReports::init(const PeriodicWiring& wiring) {
+  wiring_ = wiring;
+  if (wiring_.writers != nullptr && wiring_.dds->occupancyRate_hz > 0.0) {
+    grid_.resize(wiring_.dds->grid.rows, wiring_.dds->grid.cols);
+  }
+}
+
+void PeriodicReports::start(std::int64_t nowNs) {
+  nextStatsNs_ = nowNs + static_cast<std::int64_t>(wiring_.statsPeriod_s * 1e9);
+  nextStatusNs_ = nowNs;
+  nextOccupancyNs_ = nowNs;
+  nextWatchdogNs_ = nowNs;
+}
+
+void PeriodicReports::tick(std::int64_t nowNs, const FrameOutcome& frame) {
+  if (wiring_.writers != nullptr) {
+    if (nowNs >= nextStatusNs_) {
+      const double period_s = 1.0 / wiring_.dds->statusRate_hz;
+      publishStatus(nowNs + wiring_.monotonicToUtcNs, frame);
+      nextStatusNs_ = nowNs + static_cast<std::int64_t>(period_s * 1e9);
+    }
+    if (wiring_.dds->occupancyRate_hz > 0.0 && nowNs >= nextOccupancyNs_) {
+      publishOccupancy(frame);
+      nextOccupancyNs_ = nowNs + static_cast<std::int64_t>(1e9 / wiring_.dds->occupancyRate_hz);
+    }
+  }
+  platform::SystemdNotifier& notifier = *wiring_.notifier;
+  if (notifier.watchdogIntervalNs() > 0 && nowNs >= nextWatchdogNs_) {
+    notifier.watchdog();
+    nextWatchdogNs_ = nowNs + notifier.watchdogIntervalNs();
+  }
+  if (nowNs >= nextStatsNs_) {
+    logStats();
+    nextStatsNs_ = nowNs + static_cast<std::int64_t>(wiring_.statsPeriod_s * 1e9);
+  }
+}
+
+void PeriodicReports::publishStatus(std::int64_t nowUtcNs, const FrameOutcome& frame) {
+  const telemetry::PoseEstimate& pose = frame.pose;
+  const LoopStats& stats = *wiring_.stats;
+  messages::DroneStatus status;
+  status.droneId = wiring_.dds->droneId;
+  status.time_ns = nowUtcNs;
+  status.position = pose.pose.position;
+  const Eigen::Quaterniond& q = pose.pose.bodyToNed;
+  status.attitudeQuaternion = {q.w(), q.x(), q.y(), q.z()};
+  status.gimbalEuler_deg = {static_cast<float>(pose.pose.gimbal.angles.rollDeg),
+                            static_cast<float>(pose.pose.gimbal.angles.pitchDeg),
+                            static_cast<float>(pose.pose.gimbal.angles.yawDeg)};
+  const diagnostics::LatencyHistogram& e2e = stats.period(Stage::EndToEnd);
+  status.latencyMedian_ms = static_cast<float>(static_cast<double>(e2e.medianNs()) / 1e6);
+  status.latencyP99_ms = static_cast<float>(static_cast<double>(e2e.p99Ns()) / 1e6);
+  status.inferenceMedian_ms =
+      static_cast<float>(static_cast<double>(stats.period(Stage::Detector).medianNs()) / 1e6);
+  const LoopCounters c = wiring_.allCounters->counters();
+  status.frameRate_hz = static_cast<float>(
+      static_cast<double>(c.framesProcessed - framesAtStatus_) * wiring_.dds->statusRate_hz);
+  status.framesProcessed = c.framesProcessed;
+  status.framesDropped = c.framesDropped;
+  status.corruptFrames = c.badFrames;
+  status.stalePoses = c.stalePose + c.noPose + c.invalidPose;
+  status.outsideDtm = c.outsideDtm;
+  status.publishErrors = c.publishErrors;
+  status.activeTracks = static_cast<std::uint32_t>(frame.states.size());
+  status.setModelId(wiring_.modelId);
+  if (!wiring_.writers->status().write(status).ok()) {
+    ++wiring_.counters->publishErrors;
+  }
+  framesAtStatus_ = c.framesProcessed;
+}
+
+void PeriodicReports::publishOccupancy(const FrameOutcome& frame) {
+  // The observed area is the frame's ground footprint as perception computed it.
+  const config::OccupancyGridSpec& spec = wiring_.dds->grid;
+  grid_.droneId = wiring_.dds->droneId;
+  grid_.time_ns = frame.timeUtcNs;
+  grid_.originEast_m = spec.originEast_m;
+  grid_.originNorth_m = spec.originNorth_m;
+  grid_.resolution_m = static_cast<float>(spec.resolution_m);
+  messages::rasterizeOccupancy(frame.footprint, frame.states, grid_);
+  if (!wiring_.writers->occupancy().write(grid_).ok()) {
+    ++wiring_.counters->publishErrors;
+  }
+}
+
+void PeriodicReports::logStats() {
+  const LoopCounters c = wiring_.allCounters->counters();
+  std::array<char, 1024> line{};
+  formatStatsLine(line, c, *wiring_.stats, static_cast<double>(c.framesProcessed - framesAtStats_),
+                  wiring_.statsPeriod_s);
+  if (!wiring_.quiet) {
+    logLine("%s", line.data());
+  }
+  wiring_.notifier->status(line.data());
+  framesAtStats_ = c.framesProcessed;
+  wiring_.stats->startPeriod();
+}
+
+}  // namespace vp::app
