@@ -1,5 +1,5 @@
 // inference/onnx_parser: the QDQ ONNX parser behind parseQdqModel() (onnx_graph.hpp), private
-// to src/inference.
+// to src/perception/inference.
 //
 // One Parser walks one ModelProto into a QdqGraph. Its members are defined in four files, one
 // job each (the banners below say which member lives where):

@@ -1,6 +1,6 @@
 // io/dtm_tiff: the libtiff / libgeotiff plumbing shared by DTM reading (dtm_file.cpp) and
-// writing (dtm_write.cpp), private to src/io: error capture, the GDAL_NODATA tag, RAII handles
-// and the "path: problem" failure message.
+// writing (dtm_write.cpp), private to src/foundation/io: error capture, the GDAL_NODATA tag,
+// RAII handles and the "path: problem" failure message.
 #pragma once
 
 #include <geotiff.h>
