@@ -43,8 +43,7 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   // with and without a pose.
   options.detection.secondStage.minVehicleProbability = 0.0F;
   FramePipeline pipeline;
-  ASSERT_TRUE(pipeline.init(options, camera, rig.mount, terrain, world, shapeModel, &why))
-      << why;
+  ASSERT_TRUE(pipeline.init(options, camera, rig.mount, terrain, world, shapeModel, &why)) << why;
 
   cv::Mat frame(rig.intrinsics.heightPx, rig.intrinsics.widthPx, CV_8UC3);
   ASSERT_TRUE(reader.loadFrame(0, frame, &why)) << why;

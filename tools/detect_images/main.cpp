@@ -293,9 +293,8 @@ int runSequence(const Options& options) {
   if (!initStage(options, stage, &why))
     return fail(why);
   // A recording's frames are the app's: the training resolution unless told otherwise.
-  const vp::preprocess::PreprocessOptions pre =
-      preprocessOptions(stage, options.workingScaleGiven ? options.workingScale
-                                                         : 648.0 / rig.intrinsics.widthPx);
+  const vp::preprocess::PreprocessOptions pre = preprocessOptions(
+      stage, options.workingScaleGiven ? options.workingScale : 648.0 / rig.intrinsics.widthPx);
   vp::preprocess::Preprocessor preprocessor;
   const cv::Size size(rig.intrinsics.widthPx, rig.intrinsics.heightPx);
   if (!preprocessor.init(pre, camera, size, &why))
