@@ -2,8 +2,8 @@
 // outputs) into the firmware app's LoopConfig (config/loop_config.hpp).
 #include <string>
 
-#include "config/section_reader.hpp"
 #include "config/sections.hpp"
+#include "rig_config/section_reader.hpp"
 
 namespace vp::config::detail {
 namespace {

@@ -5,20 +5,14 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
-#include <system_error>
 #include <utility>
 #include <vector>
 
-#include "config/section_reader.hpp"
 #include "config/sections.hpp"
+#include "rig_config/section_reader.hpp"
 
 namespace vp::config {
-
-namespace fs = std::filesystem;
 
 AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName,
                       const std::string& baseDir) {
@@ -26,18 +20,12 @@ AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName
   config.sourcePath = sourceName;
   const detail::Diagnostics diag(sourceName, &config.warnings);
 
-  const YAML::Node document = detail::loadDocument(yamlText, diag);
-  if (!document.IsDefined() || document.IsNull()) {
-    diag.fail("", "the configuration is empty (expected the sections origin, camera, terrain)");
-  }
-  if (!document.IsMap()) {
-    diag.fail("", "expected a map of sections at the top level, got " + detail::describe(document));
-  }
-  detail::MapReader root(document, "", diag);
+  detail::MapReader root(detail::loadSections(yamlText, diag), "", diag);
   config.origin = detail::readOrigin(root.requiredSection("origin"));
   config.camera = detail::readCamera(root.requiredSection("camera"));
   config.mount = detail::readMount(root.section("mount"));
   config.terrain = detail::readTerrain(root.requiredSection("terrain"), baseDir);
+  // The loop's sections, in the order of detail::kLoopSectionNames (which the rig reader skips).
   config.dds = detail::readDds(root.section("dds"), baseDir);
   detail::readPerception(root.section("perception"), baseDir, config);
   config.pose = detail::readPose(root.section("pose"));
@@ -67,37 +55,13 @@ DdsSection parseDdsSection(const std::string& yamlText, const std::string& sourc
   return result;
 }
 
-namespace {
-
-// The file's text and its directory (against which relative paths are resolved).
-std::pair<std::string, std::string> readConfigFile(const std::string& path) {
-  std::error_code error;
-  if (fs::is_directory(path, error)) {
-    throw ConfigError(path + ": cannot open configuration file (it is a directory)");
-  }
-  std::ifstream file(path, std::ios::binary);
-  if (!file) {
-    throw ConfigError(path + ": cannot open configuration file");
-  }
-  std::ostringstream text;
-  text << file.rdbuf();
-  if (file.bad()) {
-    throw ConfigError(path + ": cannot read configuration file");
-  }
-  const fs::path absolute = fs::absolute(path, error);
-  const fs::path baseDir = (error ? fs::path(path) : absolute).parent_path();
-  return {text.str(), baseDir.string()};
-}
-
-}  // namespace
-
 AppConfig loadConfig(const std::string& path) {
-  const auto [text, baseDir] = readConfigFile(path);
+  const auto [text, baseDir] = detail::readConfigFile(path);
   return parseConfig(text, path, baseDir);
 }
 
 DdsSection loadDdsSection(const std::string& path) {
-  const auto [text, baseDir] = readConfigFile(path);
+  const auto [text, baseDir] = detail::readConfigFile(path);
   return parseDdsSection(text, path, baseDir);
 }
 

@@ -27,31 +27,12 @@
 #include "geodesy/attitude.hpp"
 #include "geodesy/geodesy.hpp"
 #include "perception/frame_pipeline.hpp"
+#include "rig_config/rig_config.hpp"
 #include "telemetry/pose_buffer.hpp"
 #include "terrain/terrain_model.hpp"
 #include "tracking/track_manager.hpp"
 
 namespace vp::config {
-
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-struct CameraConfig {
-  camera::Intrinsics intrinsics{};
-  camera::Distortion distortion{};
-};
-
-struct MountConfig {
-  geodesy::CameraMount mount{};
-  geodesy::GimbalState gimbal{};  // default gimbal state when telemetry has none
-};
-
-struct TerrainConfig {
-  std::string dtmPath;                  // absolute after loading
-  std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
-};
 
 // Default model files of `perception:`, relative to the configuration file's directory: the
 // repository's (and the package's) layout with config/ beside models/.

@@ -6,8 +6,8 @@
 #include <string_view>
 #include <system_error>
 
-#include "config/section_reader.hpp"
 #include "config/sections.hpp"
+#include "rig_config/section_reader.hpp"
 
 namespace vp::config::detail {
 namespace {

@@ -5,9 +5,9 @@
 #include <string_view>
 #include <vector>
 
-#include "config/section_reader.hpp"
 #include "config/sections.hpp"
 #include "inference/engine.hpp"
+#include "rig_config/section_reader.hpp"
 
 namespace vp::config::detail {
 namespace {

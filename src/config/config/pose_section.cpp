@@ -3,8 +3,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "config/section_reader.hpp"
 #include "config/sections.hpp"
+#include "rig_config/section_reader.hpp"
 
 namespace vp::config::detail {
 namespace {

@@ -1,9 +1,9 @@
 // config/tracking_section: `tracking:` into the tracker's own options (tracking::TrackerConfig,
 // its MotionNoise and AssociationParams). The file gives the heading noise in degrees, the
 // motion model keeps radians.
-#include "config/section_reader.hpp"
 #include "config/sections.hpp"
 #include "geometry/rotated_box.hpp"  // kPi
+#include "rig_config/section_reader.hpp"
 
 namespace vp::config::detail {
 namespace {

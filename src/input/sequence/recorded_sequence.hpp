@@ -10,10 +10,10 @@
 // the file, line and field ("telemetry.csv:17: qw: not a number 'x'"); frame images are read
 // one at a time by loadFrame(), which reports a missing or corrupt image as an error value,
 // never an exception. SequenceWriter writes the same format (used by the simulator).
-// rig.yaml is read with the application configuration's parser (config::loadConfig, same
-// checks and messages), but the reader hands out only the rig sections as a Rig, so that a
-// reader of recordings (the replay frame source) needs none of the loop's configuration types;
-// a program that needs a config::AppConfig copies the Rig into one.
+// rig.yaml's rig sections are read with the configuration's own rig reader
+// (config::loadRigConfig: the same checks and messages as config::loadConfig) and handed out as
+// a Rig, so that a reader of recordings (the replay frame source) needs none of the loop's
+// configuration types; a program that needs a config::AppConfig copies the Rig into one.
 #pragma once
 
 #include <cstdint>

@@ -11,8 +11,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "config/config.hpp"
 #include "csv/csv_io.hpp"
+#include "rig_config/rig_config.hpp"
 #include "sequence/sequence_format.hpp"
 
 namespace vp::sequence {
@@ -32,9 +32,9 @@ Rig readRig(const fs::path& directory) {
   if (!fs::is_regular_file(path, error)) {
     throw SequenceError(path.string() + ": missing (required)");
   }
-  config::AppConfig config;
+  config::RigConfig config;
   try {
-    config = config::loadConfig(path.string());
+    config = config::loadRigConfig(path.string());
   } catch (const config::ConfigError& problem) {
     throw SequenceError(problem.what());
   }
@@ -42,7 +42,7 @@ Rig readRig(const fs::path& directory) {
     throw SequenceError(path.string() + ": terrain.dtm_path: no such file " +
                         quote(config.terrain.dtmPath));
   }
-  // Only the rig sections: the loop's sections of a rig.yaml are its defaults, not recorded.
+  // Only the rig sections: the loop's sections of a rig.yaml are the application's, not recorded.
   Rig rig;
   rig.sourcePath = config.sourcePath;
   rig.origin = config.origin;

@@ -14,8 +14,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "config/config.hpp"
 #include "csv/csv_io.hpp"
+#include "rig_config/rig_config.hpp"
 #include "sequence/sequence_format.hpp"
 
 namespace vp::sequence {
@@ -123,9 +123,9 @@ bool SequenceWriter::open(const std::string& directory, const SequenceInfo& info
 
   // Checked now so that a sequence is never written with a rig the reader rejects.
   const fs::path absoluteDir = fs::absolute(dir, error).lexically_normal();
-  config::AppConfig rig;
+  config::RigConfig rig;
   try {
-    rig = config::parseConfig(rigYaml, (dir / kRigFile).string(), absoluteDir.string());
+    rig = config::parseRigConfig(rigYaml, (dir / kRigFile).string(), absoluteDir.string());
   } catch (const config::ConfigError& problem) {
     setWhy(why, problem.what());
     return false;
