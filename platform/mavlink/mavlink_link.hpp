@@ -1,5 +1,5 @@
 // platform/mavlink/mavlink_link: moves the bytes waiting on a UDP socket or a serial port into
-// a MAVLink parser (src/mavlink), calling back for every valid frame.
+// a MAVLink parser (src/input/mavlink), calling back for every valid frame.
 //
 // Contract: each call reads until nothing more waits (non-blocking), through a caller-owned
 // scratch buffer, so it never allocates. UDP keeps datagram boundaries: the parser is told

@@ -1394,5 +1394,98 @@ TEST(ConfigLoop, NoneSwitchesAnOptionalFileOffAndDdsTelemetryNeedsAFlightStack) 
             "none)");
 }
 
+// The rig reader (rig_config/rig_config.hpp): the rig sections exactly as parseConfig() reads
+// them, the loop's sections left to the application's reader.
+RigConfig parseRig(const std::string& text) {
+  return parseRigConfig(text, kSource, kBaseDir);
+}
+
+std::string rigErrorOf(const std::string& text) {
+  try {
+    parseRig(text);
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+bool isRigPath(const std::string& path) {
+  for (const char* section : {"origin", "camera", "mount", "terrain"}) {
+    const std::string name = section;
+    if (path == name || path.rfind(name + ".", 0) == 0) {
+      return true;
+    }
+  }
+  return false;
+}
+
+TEST(RigConfig, ReadsTheRigSectionsAsTheWholeConfiguration) {
+  const AppConfig app = parse(kFullConfig);
+  const RigConfig rig = parseRig(kFullConfig);
+  EXPECT_TRUE(rig.warnings.empty());
+  EXPECT_EQ(rig.sourcePath, app.sourcePath);
+  EXPECT_EQ(rig.origin.latitudeDeg, app.origin.latitudeDeg);
+  EXPECT_EQ(rig.origin.heightM, app.origin.heightM);
+  EXPECT_EQ(rig.camera.intrinsics.fxPx, app.camera.intrinsics.fxPx);
+  EXPECT_EQ(rig.camera.intrinsics.cyPx, app.camera.intrinsics.cyPx);
+  EXPECT_EQ(rig.camera.distortion.model, app.camera.distortion.model);
+  EXPECT_EQ(rig.camera.distortion.k3, app.camera.distortion.k3);
+  EXPECT_EQ(rig.mount.mount.leverArmM, app.mount.mount.leverArmM);
+  EXPECT_EQ(rig.mount.gimbal.reference, app.mount.gimbal.reference);
+  EXPECT_EQ(rig.mount.gimbal.angles.pitchDeg, app.mount.gimbal.angles.pitchDeg);
+  EXPECT_EQ(rig.terrain.dtmPath, app.terrain.dtmPath);
+  EXPECT_EQ(rig.terrain.crs.has_value(), app.terrain.crs.has_value());
+}
+
+TEST(RigConfig, RigProblemsGiveTheSameMessagesAsTheWholeConfiguration) {
+  int rigCases = 0;
+  for (const MalformedCase& row : kMalformedCases) {
+    if (!isRigPath(row.path)) {
+      continue;
+    }
+    SCOPED_TRACE(std::string(row.path) + " <- '" + row.to + "'");
+    const std::string text = edited(row.from, row.to);
+    EXPECT_EQ(rigErrorOf(text), errorOf(text));
+    ++rigCases;
+  }
+  EXPECT_GT(rigCases, 20);
+  EXPECT_EQ(rigErrorOf(""), errorOf(""));
+  EXPECT_EQ(rigErrorOf("- origin\n- camera\n"), errorOf("- origin\n- camera\n"));
+  EXPECT_EQ(rigErrorOf("origin:\n  latitude_deg: [43.0\ncamera: {\n"),
+            errorOf("origin:\n  latitude_deg: [43.0\ncamera: {\n"));
+}
+
+TEST(RigConfig, LeavesTheLoopSectionsToTheApplicationAndWarnsOtherUnknownKeys) {
+  std::string text = edited("  fx_px: 2900.0\n", "  fx_px: 2900.0\n  fxx: 1\n");
+  text += "logging:\n  level: debug\n";
+  const std::vector<std::string> expected = {"site.yaml: unknown key 'camera.fxx'",
+                                             "site.yaml: unknown key 'logging'"};
+  EXPECT_EQ(parseRig(text).warnings, expected);
+  // Neither read nor checked here: a loop section is the application's.
+  const std::string full = kFullConfig;
+  const std::string loopAsides =
+      full.substr(0, full.find("\ndds:\n") + 1) + "perception: 3\ntracking: {bad: 1}\napp:\n";
+  EXPECT_TRUE(parseRig(loopAsides).warnings.empty());
+  EXPECT_NE(errorOf(loopAsides), "");
+}
+
+TEST(RigConfig, LoadReportsMissingFilesAsTheWholeConfiguration) {
+  const std::string missing = "/nonexistent/vp_rig_config_test.yaml";
+  std::string rigMessage;
+  std::string appMessage;
+  try {
+    loadRigConfig(missing);
+  } catch (const ConfigError& error) {
+    rigMessage = error.what();
+  }
+  try {
+    loadConfig(missing);
+  } catch (const ConfigError& error) {
+    appMessage = error.what();
+  }
+  EXPECT_EQ(rigMessage, missing + ": cannot open configuration file");
+  EXPECT_EQ(rigMessage, appMessage);
+}
+
 }  // namespace
 }  // namespace vp::config

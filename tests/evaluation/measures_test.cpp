@@ -1,4 +1,4 @@
-// Seed 000's measures (src/evaluation) on small hand-made cases with known answers.
+// Seed 000's measures (src/evaluation/evaluation) on small hand-made cases with known answers.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,7 +1,7 @@
 // tools/evaluate/evaluate_app: the vp_evaluate command (docs/evaluation.md). It reads recorded
 // sequences with ground truth and the detections files run on them (or a YOLO image folder
 // with its detections file), computes every measure of seed 000, section 5.1 with
-// src/evaluation, and writes report.md, report.json and orientation_cdf.png to an output
+// src/evaluation/evaluation, and writes report.md, report.json and orientation_cdf.png to an output
 // folder, with the seed's own figures beside ours. Given the trajectory files of the tracker
 // (--tracks), it adds the tracking measures (MOTA, IDF1, speed, heading flips, type per track)
 // beside the detector's own figures where a detections file is given too.

@@ -1,0 +1,47 @@
+// config/app_section: `app:` (frame pool, queue, real-time settings, statistics, file
+// outputs) into the firmware app's LoopConfig (config/loop_config.hpp).
+#include <string>
+
+#include "config/sections.hpp"
+#include "rig_config/section_reader.hpp"
+
+namespace vp::config::detail {
+namespace {
+
+const Range kQueueDepthRange = Range::closed(1.0, 8.0);
+const Range kPoolSizeRange = Range::closed(0.0, 64.0);  // FramePool::kMaxFrames
+const Range kPriorityRange = Range::closed(0.0, 99.0);
+const Range kCpuRange = Range::closed(0.0, 1023.0);
+const Range kStatsPeriodRangeS = Range::closed(0.1, 3600.0);
+const Range kVideoFpsRange = Range{0.0, 1000.0, true};
+
+}  // namespace
+
+LoopConfig readLoop(MapReader section, const std::string& baseDir) {
+  const LoopConfig d;
+  LoopConfig a;
+  a.queueDepth = section.integer("queue_depth", kQueueDepthRange, d.queueDepth);
+  a.framePoolSize = section.integer("frame_pool_size", kPoolSizeRange, d.framePoolSize);
+  if (a.framePoolSize != 0 && a.framePoolSize < a.queueDepth + 2) {
+    section.fail("frame_pool_size", "must be 0 (automatic) or >= queue_depth + 2 = " +
+                                        std::to_string(a.queueDepth + 2) + ", got " +
+                                        std::to_string(a.framePoolSize));
+  }
+  a.lockMemory = section.boolean("lock_memory", d.lockMemory);
+  a.realtimePriority = section.integer("realtime_priority", kPriorityRange, d.realtimePriority);
+  if (section.has("capture_cpus")) {
+    a.captureCpus = section.integers("capture_cpus", kCpuRange, -1);
+  }
+  if (section.has("processing_cpus")) {
+    a.processingCpus = section.integers("processing_cpus", kCpuRange, -1);
+  }
+  a.statsPeriod_s = section.number("stats_period_s", kStatsPeriodRangeS, d.statsPeriod_s);
+  a.trajectoryCsv = readOptionalPath(section, "trajectory_csv", baseDir, "");
+  a.detectionsCsv = readOptionalPath(section, "detections_csv", baseDir, "");
+  a.annotatedVideo = readOptionalPath(section, "annotated_video", baseDir, "");
+  a.annotatedVideoFps = section.number("annotated_video_fps", kVideoFpsRange, d.annotatedVideoFps);
+  section.warnUnknownKeys();
+  return a;
+}
+
+}  // namespace vp::config::detail

@@ -1,0 +1,96 @@
+// config/perception_section: `perception:` into the pipeline's own options
+// (perception::PipelineOptions: preprocess, detection stage, lifter) and the ASM file. An
+// absent key keeps the module's default.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "config/sections.hpp"
+#include "inference/engine.hpp"
+#include "rig_config/section_reader.hpp"
+
+namespace vp::config::detail {
+namespace {
+
+const Range kThreadsRange = Range::closed(1.0, 16.0);
+const Range kWorkingScaleRange = Range{0.0, 1.0, true};
+const Range kTileOverlapRangePx = Range::closed(0.0, 1024.0);
+const Range kTopKRange = Range::closed(1.0, 512.0);
+const Range kMaxCropsRange = Range::closed(0.0, 512.0);
+const Range kCutMarginRangePx = Range::closed(0.0, 64.0);
+const Range kFixedGsdRangeM = Range::closed(0.0, 1.0);
+const Range kCarLengthRangeM = Range{0.0, 30.0, true};
+const Range kWhiteBalanceGridRange = Range::closed(1.0, 8.0);  // rows x cols <= 64 regions
+const Range kSampleStrideRangePx = Range::closed(1.0, 64.0);
+const Range kMaxGainRange = Range::closed(1.0, 16.0);
+
+constexpr std::string_view kBackendNames = "int8, fp32, opencv";
+
+}  // namespace
+
+void readPerception(MapReader section, const std::string& baseDir, AppConfig& config) {
+  const perception::PipelineOptions d;  // the modules' defaults
+  perception::PipelineOptions& p = config.perception;
+  preprocess::PreprocessOptions& pre = p.preprocess;
+  detection::DetectionStageOptions& det = p.detection;
+  det.detectorModelPath =
+      resolvePath(section.text("detector_model", std::string(kDefaultDetectorModel)), baseDir);
+  det.cropModelPath = readOptionalPath(section, "crop_model", baseDir, kDefaultCropModel);
+  config.asmPath = resolvePath(section.text("asm", std::string(kDefaultAsm)), baseDir);
+  det.engine.backend = section.choice<inference::Backend>(
+      "backend", inference::backendFromString, kBackendNames, d.detection.engine.backend);
+  // One knob for the detector's threads and the preprocessing row loops.
+  det.engine.threads = section.integer("threads", kThreadsRange, d.detection.engine.threads);
+  pre.threads = det.engine.threads;
+  det.cropEngineThreads =
+      section.integer("crop_threads", kThreadsRange, d.detection.cropEngineThreads);
+  pre.undistort = section.boolean("undistort", d.preprocess.undistort);
+  pre.whiteBalance = section.boolean("white_balance", d.preprocess.whiteBalance);
+  preprocess::WhiteBalanceOptions& wb = pre.whiteBalanceOptions;
+  const preprocess::WhiteBalanceOptions& wbDefaults = d.preprocess.whiteBalanceOptions;
+  if (section.has("white_balance_regions")) {
+    const std::vector<int> regions =
+        section.integers("white_balance_regions", kWhiteBalanceGridRange, 2);
+    wb.regionRows = regions[0];
+    wb.regionCols = regions[1];
+  }
+  wb.sampleStridePx = section.integer("white_balance_sample_stride_px", kSampleStrideRangePx,
+                                      wbDefaults.sampleStridePx);
+  wb.whitePointShare =
+      section.number("white_balance_white_share", kShareRange, wbDefaults.whitePointShare);
+  wb.maxGain = section.number("white_balance_max_gain", kMaxGainRange, wbDefaults.maxGain);
+  pre.workingScale = section.number("working_scale", kWorkingScaleRange, d.preprocess.workingScale);
+  pre.tileOverlapPx =
+      section.integer("tile_overlap_px", kTileOverlapRangePx, d.preprocess.tileOverlapPx);
+
+  detection::DecoderOptions& decoder = det.decoder;
+  const detection::DecoderOptions& decoderDefaults = d.detection.decoder;
+  decoder.scoreThreshold = static_cast<float>(
+      section.number("score_threshold", kProbabilityRange, decoderDefaults.scoreThreshold));
+  decoder.topKPerTile = section.integer("top_k_per_tile", kTopKRange, decoderDefaults.topKPerTile);
+  decoder.nmsIou = section.number("nms_iou", kShareRange, decoderDefaults.nmsIou);
+  decoder.duplicateOverlap =
+      section.number("duplicate_overlap", kShareRange, decoderDefaults.duplicateOverlap);
+  decoder.cutEdgeMarginPx =
+      section.number("cut_edge_margin_px", kCutMarginRangePx, decoderDefaults.cutEdgeMarginPx);
+  det.maxCrops = section.integer("max_crops", kMaxCropsRange, d.detection.maxCrops);
+
+  detection::SecondStageOptions& second = det.secondStage;
+  const detection::SecondStageOptions& secondDefaults = d.detection.secondStage;
+  second.applyFlip = section.boolean("apply_flip", secondDefaults.applyFlip);
+  second.applyRefine = section.boolean("apply_refine", secondDefaults.applyRefine);
+  second.mirrorAverage = section.boolean("crop_mirror_average", secondDefaults.mirrorAverage);
+  second.mirrorRefine = section.boolean("crop_mirror_refine", secondDefaults.mirrorRefine);
+  second.largeVehicleEnds =
+      section.boolean("crop_large_vehicle_ends", secondDefaults.largeVehicleEnds);
+  second.minVehicleProbability = static_cast<float>(section.number(
+      "crop_min_vehicle_probability", kProbabilityRange, secondDefaults.minVehicleProbability));
+  det.gsd.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRangeM, d.detection.gsd.fixedGsd_m);
+  det.gsd.nominalCarLength_m =
+      section.number("nominal_car_length_m", kCarLengthRangeM, d.detection.gsd.nominalCarLength_m);
+  p.lift.boxHeightShare =
+      section.number("lift_height_share", kProbabilityRange, d.lift.boxHeightShare);
+  section.warnUnknownKeys();
+}
+
+}  // namespace vp::config::detail

@@ -1,0 +1,60 @@
+// rig_config/rig_config: the rig's sections of the configuration file (origin, camera, mount,
+// terrain), readable without the loop's configuration.
+//
+// Contract: parseRigConfig() / loadRigConfig() read and check the sections origin, camera,
+// mount and terrain exactly as config::parseConfig() / loadConfig() do (same keys, ranges,
+// defaults and messages; ConfigError names the file and the key path) and return them in the
+// types of the foundation modules. The loop's sections of the same file (dds, perception, pose,
+// tracking, source, telemetry, app) are the application's: they are neither read nor reported
+// as unknown here; other unknown keys are warnings. The recorded-sequence reader reads a
+// recording's rig.yaml with it; config::AppConfig holds the same structs. Start-up only.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "camera/camera_model.hpp"
+#include "geodesy/attitude.hpp"
+#include "geodesy/geodesy.hpp"
+#include "terrain/terrain_model.hpp"
+
+namespace vp::config {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct CameraConfig {
+  camera::Intrinsics intrinsics{};
+  camera::Distortion distortion{};
+};
+
+struct MountConfig {
+  geodesy::CameraMount mount{};
+  geodesy::GimbalState gimbal{};  // default gimbal state when telemetry has none
+};
+
+struct TerrainConfig {
+  std::string dtmPath;                  // absolute after loading
+  std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
+};
+
+struct RigConfig {
+  std::string sourcePath;           // the file it came from
+  geodesy::GeodeticPoint origin{};  // world ENU origin
+  CameraConfig camera{};
+  MountConfig mount{};
+  TerrainConfig terrain{};
+  std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
+};
+
+// Throws ConfigError on a missing file, a YAML syntax error, or a bad key of the rig.
+RigConfig loadRigConfig(const std::string& path);
+// Same from text; sourceName is used in messages, baseDir to resolve relative paths.
+RigConfig parseRigConfig(const std::string& yamlText, const std::string& sourceName,
+                         const std::string& baseDir);
+
+}  // namespace vp::config

@@ -1,0 +1,135 @@
+// rig_config/rig_sections: the rig's sections origin:, camera:, mount:, terrain: (the camera,
+// lens and mount structs of camera/ and geodesy/ are filled directly).
+#include <algorithm>
+#include <cctype>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "rig_config/rig_sections.hpp"
+#include "rig_config/section_reader.hpp"
+
+namespace vp::config::detail {
+namespace {
+
+const Range kLatitudeRangeDeg = Range::closed(-90.0, 90.0);
+const Range kLongitudeRangeDeg = Range::closed(-180.0, 180.0);
+// Ellipsoidal height of the ENU origin: below the Dead Sea shore to above any launch site.
+const Range kOriginHeightRangeM = Range::closed(-500.0, 9000.0);
+// Not a physical limit: |coefficient| > 100 means a unit or copy mistake, not a lens.
+const Range kDistortionRange = Range::closed(-100.0, 100.0);
+const Range kRollYawRangeDeg = Range::closed(-180.0, 180.0);
+const Range kMountPitchRangeDeg = Range::closed(-90.0, 90.0);
+// Gimbal heads reach a little past nadir (-90) and somewhat above the horizon.
+const Range kGimbalPitchRangeDeg = Range::closed(-120.0, 30.0);
+// The camera sits on the airframe: a lever arm of metres more means a unit mistake.
+const Range kLeverArmRangeM = Range::closed(-10.0, 10.0);
+
+constexpr std::string_view kLensModelNames = "pinhole, brown_conrady, equivalent_spherical";
+constexpr std::string_view kGimbalReferenceNames = "body, earth";
+constexpr std::string_view kCrsForms = "auto, wgs84, or utm:<zone 1-60><N|S> such as utm:16N";
+
+std::optional<geodesy::GimbalReference> gimbalReferenceFromString(const std::string& text) {
+  if (text == "body") {
+    return geodesy::GimbalReference::Body;
+  }
+  if (text == "earth") {
+    return geodesy::GimbalReference::Earth;
+  }
+  return std::nullopt;
+}
+
+// "auto" -> an engaged empty CRS (let the DTM say); nullopt only when malformed. Case-blind,
+// as terrain::crsFromString is for the other spellings.
+std::optional<std::optional<terrain::CrsSpec>> crsSettingFromString(const std::string& text) {
+  const auto lower = [](unsigned char c) { return std::tolower(c); };
+  constexpr std::string_view kAuto = "auto";
+  if (std::equal(text.begin(), text.end(), kAuto.begin(), kAuto.end(),
+                 [&](char a, char b) { return lower(a) == lower(b); })) {
+    return std::optional<terrain::CrsSpec>();
+  }
+  const std::optional<terrain::CrsSpec> crs = terrain::crsFromString(text);
+  if (!crs) {
+    return std::nullopt;
+  }
+  return crs;
+}
+
+geodesy::EulerAnglesDeg readAngles(MapReader& section, const Range& pitchRangeDeg,
+                                   const geodesy::EulerAnglesDeg& fallback) {
+  geodesy::EulerAnglesDeg angles;
+  angles.rollDeg = section.number("roll_deg", kRollYawRangeDeg, fallback.rollDeg);
+  angles.pitchDeg = section.number("pitch_deg", pitchRangeDeg, fallback.pitchDeg);
+  angles.yawDeg = section.number("yaw_deg", kRollYawRangeDeg, fallback.yawDeg);
+  return angles;
+}
+
+}  // namespace
+
+geodesy::GeodeticPoint readOrigin(MapReader section) {
+  geodesy::GeodeticPoint origin;
+  origin.latitudeDeg = section.number("latitude_deg", kLatitudeRangeDeg, kRequired);
+  origin.longitudeDeg = section.number("longitude_deg", kLongitudeRangeDeg, kRequired);
+  origin.heightM = section.number("height_m", kOriginHeightRangeM, kRequired);
+  section.warnUnknownKeys();
+  return origin;
+}
+
+CameraConfig readCamera(MapReader section) {
+  CameraConfig config;
+  camera::Intrinsics& in = config.intrinsics;
+  in.widthPx = section.integer("width_px", kImageSizeRangePx, kRequired);
+  in.heightPx = section.integer("height_px", kImageSizeRangePx, kRequired);
+  in.fxPx = section.number("fx_px", Range::positive(), kRequired);
+  in.fyPx = section.number("fy_px", Range::positive(), kRequired);
+  // Pixel centres are integers, so the image spans [-0.5, size - 0.5] and its centre is
+  // (size - 1) / 2; a principal point outside the image is a calibration error.
+  in.cxPx = section.number("cx_px", Range::closed(-0.5, in.widthPx - 0.5), (in.widthPx - 1) / 2.0);
+  in.cyPx =
+      section.number("cy_px", Range::closed(-0.5, in.heightPx - 0.5), (in.heightPx - 1) / 2.0);
+
+  camera::Distortion& lens = config.distortion;
+  lens.model = section.choice<camera::LensModel>("lens_model", camera::lensModelFromString,
+                                                 kLensModelNames, camera::LensModel::Pinhole);
+  MapReader coefficients = section.section("distortion");
+  lens.k1 = coefficients.number("k1", kDistortionRange, 0.0);
+  lens.k2 = coefficients.number("k2", kDistortionRange, 0.0);
+  lens.p1 = coefficients.number("p1", kDistortionRange, 0.0);
+  lens.p2 = coefficients.number("p2", kDistortionRange, 0.0);
+  lens.k3 = coefficients.number("k3", kDistortionRange, 0.0);
+  coefficients.warnUnknownKeys();
+  if (lens.model != camera::LensModel::BrownConrady && section.has("distortion")) {
+    // Probably a lens_model left at its default: say so instead of silently dropping them.
+    section.warn("distortion", "ignored: only lens_model brown_conrady uses it");
+    lens = camera::Distortion{lens.model};
+  }
+  section.warnUnknownKeys();
+  return config;
+}
+
+MountConfig readMount(MapReader section) {
+  // The defaults are those of the structs, so code and file agree on "nothing configured".
+  const MountConfig defaults;
+  MountConfig config;
+  config.mount.bodyToBase = readAngles(section, kMountPitchRangeDeg, defaults.mount.bodyToBase);
+  config.mount.leverArmM =
+      section.vector3("lever_arm_m", kLeverArmRangeM, defaults.mount.leverArmM);
+  MapReader gimbal = section.section("gimbal");
+  config.gimbal.reference = gimbal.choice<geodesy::GimbalReference>(
+      "reference", gimbalReferenceFromString, kGimbalReferenceNames, defaults.gimbal.reference);
+  config.gimbal.angles = readAngles(gimbal, kGimbalPitchRangeDeg, defaults.gimbal.angles);
+  gimbal.warnUnknownKeys();
+  section.warnUnknownKeys();
+  return config;
+}
+
+TerrainConfig readTerrain(MapReader section, const std::string& baseDir) {
+  TerrainConfig config;
+  config.dtmPath = resolvePath(section.text("dtm_path", kRequired), baseDir);
+  config.crs = section.choice<std::optional<terrain::CrsSpec>>(
+      "crs", crsSettingFromString, kCrsForms, std::optional<terrain::CrsSpec>());
+  section.warnUnknownKeys();
+  return config;
+}
+
+}  // namespace vp::config::detail

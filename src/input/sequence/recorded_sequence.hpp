@@ -1,0 +1,159 @@
+// sequence/recorded_sequence: the one on-disk format of recorded sequences (field recordings
+// and the simulator), its reader and its writer. The format is documented in
+// docs/recorded_sequence.md.
+//
+// Contract: a sequence is a directory holding rig.yaml (the application configuration
+// schema: origin, camera, mount, terrain -> the DTM file beside it), sequence.yaml (format
+// version, name, frame rate, source), frames.csv + the frame images, telemetry.csv, and
+// optionally ground_truth/objects.csv and ground_truth/keypoints.csv. SequenceReader::open()
+// reads and checks every text part at once (start-up) and reports the first problem naming
+// the file, line and field ("telemetry.csv:17: qw: not a number 'x'"); frame images are read
+// one at a time by loadFrame(), which reports a missing or corrupt image as an error value,
+// never an exception. SequenceWriter writes the same format (used by the simulator).
+// rig.yaml's rig sections are read with the configuration's own rig reader
+// (config::loadRigConfig: the same checks and messages as config::loadConfig) and handed out as
+// a Rig, so that a reader of recordings (the replay frame source) needs none of the loop's
+// configuration types; a program that needs a config::AppConfig copies the Rig into one.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "camera/camera_model.hpp"
+#include "geodesy/attitude.hpp"
+#include "geodesy/geodesy.hpp"
+#include "geometry/rotated_box.hpp"
+#include "shape/vehicle_model.hpp"
+#include "terrain/terrain_model.hpp"
+
+namespace vp::sequence {
+
+constexpr int kFormatVersion = 1;
+
+struct SequenceInfo {
+  int formatVersion = kFormatVersion;
+  std::string name;
+  double frameRateHz = 10.0;
+  std::string source;  // "simulator <version> seed <n> scene <name>", or a recorder's name
+  std::string notes;   // optional free text; not written when empty
+};
+
+// What rig.yaml says (the sections origin, camera, mount and terrain of the configuration
+// schema, docs/configuration.md), in the types of the modules that use them.
+struct Rig {
+  std::string sourcePath;           // rig.yaml
+  geodesy::GeodeticPoint origin{};  // world ENU origin
+  camera::Intrinsics intrinsics{};  // camera
+  camera::Distortion distortion{};
+  geodesy::CameraMount mount{};         // mount
+  geodesy::GimbalState gimbal{};        // default gimbal state when telemetry has none
+  std::string dtmPath;                  // terrain: absolute, an existing file
+  std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
+  std::vector<std::string> warnings;    // unknown keys and other non-fatal remarks
+};
+
+struct FrameRecord {
+  std::int64_t frameId = 0;
+  std::int64_t timestampNs = 0;  // capture time, monotonic clock of the recording
+  std::string file;              // relative to the sequence directory
+};
+
+struct TelemetryRecord {
+  std::int64_t timestampNs = 0;  // same clock as the frames
+  geodesy::GeodeticPoint position{};
+  Eigen::Quaterniond bodyToNed{Eigen::Quaterniond::Identity()};
+  geodesy::GimbalState gimbal{};
+};
+
+struct ObjectTruth {
+  std::int64_t frameId = 0;
+  int trackId = 0;
+  shape::VehicleType type = shape::VehicleType::Sedan;
+  shape::ShapeParams shape{};            // ASM gamma (count 0 for large vehicles)
+  Eigen::Vector3d dimensionsM{0, 0, 0};  // length, width, height of the 3D bounding box
+  Eigen::Vector3d positionEnu{0, 0, 0};  // vehicle-frame origin in the world (ENU), m
+  double headingEnuRad = 0.0;            // driving direction, counter-clockwise from east
+  double speedMps = 0.0;
+  double yawRateRadps = 0.0;
+  geometry::RotatedBox imageBox{};  // image rotated box (angle = driving direction)
+  double truncation = 0.0;          // share of the vehicle outside the image, [0, 1]
+  double occlusion = 0.0;           // share of the visible silhouette hidden, [0, 1]
+  bool parked = false;
+};
+
+struct KeypointTruth {
+  std::int64_t frameId = 0;
+  int trackId = 0;
+  int keypoint = 0;             // index into shape::keypointNames()
+  Eigen::Vector2d pixel{0, 0};  // distorted image coordinates
+  bool visible = false;         // not self-occluded, not occluded, inside the image
+  Eigen::Vector3d worldEnu{0, 0, 0};
+};
+
+class SequenceReader {
+ public:
+  SequenceReader() = default;
+
+  bool open(const std::string& directory, std::string* why);
+
+  const std::string& directory() const { return directory_; }
+  const SequenceInfo& info() const { return info_; }
+  const Rig& rig() const { return rig_; }  // camera, mount, origin, DTM path
+  const std::vector<FrameRecord>& frames() const { return frames_; }
+  const std::vector<TelemetryRecord>& telemetry() const { return telemetry_; }
+  bool hasGroundTruth() const { return hasGroundTruth_; }
+  // Ground truth of one frame (empty when none); spans into the reader's storage.
+  std::span<const ObjectTruth> objects(std::int64_t frameId) const;
+  std::span<const KeypointTruth> keypoints(std::int64_t frameId) const;
+
+  // Decodes frame `index` into `image` (8-bit BGR). False + *why on a missing/corrupt file.
+  bool loadFrame(std::size_t index, cv::Mat& image, std::string* why) const;
+
+ private:
+  std::string directory_;
+  SequenceInfo info_{};
+  Rig rig_{};
+  std::vector<FrameRecord> frames_;
+  std::vector<TelemetryRecord> telemetry_;
+  bool hasGroundTruth_ = false;
+  std::vector<ObjectTruth> objects_;      // sorted by frame
+  std::vector<KeypointTruth> keypoints_;  // sorted by frame
+};
+
+class SequenceWriter {
+ public:
+  SequenceWriter();  // defined in the .cpp, where Files is complete
+  ~SequenceWriter();
+
+  // Creates the directory layout; rigYaml is the text of rig.yaml, dtmFile an existing DTM
+  // that is copied beside it (rig.yaml must name it as terrain.dtm_path: dtm.tif).
+  bool open(const std::string& directory, const SequenceInfo& info, const std::string& rigYaml,
+            const std::string& dtmFile, std::string* why);
+  // imageExtension ".png" (lossless) or ".jpg" (jpegQuality 1..100).
+  bool writeFrame(const FrameRecord& frame, const cv::Mat& image, std::string* why);
+  bool writeTelemetry(const TelemetryRecord& record, std::string* why);
+  bool writeObjects(std::span<const ObjectTruth> objects, std::string* why);
+  bool writeKeypoints(std::span<const KeypointTruth> keypoints, std::string* why);
+  bool close(std::string* why);
+
+  std::string imageExtension = ".png";
+  int jpegQuality = 92;
+  // gamma_i columns of ground_truth/objects.csv (0..8), fixed when the file is created by the
+  // first writeObjects(); -1: the largest shape count of that call (8 if it holds no shape).
+  int gammaColumns = -1;
+
+ private:
+  struct Files;
+  std::unique_ptr<Files> files_;  // the open CSV streams
+  std::string directory_;
+};
+
+}  // namespace vp::sequence

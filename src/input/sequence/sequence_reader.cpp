@@ -1,0 +1,239 @@
+// sequence/sequence_reader: SequenceReader, the recorded-sequence reader. The format, its rules
+// and its error messages are documented in docs/recorded_sequence.md; this file and the parts it
+// shares with the writer (sequence_format.hpp) implement exactly that document.
+#include "sequence/recorded_sequence.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <string_view>
+#include <system_error>
+#include <utility>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "csv/csv_io.hpp"
+#include "rig_config/rig_config.hpp"
+#include "sequence/sequence_format.hpp"
+
+namespace vp::sequence {
+
+using namespace detail;  // this module's internals (sequence_format.hpp)
+using csv::joinColumns;
+using csv::quote;
+using csv::splitFields;
+
+namespace {
+
+// ---- reading the parts ---------------------------------------------------------------------
+
+Rig readRig(const fs::path& directory) {
+  const fs::path path = directory / kRigFile;
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) {
+    throw SequenceError(path.string() + ": missing (required)");
+  }
+  config::RigConfig config;
+  try {
+    config = config::loadRigConfig(path.string());
+  } catch (const config::ConfigError& problem) {
+    throw SequenceError(problem.what());
+  }
+  if (!fs::is_regular_file(config.terrain.dtmPath, error)) {
+    throw SequenceError(path.string() + ": terrain.dtm_path: no such file " +
+                        quote(config.terrain.dtmPath));
+  }
+  // Only the rig sections: the loop's sections of a rig.yaml are the application's, not recorded.
+  Rig rig;
+  rig.sourcePath = config.sourcePath;
+  rig.origin = config.origin;
+  rig.intrinsics = config.camera.intrinsics;
+  rig.distortion = config.camera.distortion;
+  rig.mount = config.mount.mount;
+  rig.gimbal = config.mount.gimbal;
+  rig.dtmPath = config.terrain.dtmPath;
+  rig.crs = config.terrain.crs;
+  rig.warnings = std::move(config.warnings);
+  return rig;
+}
+
+std::vector<FrameRecord> readFrames(const fs::path& directory, SequenceRules& rules) {
+  CsvFile file(directory, kFramesFile);
+  expectHeader(file, toStrings(kFrameColumns));
+  std::vector<FrameRecord> frames;
+  while (file.nextRow()) {
+    try {
+      FrameRecord frame = parseFrameRow(file.fields());
+      rules.addFrame(frame);
+      frames.push_back(std::move(frame));
+    } catch (const FieldError& error) {
+      file.fail(error);
+    }
+  }
+  return frames;
+}
+
+std::vector<TelemetryRecord> readTelemetry(const fs::path& directory, SequenceRules& rules) {
+  CsvFile file(directory, kTelemetryFile);
+  expectHeader(file, toStrings(kTelemetryColumns));
+  std::vector<TelemetryRecord> records;
+  while (file.nextRow()) {
+    try {
+      records.push_back(parseTelemetryRow(file.fields()));
+      rules.addTelemetry(records.back());
+    } catch (const FieldError& error) {
+      file.fail(error);
+    }
+  }
+  return records;
+}
+
+// The gamma column count of an objects.csv header, or -1 when it is not a valid header.
+int objectsGammaCount(std::string_view header) {
+  std::vector<std::string_view> fields;
+  splitFields(header, fields);
+  const int count = static_cast<int>(fields.size()) -
+                    static_cast<int>(kObjectHeadColumns.size() + kObjectTailColumns.size());
+  if (count < 0 || count > shape::kMaxShapeComponents) {
+    return -1;
+  }
+  return header == joinColumns(objectColumns(count)) ? count : -1;
+}
+
+std::vector<ObjectTruth> readObjects(const fs::path& directory, SequenceRules& rules) {
+  CsvFile file(directory, kObjectsFile);
+  const std::string_view header = file.header();
+  const int gammaCount = objectsGammaCount(header);
+  if (gammaCount < 0) {
+    file.failHeader(
+        "frame_id,track_id,type,gamma_0,...,gamma_{n-1},length_m,width_m,height_m,east_m,"
+        "north_m,up_m,heading_enu_rad,speed_mps,yaw_rate_radps,box_cx_px,box_cy_px,"
+        "box_length_px,box_width_px,box_angle_rad,truncation,occlusion,parked",
+        header, " (n = 0.." + std::to_string(shape::kMaxShapeComponents) + ")");
+  }
+  file.setColumns(objectColumns(gammaCount));
+  std::vector<ObjectTruth> objects;
+  while (file.nextRow()) {
+    try {
+      objects.push_back(parseObjectRow(file.fields(), gammaCount, file.columns()));
+      rules.addObject(objects.back());
+    } catch (const FieldError& error) {
+      file.fail(error);
+    }
+  }
+  return objects;
+}
+
+std::vector<KeypointTruth> readKeypoints(const fs::path& directory, SequenceRules& rules) {
+  CsvFile file(directory, kKeypointsFile);
+  expectHeader(file, toStrings(kKeypointColumns));
+  std::vector<KeypointTruth> keypoints;
+  while (file.nextRow()) {
+    try {
+      keypoints.push_back(parseKeypointRow(file.fields()));
+      rules.addKeypoint(keypoints.back());
+    } catch (const FieldError& error) {
+      file.fail(error);
+    }
+  }
+  return keypoints;
+}
+
+// Storage is in non-decreasing frame order (the files must be); spans are found by bisection.
+struct ByFrame {
+  template <typename T>
+  bool operator()(const T& record, std::int64_t frameId) const {
+    return record.frameId < frameId;
+  }
+  template <typename T>
+  bool operator()(std::int64_t frameId, const T& record) const {
+    return frameId < record.frameId;
+  }
+};
+
+template <typename T>
+std::span<const T> framesSpan(const std::vector<T>& records, std::int64_t frameId) {
+  const auto [first, last] = std::equal_range(records.begin(), records.end(), frameId, ByFrame{});
+  return std::span<const T>(first, last);
+}
+
+}  // namespace
+
+// ---- SequenceReader ------------------------------------------------------------------------
+
+bool SequenceReader::open(const std::string& directory, std::string* why) {
+  *this = SequenceReader{};
+  try {
+    const fs::path dir(directory);
+    SequenceReader reader;
+    reader.directory_ = directory;
+    const std::int64_t frameCount = readInfo(dir, &reader.info_);
+    reader.rig_ = readRig(dir);
+    SequenceRules rules;
+    reader.frames_ = readFrames(dir, rules);
+    if (static_cast<std::size_t>(frameCount) != reader.frames_.size()) {
+      throw SequenceError((dir / kSequenceFile).string() +
+                          ": frame_count: " + std::to_string(frameCount) + " but frames.csv has " +
+                          std::to_string(reader.frames_.size()) + " frames");
+    }
+    reader.telemetry_ = readTelemetry(dir, rules);
+    const bool hasObjects = fileExists(dir / kObjectsFile);
+    if (hasObjects) {
+      reader.hasGroundTruth_ = true;
+      reader.objects_ = readObjects(dir, rules);
+    }
+    if (fileExists(dir / kKeypointsFile)) {
+      if (!hasObjects) {
+        throw SequenceError((dir / kKeypointsFile).string() + ": present without " +
+                            (dir / kObjectsFile).string());
+      }
+      reader.keypoints_ = readKeypoints(dir, rules);
+    }
+    *this = std::move(reader);
+    return true;
+  } catch (const SequenceError& error) {
+    setWhy(why, error.what());
+    return false;
+  }
+}
+
+std::span<const ObjectTruth> SequenceReader::objects(std::int64_t frameId) const {
+  return framesSpan(objects_, frameId);
+}
+
+std::span<const KeypointTruth> SequenceReader::keypoints(std::int64_t frameId) const {
+  return framesSpan(keypoints_, frameId);
+}
+
+bool SequenceReader::loadFrame(std::size_t index, cv::Mat& image, std::string* why) const {
+  if (index >= frames_.size()) {
+    setWhy(why, directory_ + ": frame index " + std::to_string(index) + " out of range (" +
+                    std::to_string(frames_.size()) + " frames)");
+    return false;
+  }
+  const std::string path = (fs::path(directory_) / frames_[index].file).string();
+  cv::Mat decoded;
+  try {
+    decoded = cv::imread(path, cv::IMREAD_COLOR);
+  } catch (const cv::Exception&) {
+    decoded.release();  // a decoder that throws on a corrupt file: same report as one that fails
+  }
+  if (decoded.empty()) {
+    setWhy(why, path + ": cannot decode image (missing or corrupt)");
+    return false;
+  }
+  const camera::Intrinsics& camera = rig_.intrinsics;
+  if (decoded.cols != camera.widthPx || decoded.rows != camera.heightPx) {
+    setWhy(why, path + ": image is " + std::to_string(decoded.cols) + "x" +
+                    std::to_string(decoded.rows) + ", rig.yaml camera is " +
+                    std::to_string(camera.widthPx) + "x" + std::to_string(camera.heightPx));
+    return false;
+  }
+  if (image.size() == decoded.size() && image.type() == decoded.type()) {
+    decoded.copyTo(image);  // keeps the caller's buffer (it may be shared or pinned)
+  } else {
+    image = decoded;
+  }
+  return true;
+}
+
+}  // namespace vp::sequence

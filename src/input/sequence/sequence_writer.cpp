@@ -1,0 +1,368 @@
+// sequence/sequence_writer: the recorded-sequence writer (used by the simulator). It formats
+// each record, parses it back with the reader's parser and applies the reader's rules before
+// writing, so it cannot write a sequence that the reader rejects.
+#include "sequence/recorded_sequence.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <system_error>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "csv/csv_io.hpp"
+#include "rig_config/rig_config.hpp"
+#include "sequence/sequence_format.hpp"
+
+namespace vp::sequence {
+
+using namespace detail;  // this module's internals (sequence_format.hpp)
+using csv::joinColumns;
+using csv::quote;
+using csv::splitFields;
+
+// ---- SequenceWriter ------------------------------------------------------------------------
+
+struct SequenceWriter::Files {
+  // One CSV output: the stream, its display name and the line the next row goes to.
+  struct Csv {
+    std::ofstream stream;
+    std::string name;
+    int nextLine = 2;
+  };
+
+  fs::path directory;
+  SequenceInfo info;
+  int widthPx = 0;
+  int heightPx = 0;
+  int gammaColumns = 0;
+  std::vector<std::string> objectNames;
+  Csv frames;
+  Csv telemetry;
+  std::optional<Csv> objects;
+  std::optional<Csv> keypoints;
+  SequenceRules rules;
+  std::vector<std::string_view> fields;  // scratch
+
+  bool openCsv(Csv& csv, const char* relativePath, const std::string& header, std::string* why) {
+    csv.name = (directory / relativePath).string();
+    csv.stream.open(directory / relativePath, std::ios::binary | std::ios::trunc);
+    csv.stream << header << '\n';
+    if (!csv.stream) {
+      setWhy(why, csv.name + ": cannot write");
+      return false;
+    }
+    return true;
+  }
+
+  bool appendRow(Csv& csv, const std::string& row, std::string* why) {
+    csv.stream << row << '\n';
+    ++csv.nextLine;
+    if (!csv.stream) {
+      setWhy(why, csv.name + ": write error");
+      return false;
+    }
+    return true;
+  }
+
+  std::string where(const Csv& csv, const FieldError& error) const {
+    return csv.name + ":" + std::to_string(csv.nextLine) + ": " + error.field + ": " +
+           error.problem;
+  }
+};
+
+SequenceWriter::SequenceWriter() = default;
+
+SequenceWriter::~SequenceWriter() {
+  if (files_) {
+    close(nullptr);
+  }
+}
+
+bool SequenceWriter::open(const std::string& directory, const SequenceInfo& info,
+                          const std::string& rigYaml, const std::string& dtmFile,
+                          std::string* why) {
+  if (files_) {
+    setWhy(why, directory_ + ": writer already open");
+    return false;
+  }
+  const fs::path dir(directory);
+  const std::string infoName = (dir / kSequenceFile).string();
+  if (info.formatVersion != kFormatVersion) {
+    setWhy(why, infoName + ": format_version: " + std::to_string(info.formatVersion) +
+                    " not supported (this writer writes " + std::to_string(kFormatVersion) + ")");
+    return false;
+  }
+  if (info.name.empty()) {
+    setWhy(why, infoName + ": name: must not be empty");
+    return false;
+  }
+  if (!(info.frameRateHz > 0.0) || !std::isfinite(info.frameRateHz)) {
+    setWhy(why, infoName + ": frame_rate_hz: must be a finite number > 0");
+    return false;
+  }
+
+  std::error_code error;
+  // Never mix two recordings: stale frames of an earlier run would be silently kept.
+  if (fs::exists(dir, error) && !(fs::is_directory(dir, error) && fs::is_empty(dir, error))) {
+    setWhy(why, directory + ": exists and is not an empty directory");
+    return false;
+  }
+  fs::create_directories(dir / "frames", error);
+  if (!error) {
+    fs::create_directories(dir / "ground_truth", error);
+  }
+  if (error) {
+    setWhy(why, directory + ": cannot create the directory: " + error.message());
+    return false;
+  }
+
+  // Checked now so that a sequence is never written with a rig the reader rejects.
+  const fs::path absoluteDir = fs::absolute(dir, error).lexically_normal();
+  config::RigConfig rig;
+  try {
+    rig = config::parseRigConfig(rigYaml, (dir / kRigFile).string(), absoluteDir.string());
+  } catch (const config::ConfigError& problem) {
+    setWhy(why, problem.what());
+    return false;
+  }
+  if (fs::path(rig.terrain.dtmPath) != (absoluteDir / kDtmFile).lexically_normal()) {
+    setWhy(why, (dir / kRigFile).string() + ": terrain.dtm_path: must be " + kDtmFile +
+                    " (the writer copies the DTM there)");
+    return false;
+  }
+  {
+    std::ofstream rigFile(dir / kRigFile, std::ios::binary | std::ios::trunc);
+    rigFile << rigYaml;
+    rigFile.close();
+    if (!rigFile) {
+      setWhy(why, (dir / kRigFile).string() + ": cannot write");
+      return false;
+    }
+  }
+  if (!fs::copy_file(dtmFile, dir / kDtmFile, error)) {
+    setWhy(why, "cannot copy the DTM " + quote(dtmFile) + " to " +
+                    quote((dir / kDtmFile).string()) + ": " + error.message());
+    return false;
+  }
+  for (const char* extension : kWorldFileExtensions) {
+    const fs::path worldFile = fs::path(dtmFile).replace_extension(extension);
+    if (fileExists(worldFile) &&
+        !fs::copy_file(worldFile, dir / (std::string("dtm") + extension), error)) {
+      setWhy(why,
+             "cannot copy the world file " + quote(worldFile.string()) + ": " + error.message());
+      return false;
+    }
+  }
+
+  auto files = std::make_unique<Files>();
+  files->directory = dir;
+  files->info = info;
+  files->widthPx = rig.camera.intrinsics.widthPx;
+  files->heightPx = rig.camera.intrinsics.heightPx;
+  if (!files->openCsv(files->frames, kFramesFile, joinColumns(toStrings(kFrameColumns)), why) ||
+      !files->openCsv(files->telemetry, kTelemetryFile, joinColumns(toStrings(kTelemetryColumns)),
+                      why)) {
+    return false;
+  }
+  files_ = std::move(files);
+  directory_ = directory;
+  return true;
+}
+
+bool SequenceWriter::writeFrame(const FrameRecord& frame, const cv::Mat& image, std::string* why) {
+  if (!files_) {
+    setWhy(why, "writeFrame: the writer is not open");
+    return false;
+  }
+  Files& files = *files_;
+  FrameRecord record = frame;
+  if (record.file.empty()) {
+    std::array<char, 32> name{};
+    std::snprintf(name.data(), name.size(), "%06lld", static_cast<long long>(record.frameId));
+    record.file = "frames/" + std::string(name.data()) + imageExtension;
+  }
+  std::vector<int> parameters;
+  try {
+    if (record.file.find_first_of(",\"\r\n") != std::string::npos) {
+      throw FieldError{"file",
+                       "must not contain ',', '\"' or line breaks, got " + quote(record.file)};
+    }
+    const std::string row = formatFrameRow(record);
+    splitFields(row, files.fields);
+    record = parseFrameRow(files.fields);
+    files.rules.checkFrame(record);
+    const std::string extension = fs::path(record.file).extension().string();
+    if (extension == ".png") {
+      parameters = {cv::IMWRITE_PNG_COMPRESSION, kPngCompression};
+    } else if (extension == ".jpg" || extension == ".jpeg") {
+      if (jpegQuality < 1 || jpegQuality > 100) {
+        throw FieldError{"file",
+                         "jpegQuality must be in [1, 100], got " + std::to_string(jpegQuality)};
+      }
+      parameters = {cv::IMWRITE_JPEG_QUALITY, jpegQuality};
+    } else {
+      throw FieldError{
+          "file", "unsupported image extension " + quote(extension) + " (expected .png, .jpg)"};
+    }
+    if (image.type() != CV_8UC3 && image.type() != CV_8UC1) {
+      throw FieldError{"image", "expected an 8-bit BGR or grey image, got OpenCV type " +
+                                    std::to_string(image.type())};
+    }
+    if (image.cols != files.widthPx || image.rows != files.heightPx) {
+      throw FieldError{"image", "image is " + std::to_string(image.cols) + "x" +
+                                    std::to_string(image.rows) + ", rig.yaml camera is " +
+                                    std::to_string(files.widthPx) + "x" +
+                                    std::to_string(files.heightPx)};
+    }
+  } catch (const FieldError& error) {
+    setWhy(why, files.where(files.frames, error));
+    return false;
+  }
+
+  const fs::path path = files.directory / record.file;
+  std::error_code error;
+  fs::create_directories(path.parent_path(), error);
+  bool written = false;
+  try {
+    written = !error && cv::imwrite(path.string(), image, parameters);
+  } catch (const cv::Exception&) {
+    written = false;  // reported below like a failed write
+  }
+  if (!written) {
+    setWhy(why, path.string() + ": cannot write image");
+    return false;
+  }
+  files.rules.addFrame(record);
+  return files.appendRow(files.frames, formatFrameRow(record), why);
+}
+
+bool SequenceWriter::writeTelemetry(const TelemetryRecord& record, std::string* why) {
+  if (!files_) {
+    setWhy(why, "writeTelemetry: the writer is not open");
+    return false;
+  }
+  Files& files = *files_;
+  const std::string row = formatTelemetryRow(record);
+  try {
+    splitFields(row, files.fields);
+    files.rules.addTelemetry(parseTelemetryRow(files.fields));
+  } catch (const FieldError& error) {
+    setWhy(why, files.where(files.telemetry, error));
+    return false;
+  }
+  return files.appendRow(files.telemetry, row, why);
+}
+
+bool SequenceWriter::writeObjects(std::span<const ObjectTruth> objects, std::string* why) {
+  if (!files_) {
+    setWhy(why, "writeObjects: the writer is not open");
+    return false;
+  }
+  Files& files = *files_;
+  if (!files.objects) {
+    int columns = gammaColumns;
+    if (columns < 0) {
+      columns = 0;
+      for (const ObjectTruth& object : objects) {
+        columns = std::max(columns, object.shape.count);
+      }
+      columns = columns > 0 ? columns : shape::kMaxShapeComponents;
+    }
+    if (columns > shape::kMaxShapeComponents) {
+      setWhy(why, "writeObjects: gammaColumns must be in [-1, " +
+                      std::to_string(shape::kMaxShapeComponents) + "], got " +
+                      std::to_string(columns));
+      return false;
+    }
+    files.gammaColumns = columns;
+    files.objectNames = objectColumns(columns);
+    files.objects.emplace();
+    if (!files.openCsv(*files.objects, kObjectsFile, joinColumns(files.objectNames), why)) {
+      return false;
+    }
+  }
+  for (const ObjectTruth& object : objects) {
+    try {
+      if (object.shape.count < 0 || object.shape.count > files.gammaColumns) {
+        throw FieldError{"gamma", "shape has " + std::to_string(object.shape.count) +
+                                      " components, objects.csv has " +
+                                      std::to_string(files.gammaColumns) + " gamma columns"};
+      }
+      const std::string row = formatObjectRow(object, files.gammaColumns);
+      splitFields(row, files.fields);
+      files.rules.addObject(parseObjectRow(files.fields, files.gammaColumns, files.objectNames));
+      if (!files.appendRow(*files.objects, row, why)) {
+        return false;
+      }
+    } catch (const FieldError& error) {
+      setWhy(why, files.where(*files.objects, error));
+      return false;
+    }
+  }
+  return true;
+}
+
+bool SequenceWriter::writeKeypoints(std::span<const KeypointTruth> keypoints, std::string* why) {
+  if (!files_) {
+    setWhy(why, "writeKeypoints: the writer is not open");
+    return false;
+  }
+  Files& files = *files_;
+  if (!files.keypoints) {
+    files.keypoints.emplace();
+    if (!files.openCsv(*files.keypoints, kKeypointsFile, joinColumns(toStrings(kKeypointColumns)),
+                       why)) {
+      return false;
+    }
+  }
+  for (const KeypointTruth& keypoint : keypoints) {
+    try {
+      const std::string row = formatKeypointRow(keypoint);
+      splitFields(row, files.fields);
+      files.rules.addKeypoint(parseKeypointRow(files.fields));
+      if (!files.appendRow(*files.keypoints, row, why)) {
+        return false;
+      }
+    } catch (const FieldError& error) {
+      setWhy(why, files.where(*files.keypoints, error));
+      return false;
+    }
+  }
+  return true;
+}
+
+bool SequenceWriter::close(std::string* why) {
+  if (!files_) {
+    return true;  // closing twice is harmless
+  }
+  const std::unique_ptr<Files> files = std::move(files_);
+  bool ok = true;
+  const auto finish = [&](std::ofstream& stream, const std::string& name) {
+    stream.close();
+    if (ok && !stream) {
+      setWhy(why, name + ": write error");
+      ok = false;
+    }
+  };
+  finish(files->frames.stream, files->frames.name);
+  finish(files->telemetry.stream, files->telemetry.name);
+  if (files->objects) {
+    finish(files->objects->stream, files->objects->name);
+  }
+  if (files->keypoints) {
+    finish(files->keypoints->stream, files->keypoints->name);
+  }
+  // Written last: a recording cut short has no sequence.yaml, and the reader rejects it.
+  const fs::path infoPath = files->directory / kSequenceFile;
+  std::ofstream info(infoPath, std::ios::binary | std::ios::trunc);
+  info << formatInfo(files->info, files->rules.frameCount());
+  finish(info, infoPath.string());
+  return ok;
+}
+
+}  // namespace vp::sequence
