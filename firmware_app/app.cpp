@@ -27,7 +27,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
     ownClock_ = std::make_unique<platform::MonotonicClock>();
     clock_ = ownClock_.get();
   }
-  monotonicToUtcNs_ = realtimeNowNs() - platform::monotonicNowNs();
+  monotonicToUtcNs_ = realtimeNow_ns() - platform::monotonicNow_ns();
   if (!initSource(why) || !initWorld(why) || !initPose(why)) {
     return false;
   }
@@ -46,7 +46,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   wiring.shapeModel = &asm_;
   wiring.droneId = config_.dds.droneId;
   wiring.sourceOnMonotonicClock = capture_.source().capturesOnMonotonicClock();
-  wiring.monotonicToUtcNs = monotonicToUtcNs_;
+  wiring.monotonicToUtc_ns = monotonicToUtcNs_;
   // The `tracking:` section is the tracker's own options; the app adds what it owns.
   tracking::TrackerConfig tracker = config_.tracking;
   tracker.maxDetections = detection::kMaxDetectionsPerFrame;
@@ -63,7 +63,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   outputs.detectionsCsv = config_.app.detectionsCsv;
   outputs.annotatedVideo = config_.app.annotatedVideo;
   outputs.videoFps = config_.app.annotatedVideoFps;
-  outputs.frameSize = cv::Size(capture_.pool().widthPx(), capture_.pool().heightPx());
+  outputs.frameSize = cv::Size(capture_.pool().width_px(), capture_.pool().height_px());
   outputs.gammaColumns = asm_.componentCount();
   outputs.model = step_.perception().modelId();
   outputs.source = replay_ != nullptr ? config_.source.sequenceDir : config_.source.v4l2.device;
@@ -88,7 +88,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   reports.counters = &counters_;
   reports.allCounters = this;
   reports.modelId = step_.perception().modelId();
-  reports.monotonicToUtcNs = monotonicToUtcNs_;
+  reports.monotonicToUtc_ns = monotonicToUtcNs_;
   reports_.init(reports);
   return true;
 }
@@ -113,11 +113,11 @@ bool App::initSource(std::string* why) {
     config_.terrain = {rig.dtmPath, rig.crs};
   }
   const camera::Intrinsics& in = config_.camera.intrinsics;
-  if (in.widthPx != source->widthPx() || in.heightPx != source->heightPx()) {
+  if (in.width_px != source->width_px() || in.height_px != source->height_px()) {
     if (why) {
-      *why = "camera.width_px x camera.height_px is " + std::to_string(in.widthPx) + "x" +
-             std::to_string(in.heightPx) + " but the source delivers " +
-             std::to_string(source->widthPx()) + "x" + std::to_string(source->heightPx()) +
+      *why = "camera.width_px x camera.height_px is " + std::to_string(in.width_px) + "x" +
+             std::to_string(in.height_px) + " but the source delivers " +
+             std::to_string(source->width_px()) + "x" + std::to_string(source->height_px()) +
              " frames (calibrate at the capture size)";
     }
     return false;
@@ -254,15 +254,15 @@ bool App::run(std::string* why) {
   if (!startRealtime(why)) {
     return false;
   }
-  const std::int64_t startNs = clock_->nowNs();
-  reports_.start(startNs);
+  const std::int64_t start_ns = clock_->now_ns();
+  reports_.start(start_ns);
   const FramePool& pool = capture_.pool();
   logLine(
       "running: %s %s, pose from %s, DDS %s, queue depth %d, %zu frames of %dx%d",
       replay_ != nullptr ? "replay of" : "camera",
       replay_ != nullptr ? config_.source.sequenceDir.c_str() : config_.source.v4l2.device.c_str(),
       step_.poseInput()->name(), dds_ ? "on" : "off", config_.app.queueDepth, pool.capacity(),
-      pool.widthPx(), pool.heightPx());
+      pool.width_px(), pool.height_px());
   notifier_.ready();
   capture_.start({run_.maxFrames, run_.everyFrame, config_.app.captureCpus});
 
@@ -294,17 +294,17 @@ bool App::run(std::string* why) {
   notifier_.stopping();
   capture_.stop();  // the capture thread ends, every waiting frame back in the pool
   step_.finish();   // every DDS instance disposed, the files closed
-  runWall_s_ = static_cast<double>(clock_->nowNs() - startNs) / 1e9;
+  runWall_s_ = static_cast<double>(clock_->now_ns() - start_ns) / 1e9;
   return true;
 }
 
 void App::processFrame(FrameIndex index) {
-  const FrameOutcome outcome = step_.process(capture_.frame(index), capture_.captureNs(index));
+  const FrameOutcome outcome = step_.process(capture_.frame(index), capture_.capture_ns(index));
   capture_.release(index);
   if (!outcome.processed) {
     return;
   }
-  reports_.tick(clock_->nowNs(), outcome);
+  reports_.tick(clock_->now_ns(), outcome);
   if (seams_.observer != nullptr) {
     seams_.observer->onFrameDone(counters_.framesProcessed);
   }

@@ -4,7 +4,7 @@ namespace vp::app {
 
 namespace {
 
-constexpr std::int64_t kNsPerMs = 1'000'000;
+constexpr std::int64_t kNsPer_ms = 1'000'000;
 
 }  // namespace
 
@@ -35,8 +35,8 @@ bool DdsPoseInput::open(const config::TelemetryConfig& config, std::string* why)
   return result.ok();
 }
 
-void DdsPoseInput::poll(std::int64_t /*frameTimeNs*/, telemetry::PoseBuffer& buffer) {
-  const std::int64_t receiveNs = clock_.nowNs();
+void DdsPoseInput::poll(std::int64_t /*frameTime_ns*/, telemetry::PoseBuffer& buffer) {
+  const std::int64_t receive_ns = clock_.now_ns();
   const std::uint64_t rejectedBefore = subscriber_.counters().rejected();
   if (!subscriber_.poll(ring_).ok()) {
     ++counters_.readErrors;
@@ -44,13 +44,13 @@ void DdsPoseInput::poll(std::int64_t /*frameTimeNs*/, telemetry::PoseBuffer& buf
   counters_.linkRejected += subscriber_.counters().rejected() - rejectedBefore;
   platform::dds::PoseSample in;
   while (ring_.pop(&in)) {
-    std::int64_t localNs = 0;
+    std::int64_t local_ns = 0;
     if (in.timeBase == platform::dds::TelemetryTimeBase::Utc) {
-      localNs = in.time_ns - monotonicToUtcNs_;
+      local_ns = in.time_ns - monotonicToUtcNs_;
     } else {
-      const auto bootMs = static_cast<std::uint32_t>(in.time_ns / kNsPerMs);
-      bootClock_.observe(bootMs, receiveNs);
-      localNs = bootClock_.toLocalNs(bootMs) + in.time_ns % kNsPerMs;
+      const auto boot_ms = static_cast<std::uint32_t>(in.time_ns / kNsPer_ms);
+      bootClock_.observe(boot_ms, receive_ns);
+      local_ns = bootClock_.toLocal_ns(boot_ms) + in.time_ns % kNsPer_ms;
     }
     if (in.hasPosition) {
       position_ = in.position;
@@ -60,7 +60,7 @@ void DdsPoseInput::poll(std::int64_t /*frameTimeNs*/, telemetry::PoseBuffer& buf
       continue;  // PX4 position alone: kept for the next attitude
     }
     telemetry::PoseSample sample;
-    sample.timestampNs = localNs;
+    sample.timestamp_ns = local_ns;
     sample.position = position_;
     sample.bodyToNed = in.bodyToNed;
     sample.gimbal = defaultGimbal_;

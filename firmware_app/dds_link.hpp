@@ -42,10 +42,10 @@ class DdsWriters {
 class DdsPoseInput final : public PoseInput {
  public:
   DdsPoseInput(platform::Clock& clock, const geodesy::GimbalState& defaultGimbal,
-               std::int64_t monotonicToUtcNs)
-      : clock_(clock), defaultGimbal_(defaultGimbal), monotonicToUtcNs_(monotonicToUtcNs) {}
+               std::int64_t monotonicToUtc_ns)
+      : clock_(clock), defaultGimbal_(defaultGimbal), monotonicToUtcNs_(monotonicToUtc_ns) {}
   bool open(const config::TelemetryConfig& config, std::string* why);
-  void poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) override;
+  void poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) override;
   const char* name() const override { return "dds"; }
 
  private:

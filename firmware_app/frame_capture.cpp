@@ -11,12 +11,12 @@ namespace vp::app {
 
 namespace {
 
-constexpr std::int64_t kNsPerMs = 1'000'000;
-constexpr int kMaxQueueDepth = 8;                     // app.queue_depth's upper bound
-constexpr std::int64_t kCaptureBackoffNs = kNsPerMs;  // capture waits this long on a retry
+constexpr std::int64_t kNsPer_ms = 1'000'000;
+constexpr int kMaxQueueDepth = 8;                       // app.queue_depth's upper bound
+constexpr std::int64_t kCaptureBackoff_ns = kNsPer_ms;  // capture waits this long on a retry
 
-void sleepNs(platform::Clock& clock, std::int64_t ns) {
-  clock.sleepUntilNs(clock.nowNs() + ns);
+void sleep_ns(platform::Clock& clock, std::int64_t ns) {
+  clock.sleepUntil_ns(clock.now_ns() + ns);
 }
 
 }  // namespace
@@ -120,7 +120,7 @@ bool FrameCapture::open(std::unique_ptr<FrameSource> source, platform::Clock& cl
   source_ = std::move(source);
   clock_ = &clock;
   std::string problem;
-  if (!pool_.init(static_cast<std::size_t>(poolSize), source_->widthPx(), source_->heightPx(),
+  if (!pool_.init(static_cast<std::size_t>(poolSize), source_->width_px(), source_->height_px(),
                   &problem)) {
     if (why) {
       *why = "frame pool: " + problem;
@@ -192,13 +192,13 @@ void FrameCapture::captureLoop() {
     if (settings_.everyFrame) {
       // Offline runs: wait for room instead of dropping (the source is not a live camera).
       while (queue_->waiting() >= depth && !stopRequested()) {
-        sleepNs(*clock_, kCaptureBackoffNs);
+        sleep_ns(*clock_, kCaptureBackoff_ns);
       }
     }
     const std::optional<FrameIndex> index = pool_.acquire();
     if (!index) {
       counters_.poolEmpty.fetch_add(1, std::memory_order_relaxed);
-      sleepNs(*clock_, kCaptureBackoffNs);
+      sleep_ns(*clock_, kCaptureBackoff_ns);
       continue;
     }
     Frame& frame = pool_.frame(*index);
@@ -217,7 +217,7 @@ void FrameCapture::captureLoop() {
       case SourceStatus::Frame:
         ++taken;
         captureNs_[*index] =
-            source_->capturesOnMonotonicClock() ? frame.timestampNs : clock_->nowNs();
+            source_->capturesOnMonotonicClock() ? frame.timestamp_ns : clock_->now_ns();
         counters_.framesIn.fetch_add(1, std::memory_order_relaxed);
         queue_->publish(*index);
         queue_->notify();
@@ -230,7 +230,7 @@ void FrameCapture::captureLoop() {
         continue;
       case SourceStatus::Retry:
         pool_.release(*index);
-        sleepNs(*clock_, kCaptureBackoffNs);
+        sleep_ns(*clock_, kCaptureBackoff_ns);
         continue;
       case SourceStatus::End:
         pool_.release(*index);

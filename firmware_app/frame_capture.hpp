@@ -9,7 +9,7 @@
 // source.next() -> the channel (drop-oldest when the processing thread falls behind, counted;
 // with everyFrame it waits for room instead), until the source ends, maxFrames were taken or
 // a stop is requested (requestStop() or a stop signal). The processing thread takes frames
-// with take(), reads them with frame() and captureNs() (capture time on the loop clock),
+// with take(), reads them with frame() and capture_ns() (capture time on the loop clock),
 // gives them back with release(), and sleeps on waitFor(wakeCount()) between frames; done()
 // says the capture thread has ended. stop() ends and joins the capture thread and returns
 // every waiting frame to the pool (the destructor only ends and joins it). Bad frames and
@@ -70,7 +70,7 @@ class FrameCapture {
   std::uint32_t wakeCount() const;
   void waitFor(std::uint32_t seen) const;
   const Frame& frame(FrameIndex index) const { return pool_.frame(index); }
-  std::int64_t captureNs(FrameIndex index) const { return captureNs_[index]; }
+  std::int64_t capture_ns(FrameIndex index) const { return captureNs_[index]; }
   void release(FrameIndex index) { pool_.release(index); }
 
   const FrameSource& source() const { return *source_; }

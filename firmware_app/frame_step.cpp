@@ -52,17 +52,17 @@ bool FrameStep::openOutputs(const OutputSpec& spec, std::string* why) {
   return outputs_.open(spec, why);
 }
 
-FrameOutcome FrameStep::process(const Frame& frame, std::int64_t captureNs) {
+FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
   platform::Clock& clock = *wiring_.clock;
   LoopCounters& counters = *wiring_.counters;
   LoopStats& stats = *wiring_.stats;
-  const std::int64_t startNs = clock.nowNs();
-  const std::int64_t t = frame.timestampNs;
-  stats.record(Stage::Queue, startNs - captureNs);
+  const std::int64_t start_ns = clock.now_ns();
+  const std::int64_t t = frame.timestamp_ns;
+  stats.record(Stage::Queue, start_ns - capture_ns);
   if (!haveUtcOffset_) {
     // Camera stamps are CLOCK_MONOTONIC; a replay's are the recording's, mapped so that its
     // first frame is "now" (see the contract).
-    toUtcNs_ = wiring_.sourceOnMonotonicClock ? wiring_.monotonicToUtcNs : realtimeNowNs() - t;
+    toUtcNs_ = wiring_.sourceOnMonotonicClock ? wiring_.monotonicToUtc_ns : realtimeNow_ns() - t;
     haveUtcOffset_ = true;
   } else if (t <= lastTimestampNs_) {
     ++counters.pipelineErrors;
@@ -98,14 +98,14 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t captureNs) {
             perception_->lastError());
     return {};
   }
-  stats.recordMs(Stage::Preprocess, timings.preprocess_ms);
-  stats.recordMs(Stage::Detector, timings.detector_ms);
-  stats.recordMs(Stage::Decode, timings.decode_ms);
-  stats.recordMs(Stage::Crops, timings.crops_ms);
-  stats.recordMs(Stage::Lift, timings.lift_ms);
+  stats.record_ms(Stage::Preprocess, timings.preprocess_ms);
+  stats.record_ms(Stage::Detector, timings.detector_ms);
+  stats.record_ms(Stage::Decode, timings.decode_ms);
+  stats.record_ms(Stage::Crops, timings.crops_ms);
+  stats.record_ms(Stage::Lift, timings.lift_ms);
   countObservations();
 
-  const std::int64_t trackStartNs = clock.nowNs();
+  const std::int64_t trackStart_ns = clock.now_ns();
   const std::size_t detections =
       tracking::toWorldDetections(perception_->observations(), worldDetections_);
   const auto report = tracker_.step(
@@ -115,12 +115,12 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t captureNs) {
     logLine("frame %lld: tracker: %s", static_cast<long long>(frame.frameId),
             tracking::toString(report.error()));
   }
-  const std::int64_t publishStartNs = clock.nowNs();
-  stats.record(Stage::Track, publishStartNs - trackStartNs);
+  const std::int64_t publishStart_ns = clock.now_ns();
+  stats.record(Stage::Track, publishStart_ns - trackStart_ns);
   const std::span<const messages::VehicleState> states = publish(t, frame.frameId);
-  const std::int64_t publishedNs = clock.nowNs();
-  stats.record(Stage::Publish, publishedNs - publishStartNs);
-  stats.record(Stage::EndToEnd, publishedNs - captureNs);
+  const std::int64_t published_ns = clock.now_ns();
+  stats.record(Stage::Publish, published_ns - publishStart_ns);
+  stats.record(Stage::EndToEnd, published_ns - capture_ns);
 
   outputs_.writeDetections(frame.frameId, perception_->observations());
   if (outputs_.wantsVideo()) {
@@ -164,7 +164,7 @@ void FrameStep::logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameI
         "pose %s from frame %lld (nearest sample %.3f s away; telemetry %s: %llu samples, "
         "%llu refused): detections are kept image-only",
         telemetry::toString(status), static_cast<long long>(frameId),
-        pose.ageNs >= 0 ? static_cast<double>(pose.ageNs) / 1e9 : -1.0, poseInput_->name(),
+        pose.age_ns >= 0 ? static_cast<double>(pose.age_ns) / 1e9 : -1.0, poseInput_->name(),
         static_cast<unsigned long long>(poseInput_->counters().received),
         static_cast<unsigned long long>(poseInput_->counters().linkRejected +
                                         poseInput_->counters().bufferRejected));
@@ -173,7 +173,7 @@ void FrameStep::logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameI
   poseEpisodeFrames_ = 1;
 }
 
-std::span<const messages::VehicleState> FrameStep::publish(std::int64_t timestampNs,
+std::span<const messages::VehicleState> FrameStep::publish(std::int64_t timestamp_ns,
                                                            std::int64_t frameId) {
   LoopCounters& counters = *wiring_.counters;
   std::size_t count = 0;
@@ -203,7 +203,7 @@ std::span<const messages::VehicleState> FrameStep::publish(std::int64_t timestam
         wiring_.observer->onPublished(state);
       }
     }
-    const platform::dds::FrameSummary summary = dds->states().endFrame(timestampNs + toUtcNs_);
+    const platform::dds::FrameSummary summary = dds->states().endFrame(timestamp_ns + toUtcNs_);
     counters.tracksDisposed += summary.disposed;
     counters.publishErrors += summary.errors;
   }
@@ -216,7 +216,7 @@ void FrameStep::finish() {
   LoopCounters& counters = *wiring_.counters;
   if (DdsWriters* dds = wiring_.dds) {
     // A frame without tracks: endFrame() disposes every published instance.
-    const platform::dds::FrameSummary summary = dds->states().endFrame(realtimeNowNs());
+    const platform::dds::FrameSummary summary = dds->states().endFrame(realtimeNow_ns());
     counters.tracksDisposed += summary.disposed;
     counters.publishErrors += summary.errors;
   }

@@ -50,7 +50,7 @@ class LoopObserver {
 // What one frame leaves for the periodic reports.
 struct FrameOutcome {
   bool processed = false;                          // false: skipped (logged and counted)
-  std::int64_t timeUtcNs = 0;                      // the frame's time on the DDS (UTC) clock
+  std::int64_t timeUtc_ns = 0;                     // the frame's time on the DDS (UTC) clock
   telemetry::PoseEstimate pose{};                  // the pose at the frame time
   std::span<const messages::VehicleState> states;  // the published (confirmed, lost) tracks
   std::span<const Eigen::Vector2d> footprint;      // the ground the frame shows (perception's)
@@ -68,7 +68,7 @@ struct FrameStepWiring {
   const shape::ActiveShapeModel* shapeModel = nullptr;
   std::uint32_t droneId = 0;
   bool sourceOnMonotonicClock = false;  // camera stamps: CLOCK_MONOTONIC
-  std::int64_t monotonicToUtcNs = 0;
+  std::int64_t monotonicToUtc_ns = 0;
 };
 
 class FrameStep {
@@ -79,7 +79,7 @@ class FrameStep {
             std::string* why);
   bool openOutputs(const OutputSpec& spec, std::string* why);
 
-  FrameOutcome process(const Frame& frame, std::int64_t captureNs);
+  FrameOutcome process(const Frame& frame, std::int64_t capture_ns);
   void finish();
 
   const PoseInput* poseInput() const { return poseInput_.get(); }  // null before init()
@@ -89,7 +89,7 @@ class FrameStep {
   void countObservations();
   void logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameId,
                       const telemetry::PoseEstimate& pose);
-  std::span<const messages::VehicleState> publish(std::int64_t timestampNs, std::int64_t frameId);
+  std::span<const messages::VehicleState> publish(std::int64_t timestamp_ns, std::int64_t frameId);
 
   FrameStepWiring wiring_{};
   std::unique_ptr<FramePerception> perception_;

@@ -37,8 +37,8 @@ bool CameraFrameSource::open(const config::V4l2SourceConfig& config, std::string
   platform::v4l2::V4l2CameraConfig camera;
   camera.devicePath = config.busInfo.empty() ? config.device : "";
   camera.busInfo = config.busInfo;
-  camera.widthPx = config.widthPx;
-  camera.heightPx = config.heightPx;
+  camera.width_px = config.width_px;
+  camera.height_px = config.height_px;
   camera.preferredFormats.clear();
   for (const config::CameraPixelFormat format : config.formats) {
     switch (format) {
@@ -54,7 +54,7 @@ bool CameraFrameSource::open(const config::V4l2SourceConfig& config, std::string
     }
   }
   camera.bufferCount = static_cast<unsigned>(config.buffers);
-  camera.dequeueTimeoutMs = config.dequeueTimeoutMs;
+  camera.dequeueTimeout_ms = config.dequeueTimeout_ms;
   return camera_.open(camera, why);
 }
 
@@ -99,15 +99,16 @@ void PoseInput::push(const telemetry::PoseSample& sample, telemetry::PoseBuffer&
 
 void RecordingPoseInput::open(const platform::replay::SequenceReplay& replay, bool loop,
                               double lookahead_s) {
-  telemetry_.open(replay.reader().telemetry(), loop, replay.loopPeriodNs());
+  telemetry_.open(replay.reader().telemetry(), loop, replay.loopPeriod_ns());
   lookaheadNs_ = static_cast<std::int64_t>(lookahead_s * 1e9);
 }
 
-void RecordingPoseInput::poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) {
+void RecordingPoseInput::poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) {
   // Interpolating to the frame time needs the sample after it: the recording is pushed ahead.
-  while (const sequence::TelemetryRecord* record = telemetry_.nextDue(frameTimeNs + lookaheadNs_)) {
+  while (const sequence::TelemetryRecord* record =
+             telemetry_.nextDue(frameTime_ns + lookaheadNs_)) {
     telemetry::PoseSample sample;
-    sample.timestampNs = record->timestampNs;
+    sample.timestamp_ns = record->timestamp_ns;
     sample.position = record->position;
     sample.bodyToNed = record->bodyToNed;
     sample.gimbal = record->gimbal;
@@ -117,8 +118,8 @@ void RecordingPoseInput::poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& b
 
 bool MavlinkPoseInput::open(const config::TelemetryLinkConfig& config, std::string* why) {
   mavlink::PoseAssemblerConfig assembler;
-  assembler.geoidSeparationM = config.geoidSeparation_m;
-  assembler.linkLatencyNs = static_cast<std::int64_t>(config.linkLatency_s * 1e9);
+  assembler.geoidSeparation_m = config.geoidSeparation_m;
+  assembler.linkLatency_ns = static_cast<std::int64_t>(config.linkLatency_s * 1e9);
   assembler.systemId = static_cast<std::uint8_t>(config.systemId);
   assembler_ = std::make_unique<mavlink::MavlinkPoseAssembler>(assembler);
   if (config.source == config::TelemetrySourceKind::MavlinkSerial) {
@@ -127,17 +128,17 @@ bool MavlinkPoseInput::open(const config::TelemetryLinkConfig& config, std::stri
   return udp_.open(config.udpBindAddress, static_cast<std::uint16_t>(config.udpPort), why);
 }
 
-void MavlinkPoseInput::poll(std::int64_t /*frameTimeNs*/, telemetry::PoseBuffer& buffer) {
-  const std::int64_t receiveNs = clock_.nowNs();
+void MavlinkPoseInput::poll(std::int64_t /*frameTime_ns*/, telemetry::PoseBuffer& buffer) {
+  const std::int64_t receive_ns = clock_.now_ns();
   const std::uint64_t rejectedBefore = assembler_->counters().rejected;
   const auto onFrame = [&](const mavlink::MavlinkFrame& frame) {
     const std::optional<mavlink::Message> message = mavlink::decode(frame);
-    if (!message || !assembler_->add(*message, frame.systemId, receiveNs)) {
+    if (!message || !assembler_->add(*message, frame.systemId, receive_ns)) {
       return;
     }
     const mavlink::PoseSample& in = assembler_->sample();
     telemetry::PoseSample sample;
-    sample.timestampNs = in.timestampNs;
+    sample.timestamp_ns = in.timestamp_ns;
     sample.position = in.position;
     sample.bodyToNed = in.bodyToNed;
     sample.gimbal = in.hasGimbal ? in.gimbal : defaultGimbal_;

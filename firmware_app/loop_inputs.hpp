@@ -49,9 +49,9 @@ class FrameSource {
   virtual const char* message() const = 0;  // the last bad frame or event, with context
   virtual SourceEvents events() const { return {}; }
   virtual bool capturesOnMonotonicClock() const = 0;  // frame stamps are CLOCK_MONOTONIC
-  virtual double nominalFrameRateHz() const = 0;
-  virtual int widthPx() const = 0;  // the size of every frame it delivers (after open())
-  virtual int heightPx() const = 0;
+  virtual double nominalFrameRate_hz() const = 0;
+  virtual int width_px() const = 0;  // the size of every frame it delivers (after open())
+  virtual int height_px() const = 0;
 };
 
 class ReplayFrameSource final : public FrameSource {
@@ -61,9 +61,9 @@ class ReplayFrameSource final : public FrameSource {
   SourceStatus next(Frame& out) override;
   const char* message() const override { return message_.c_str(); }
   bool capturesOnMonotonicClock() const override { return false; }
-  double nominalFrameRateHz() const override { return replay_.reader().info().frameRateHz; }
-  int widthPx() const override { return replay_.widthPx(); }
-  int heightPx() const override { return replay_.heightPx(); }
+  double nominalFrameRate_hz() const override { return replay_.reader().info().frameRate_hz; }
+  int width_px() const override { return replay_.width_px(); }
+  int height_px() const override { return replay_.height_px(); }
   const platform::replay::SequenceReplay& replay() const { return replay_; }
 
  private:
@@ -80,9 +80,9 @@ class CameraFrameSource final : public FrameSource {
   const char* message() const override { return message_.data(); }
   SourceEvents events() const override;
   bool capturesOnMonotonicClock() const override { return true; }
-  double nominalFrameRateHz() const override { return 10.0; }  // seed 000's camera
-  int widthPx() const override { return camera_.format().widthPx; }
-  int heightPx() const override { return camera_.format().heightPx; }
+  double nominalFrameRate_hz() const override { return 10.0; }  // seed 000's camera
+  int width_px() const override { return camera_.format().width_px; }
+  int height_px() const override { return camera_.format().height_px; }
   const platform::v4l2::V4l2Camera& camera() const { return camera_; }
 
  private:
@@ -100,9 +100,9 @@ struct PoseInputCounters {
 class PoseInput {
  public:
   virtual ~PoseInput() = default;
-  // Moves what has arrived (a recording: the samples due up to frameTimeNs + lookahead) into
+  // Moves what has arrived (a recording: the samples due up to frameTime_ns + lookahead) into
   // buffer. Non-blocking, no allocation.
-  virtual void poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) = 0;
+  virtual void poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) = 0;
   virtual const char* name() const = 0;
   const PoseInputCounters& counters() const { return counters_; }
 
@@ -115,7 +115,7 @@ class PoseInput {
 class RecordingPoseInput final : public PoseInput {
  public:
   void open(const platform::replay::SequenceReplay& replay, bool loop, double lookahead_s);
-  void poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) override;
+  void poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) override;
   const char* name() const override { return "recording"; }
 
  private:
@@ -129,7 +129,7 @@ class MavlinkPoseInput final : public PoseInput {
   MavlinkPoseInput(platform::Clock& clock, const geodesy::GimbalState& defaultGimbal)
       : clock_(clock), defaultGimbal_(defaultGimbal) {}
   bool open(const config::TelemetryLinkConfig& config, std::string* why);
-  void poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) override;
+  void poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) override;
   const char* name() const override { return serial_.isOpen() ? "mavlink serial" : "mavlink udp"; }
   const mavlink::MavlinkPoseAssembler& assembler() const { return *assembler_; }
 

@@ -27,7 +27,7 @@ void logLine(const char* format, ...) {
   std::fwrite(line, 1, static_cast<std::size_t>(n), stderr);
 }
 
-std::int64_t realtimeNowNs() {
+std::int64_t realtimeNow_ns() {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * kNsPerSecond + ts.tv_nsec;

@@ -44,12 +44,12 @@ output_files::DetectionRecord toDetectionRecord(std::int64_t frameId, int detId,
   record.liftStatus = toFileStatus(observation.liftStatus);
   if (observation.liftStatus == perception::LiftStatus::Ok) {
     record.positionEnu = observation.ground.centreEnu;
-    record.latitudeDeg = observation.ground.centreWgs84.latitudeDeg;
-    record.longitudeDeg = observation.ground.centreWgs84.longitudeDeg;
-    record.heightM = observation.ground.centreWgs84.heightM;
-    record.headingEnuRad = observation.ground.headingEnuRad;
-    record.dimensionsM =
-        Eigen::Vector3d(observation.ground.lengthM, observation.ground.widthM, observation.heightM);
+    record.latitude_deg = observation.ground.centreWgs84.latitude_deg;
+    record.longitude_deg = observation.ground.centreWgs84.longitude_deg;
+    record.height_m = observation.ground.centreWgs84.height_m;
+    record.headingEnu_rad = observation.ground.headingEnu_rad;
+    record.dimensions_m = Eigen::Vector3d(observation.ground.length_m, observation.ground.width_m,
+                                          observation.height_m);
   }
   return record;
 }
@@ -112,9 +112,9 @@ void LoopOutputs::writeTracks(std::int64_t frameId, std::span<const tracking::Tr
     return;
   }
   for (std::size_t i = 0; i < tracks.size() && i < states.size(); ++i) {
-    const tracking::Wgs84Position wgs84{states[i].position.latitudeDeg,
-                                        states[i].position.longitudeDeg,
-                                        states[i].position.heightM};
+    const tracking::Wgs84Position wgs84{states[i].position.latitude_deg,
+                                        states[i].position.longitude_deg,
+                                        states[i].position.height_m};
     if (!trajectory_.writeRow(frameId, tracks[i], &wgs84, nullptr)) {
       fail(spec_.trajectoryCsv + ": a row was not written (frame " + std::to_string(frameId) +
            ", track " + std::to_string(tracks[i].id) + ")");

@@ -8,7 +8,7 @@ namespace vp::app {
 
 namespace {
 
-constexpr double kMsPerNs = 1e-6;
+constexpr double kMsPer_ns = 1e-6;
 
 // Appends printf-formatted text at *length, never past the buffer's end.
 void append(std::span<char> out, int* length, const char* format, ...)
@@ -80,7 +80,8 @@ int formatStatsLine(std::span<char> out, const LoopCounters& c, const LoopStats&
     const auto stage = static_cast<Stage>(s);
     const diagnostics::LatencyHistogram& h = stats.period(stage);
     append(out, &length, " %s %.1f/%.1f", toString(stage),
-           static_cast<double>(h.medianNs()) * kMsPerNs, static_cast<double>(h.p99Ns()) * kMsPerNs);
+           static_cast<double>(h.median_ns()) * kMsPer_ns,
+           static_cast<double>(h.p99_ns()) * kMsPer_ns);
   }
   return length;
 }
@@ -115,8 +116,8 @@ int formatSummaryLine(std::span<char> out, const LoopCounters& c, const LoopStat
     const auto stage = static_cast<Stage>(s);
     const diagnostics::LatencyHistogram& h = stats.total(stage);
     append(out, &length, " %s_median_ms=%.3f %s_p99_ms=%.3f", toString(stage),
-           static_cast<double>(h.medianNs()) * kMsPerNs, toString(stage),
-           static_cast<double>(h.p99Ns()) * kMsPerNs);
+           static_cast<double>(h.median_ns()) * kMsPer_ns, toString(stage),
+           static_cast<double>(h.p99_ns()) * kMsPer_ns);
   }
   return length;
 }

@@ -73,7 +73,7 @@ class LoopStats {
     total_[static_cast<std::size_t>(stage)].record(ns);
     period_[static_cast<std::size_t>(stage)].record(ns);
   }
-  void recordMs(Stage stage, double ms) { record(stage, static_cast<std::int64_t>(ms * 1e6)); }
+  void record_ms(Stage stage, double ms) { record(stage, static_cast<std::int64_t>(ms * 1e6)); }
   const diagnostics::LatencyHistogram& total(Stage stage) const {
     return total_[static_cast<std::size_t>(stage)];
   }

@@ -23,7 +23,7 @@ namespace vp::app {
 class FramePerception {
  public:
   virtual ~FramePerception() = default;
-  virtual perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+  virtual perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                              const telemetry::PoseEstimate& pose) = 0;
   virtual std::span<const perception::VehicleObservation> observations() const = 0;
   virtual const perception::FrameLiftSummary& liftSummary() const = 0;
@@ -46,9 +46,9 @@ class PipelinePerception final : public FramePerception {
             const geodesy::LocalFrame& frame, const shape::ActiveShapeModel& shapeModel,
             std::string* why);
 
-  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                      const telemetry::PoseEstimate& pose) override {
-    return pipeline_.process(bgrFrame, timestampNs, pose);
+    return pipeline_.process(bgrFrame, timestamp_ns, pose);
   }
   std::span<const perception::VehicleObservation> observations() const override {
     return pipeline_.observations();

@@ -14,53 +14,53 @@ void PeriodicReports::init(const PeriodicWiring& wiring) {
   }
 }
 
-void PeriodicReports::start(std::int64_t nowNs) {
-  nextStatsNs_ = nowNs + static_cast<std::int64_t>(wiring_.statsPeriod_s * 1e9);
-  nextStatusNs_ = nowNs;
-  nextOccupancyNs_ = nowNs;
-  nextWatchdogNs_ = nowNs;
+void PeriodicReports::start(std::int64_t now_ns) {
+  nextStatsNs_ = now_ns + static_cast<std::int64_t>(wiring_.statsPeriod_s * 1e9);
+  nextStatusNs_ = now_ns;
+  nextOccupancyNs_ = now_ns;
+  nextWatchdogNs_ = now_ns;
 }
 
-void PeriodicReports::tick(std::int64_t nowNs, const FrameOutcome& frame) {
+void PeriodicReports::tick(std::int64_t now_ns, const FrameOutcome& frame) {
   if (wiring_.writers != nullptr) {
-    if (nowNs >= nextStatusNs_) {
+    if (now_ns >= nextStatusNs_) {
       const double period_s = 1.0 / wiring_.dds->statusRate_hz;
-      publishStatus(nowNs + wiring_.monotonicToUtcNs, frame);
-      nextStatusNs_ = nowNs + static_cast<std::int64_t>(period_s * 1e9);
+      publishStatus(now_ns + wiring_.monotonicToUtc_ns, frame);
+      nextStatusNs_ = now_ns + static_cast<std::int64_t>(period_s * 1e9);
     }
-    if (wiring_.dds->occupancyRate_hz > 0.0 && nowNs >= nextOccupancyNs_) {
+    if (wiring_.dds->occupancyRate_hz > 0.0 && now_ns >= nextOccupancyNs_) {
       publishOccupancy(frame);
-      nextOccupancyNs_ = nowNs + static_cast<std::int64_t>(1e9 / wiring_.dds->occupancyRate_hz);
+      nextOccupancyNs_ = now_ns + static_cast<std::int64_t>(1e9 / wiring_.dds->occupancyRate_hz);
     }
   }
   platform::SystemdNotifier& notifier = *wiring_.notifier;
-  if (notifier.watchdogIntervalNs() > 0 && nowNs >= nextWatchdogNs_) {
+  if (notifier.watchdogInterval_ns() > 0 && now_ns >= nextWatchdogNs_) {
     notifier.watchdog();
-    nextWatchdogNs_ = nowNs + notifier.watchdogIntervalNs();
+    nextWatchdogNs_ = now_ns + notifier.watchdogInterval_ns();
   }
-  if (nowNs >= nextStatsNs_) {
+  if (now_ns >= nextStatsNs_) {
     logStats();
-    nextStatsNs_ = nowNs + static_cast<std::int64_t>(wiring_.statsPeriod_s * 1e9);
+    nextStatsNs_ = now_ns + static_cast<std::int64_t>(wiring_.statsPeriod_s * 1e9);
   }
 }
 
-void PeriodicReports::publishStatus(std::int64_t nowUtcNs, const FrameOutcome& frame) {
+void PeriodicReports::publishStatus(std::int64_t nowUtc_ns, const FrameOutcome& frame) {
   const telemetry::PoseEstimate& pose = frame.pose;
   const LoopStats& stats = *wiring_.stats;
   messages::DroneStatus status;
   status.droneId = wiring_.dds->droneId;
-  status.time_ns = nowUtcNs;
+  status.time_ns = nowUtc_ns;
   status.position = pose.pose.position;
   const Eigen::Quaterniond& q = pose.pose.bodyToNed;
   status.attitudeQuaternion = {q.w(), q.x(), q.y(), q.z()};
-  status.gimbalEuler_deg = {static_cast<float>(pose.pose.gimbal.angles.rollDeg),
-                            static_cast<float>(pose.pose.gimbal.angles.pitchDeg),
-                            static_cast<float>(pose.pose.gimbal.angles.yawDeg)};
+  status.gimbalEuler_deg = {static_cast<float>(pose.pose.gimbal.angles.roll_deg),
+                            static_cast<float>(pose.pose.gimbal.angles.pitch_deg),
+                            static_cast<float>(pose.pose.gimbal.angles.yaw_deg)};
   const diagnostics::LatencyHistogram& e2e = stats.period(Stage::EndToEnd);
-  status.latencyMedian_ms = static_cast<float>(static_cast<double>(e2e.medianNs()) / 1e6);
-  status.latencyP99_ms = static_cast<float>(static_cast<double>(e2e.p99Ns()) / 1e6);
+  status.latencyMedian_ms = static_cast<float>(static_cast<double>(e2e.median_ns()) / 1e6);
+  status.latencyP99_ms = static_cast<float>(static_cast<double>(e2e.p99_ns()) / 1e6);
   status.inferenceMedian_ms =
-      static_cast<float>(static_cast<double>(stats.period(Stage::Detector).medianNs()) / 1e6);
+      static_cast<float>(static_cast<double>(stats.period(Stage::Detector).median_ns()) / 1e6);
   const LoopCounters c = wiring_.allCounters->counters();
   status.frameRate_hz = static_cast<float>(
       static_cast<double>(c.framesProcessed - framesAtStatus_) * wiring_.dds->statusRate_hz);
@@ -82,7 +82,7 @@ void PeriodicReports::publishOccupancy(const FrameOutcome& frame) {
   // The observed area is the frame's ground footprint as perception computed it.
   const config::OccupancyGridSpec& spec = wiring_.dds->grid;
   grid_.droneId = wiring_.dds->droneId;
-  grid_.time_ns = frame.timeUtcNs;
+  grid_.time_ns = frame.timeUtc_ns;
   grid_.originEast_m = spec.originEast_m;
   grid_.originNorth_m = spec.originNorth_m;
   grid_.resolution_m = static_cast<float>(spec.resolution_m);

@@ -41,17 +41,17 @@ struct PeriodicWiring {
   LoopCounters* counters = nullptr;  // the processing thread's (publish errors)
   const CounterSource* allCounters = nullptr;
   const char* modelId = "";  // the drone status's model id (borrowed)
-  std::int64_t monotonicToUtcNs = 0;
+  std::int64_t monotonicToUtc_ns = 0;
 };
 
 class PeriodicReports {
  public:
   void init(const PeriodicWiring& wiring);
-  void start(std::int64_t nowNs);
-  void tick(std::int64_t nowNs, const FrameOutcome& frame);
+  void start(std::int64_t now_ns);
+  void tick(std::int64_t now_ns, const FrameOutcome& frame);
 
  private:
-  void publishStatus(std::int64_t nowUtcNs, const FrameOutcome& frame);
+  void publishStatus(std::int64_t nowUtc_ns, const FrameOutcome& frame);
   void publishOccupancy(const FrameOutcome& frame);
   void logStats();
 

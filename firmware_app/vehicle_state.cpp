@@ -11,7 +11,7 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kNsPerSecond = 1e9;
-constexpr double kHeadingProbeM = 10.0;  // forward point for the true-north azimuth, m
+constexpr double kHeadingProbe_m = 10.0;  // forward point for the true-north azimuth, m
 
 double wrapTwoPi(double angle) {
   double wrapped = std::fmod(angle, kTwoPi);
@@ -24,15 +24,15 @@ double wrapTwoPi(double angle) {
 }  // namespace
 
 messages::VehicleState toVehicleState(const tracking::TrackState& track, std::uint32_t droneId,
-                                      std::int64_t toUtcOffsetNs, const geodesy::LocalFrame& frame,
+                                      std::int64_t toUtcOffset_ns, const geodesy::LocalFrame& frame,
                                       const terrain::TerrainModel* terrain,
                                       const shape::ActiveShapeModel* shapeModel) {
   messages::VehicleState state;
   state.droneId = droneId;
   state.trackId = track.id;
-  state.measurementTimeNs = track.timestampNs + toUtcOffsetNs;
+  state.measurementTime_ns = track.timestamp_ns + toUtcOffset_ns;
   state.trackAge_s =
-      static_cast<float>(static_cast<double>(track.timestampNs - track.birthNs) / kNsPerSecond);
+      static_cast<float>(static_cast<double>(track.timestamp_ns - track.birth_ns) / kNsPerSecond);
 
   Eigen::Vector3d centre(track.centreEnu.x(), track.centreEnu.y(), 0.0);
   if (terrain != nullptr) {
@@ -43,26 +43,26 @@ messages::VehicleState toVehicleState(const tracking::TrackState& track, std::ui
   }
   state.position = frame.toGeodetic(centre);
   state.enu_m = {centre.x(), centre.y(), centre.z()};
-  const double heading = wrapTwoPi(track.headingEnuRad);
+  const double heading = wrapTwoPi(track.headingEnu_rad);
   state.headingEnu_rad = heading;
   const Eigen::Vector3d ahead =
-      centre + kHeadingProbeM * Eigen::Vector3d(std::cos(heading), std::sin(heading), 0.0);
-  double northDeg = geodesy::azimuthDeg(state.position, frame.toGeodetic(ahead));
-  northDeg = std::fmod(northDeg, 360.0);
-  if (northDeg < 0.0) {
-    northDeg += 360.0;
+      centre + kHeadingProbe_m * Eigen::Vector3d(std::cos(heading), std::sin(heading), 0.0);
+  double north_deg = geodesy::azimuth_deg(state.position, frame.toGeodetic(ahead));
+  north_deg = std::fmod(north_deg, 360.0);
+  if (north_deg < 0.0) {
+    north_deg += 360.0;
   }
-  state.headingTrueNorth_deg = northDeg >= 360.0 ? 0.0 : northDeg;
+  state.headingTrueNorth_deg = north_deg >= 360.0 ? 0.0 : north_deg;
 
-  state.speed_mps = static_cast<float>(track.speedMps);
-  state.velocityEnu_mps = {static_cast<float>(track.speedMps * std::cos(heading)),
-                           static_cast<float>(track.speedMps * std::sin(heading))};
+  state.speed_mps = static_cast<float>(track.speed_mps);
+  state.velocityEnu_mps = {static_cast<float>(track.speed_mps * std::cos(heading)),
+                           static_cast<float>(track.speed_mps * std::sin(heading))};
   state.yawRate_radps = static_cast<float>(track.yawRateRadps);
   state.yawRateVariance_rad2ps2 =
       static_cast<float>(track.yawRateSigmaRadps * track.yawRateSigmaRadps);
   state.acceleration_mps2 = static_cast<float>(track.accelerationMps2);
-  state.length_m = static_cast<float>(track.lengthM);
-  state.width_m = static_cast<float>(track.widthM);
+  state.length_m = static_cast<float>(track.length_m);
+  state.width_m = static_cast<float>(track.width_m);
   state.type = track.type;
   state.typeProbability = track.typeProbabilities;
   if (track.type != shape::VehicleType::Large) {
@@ -70,14 +70,14 @@ messages::VehicleState toVehicleState(const tracking::TrackState& track, std::ui
     if (shapeModel != nullptr) {
       const shape::VehicleGeometry geometry =
           shape::vehicleGeometry(*shapeModel, track.type, track.shape);
-      state.height_m = static_cast<float>(geometry.sizeM.z());
+      state.height_m = static_cast<float>(geometry.size_m.z());
     }
   }
   const Eigen::Matrix3d& c = track.poseCovariance;
   state.poseCovariance = {static_cast<float>(c(0, 0)), static_cast<float>(c(0, 1)),
                           static_cast<float>(c(0, 2)), static_cast<float>(c(1, 1)),
                           static_cast<float>(c(1, 2)), static_cast<float>(c(2, 2))};
-  state.speedVariance_m2ps2 = static_cast<float>(track.speedSigmaMps * track.speedSigmaMps);
+  state.speedVariance_m2ps2 = static_cast<float>(track.speedSigma_mps * track.speedSigma_mps);
   state.detectionConfidence = static_cast<float>(track.score);
   state.status = track.status;
   return state;

@@ -21,7 +21,7 @@
 namespace vp::app {
 
 messages::VehicleState toVehicleState(const tracking::TrackState& track, std::uint32_t droneId,
-                                      std::int64_t toUtcOffsetNs, const geodesy::LocalFrame& frame,
+                                      std::int64_t toUtcOffset_ns, const geodesy::LocalFrame& frame,
                                       const terrain::TerrainModel* terrain,
                                       const shape::ActiveShapeModel* shapeModel);
 

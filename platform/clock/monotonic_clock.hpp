@@ -2,7 +2,7 @@
 // interface, so that sources that wait (replay pacing, device reopen backoff) can be tested
 // without sleeping.
 //
-// Contract: nowNs() never goes backwards; sleepUntilNs() returns at or after the deadline
+// Contract: now_ns() never goes backwards; sleepUntil_ns() returns at or after the deadline
 // (at once when it has passed). Neither allocates nor throws. Header-only.
 #pragma once
 
@@ -15,13 +15,13 @@ namespace vp::platform {
 class Clock {
  public:
   virtual ~Clock() = default;
-  virtual std::int64_t nowNs() const = 0;
-  virtual void sleepUntilNs(std::int64_t deadlineNs) = 0;
+  virtual std::int64_t now_ns() const = 0;
+  virtual void sleepUntil_ns(std::int64_t deadline_ns) = 0;
 };
 
 constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 
-inline std::int64_t monotonicNowNs() {
+inline std::int64_t monotonicNow_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * kNsPerSecond + ts.tv_nsec;
@@ -29,11 +29,11 @@ inline std::int64_t monotonicNowNs() {
 
 class MonotonicClock final : public Clock {
  public:
-  std::int64_t nowNs() const override { return monotonicNowNs(); }
-  void sleepUntilNs(std::int64_t deadlineNs) override {
+  std::int64_t now_ns() const override { return monotonicNow_ns(); }
+  void sleepUntil_ns(std::int64_t deadline_ns) override {
     timespec ts{};
-    ts.tv_sec = static_cast<time_t>(deadlineNs / kNsPerSecond);
-    ts.tv_nsec = static_cast<long>(deadlineNs % kNsPerSecond);
+    ts.tv_sec = static_cast<time_t>(deadline_ns / kNsPerSecond);
+    ts.tv_nsec = static_cast<long>(deadline_ns % kNsPerSecond);
     // An absolute deadline: a signal only restarts the same wait, it never shortens it.
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     }
@@ -43,15 +43,15 @@ class MonotonicClock final : public Clock {
 // A clock that only moves when told to (tests, simulation faster than real time).
 class ManualClock final : public Clock {
  public:
-  explicit ManualClock(std::int64_t startNs = 0) : nowNs_(startNs) {}
-  std::int64_t nowNs() const override { return nowNs_; }
-  void sleepUntilNs(std::int64_t deadlineNs) override {
+  explicit ManualClock(std::int64_t start_ns = 0) : nowNs_(start_ns) {}
+  std::int64_t now_ns() const override { return nowNs_; }
+  void sleepUntil_ns(std::int64_t deadline_ns) override {
     ++sleeps_;
-    if (deadlineNs > nowNs_) {
-      nowNs_ = deadlineNs;
+    if (deadline_ns > nowNs_) {
+      nowNs_ = deadline_ns;
     }
   }
-  void advanceNs(std::int64_t deltaNs) { nowNs_ += deltaNs; }
+  void advance_ns(std::int64_t delta_ns) { nowNs_ += delta_ns; }
   int sleeps() const { return sleeps_; }
 
  private:

@@ -8,7 +8,7 @@ namespace vp::platform::dds {
 namespace {
 
 vp_msg_Wgs84Position toWire(const geodesy::GeodeticPoint& p) {
-  return vp_msg_Wgs84Position{p.latitudeDeg, p.longitudeDeg, p.heightM};
+  return vp_msg_Wgs84Position{p.latitude_deg, p.longitude_deg, p.height_m};
 }
 geodesy::GeodeticPoint fromWire(const vp_msg_Wgs84Position& p) {
   return geodesy::GeodeticPoint{p.latitude_deg, p.longitude_deg, p.height_m};
@@ -23,7 +23,7 @@ static_assert(messages::DroneStatus::kModelIdCapacity + 1 == sizeof(vp_msg_Drone
 void toSample(const messages::VehicleState& s, vp_msg_VehicleState& out) {
   out.drone_id = s.droneId;
   out.track_id = s.trackId;
-  out.measurement_time_ns = s.measurementTimeNs;
+  out.measurement_time_ns = s.measurementTime_ns;
   out.track_age_s = s.trackAge_s;
   out.position = toWire(s.position);
   std::copy(s.enu_m.begin(), s.enu_m.end(), out.enu_m);
@@ -52,7 +52,7 @@ messages::VehicleState fromSample(const vp_msg_VehicleState& in) {
   messages::VehicleState s;
   s.droneId = in.drone_id;
   s.trackId = in.track_id;
-  s.measurementTimeNs = in.measurement_time_ns;
+  s.measurementTime_ns = in.measurement_time_ns;
   s.trackAge_s = in.track_age_s;
   s.position = fromWire(in.position);
   std::copy(std::begin(in.enu_m), std::end(in.enu_m), s.enu_m.begin());

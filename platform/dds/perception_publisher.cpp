@@ -65,7 +65,7 @@ PublishResult VehicleStatePublisher::publish(const messages::VehicleState& state
   }
   published_[index].seenThisFrame = true;
   toSample(state, sample_);
-  const dds_return_t rc = dds_write_ts(writer_.get(), &sample_, state.measurementTimeNs);
+  const dds_return_t rc = dds_write_ts(writer_.get(), &sample_, state.measurementTime_ns);
   if (rc < 0) {
     return PublishResult{PublishOutcome::DdsError, DdsResult::failure("dds_write_ts", rc)};
   }

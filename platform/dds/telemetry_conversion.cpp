@@ -9,7 +9,7 @@ namespace vp::platform::dds {
 namespace {
 
 constexpr std::int64_t kNsPerS = 1'000'000'000;
-constexpr std::int64_t kNsPerUs = 1'000;
+constexpr std::int64_t kNsPer_us = 1'000;
 
 // Body FLU <-> FRD: y and z change sign (its own inverse).
 Eigen::Matrix3d frdFromFlu() {
@@ -34,11 +34,11 @@ TelemetryRejection unitQuaternion(double w, double x, double y, double z, Eigen:
   return TelemetryRejection::None;
 }
 
-TelemetryRejection checkPosition(double latitudeDeg, double longitudeDeg, double heightM) {
-  if (!std::isfinite(latitudeDeg) || !std::isfinite(longitudeDeg) || !std::isfinite(heightM)) {
+TelemetryRejection checkPosition(double latitude_deg, double longitude_deg, double height_m) {
+  if (!std::isfinite(latitude_deg) || !std::isfinite(longitude_deg) || !std::isfinite(height_m)) {
     return TelemetryRejection::NonFinite;
   }
-  if (std::abs(latitudeDeg) > 90.0 || std::abs(longitudeDeg) > 180.0) {
+  if (std::abs(latitude_deg) > 90.0 || std::abs(longitude_deg) > 180.0) {
     return TelemetryRejection::PositionOutOfRange;
   }
   return TelemetryRejection::None;
@@ -48,7 +48,7 @@ TelemetryRejection checkPosition(double latitudeDeg, double longitudeDeg, double
 // the estimate was published. A publisher that leaves timestamp_sample 0 gets timestamp.
 std::int64_t validityTime_ns(std::uint64_t timestamp_us, std::uint64_t timestampSample_us) {
   const std::uint64_t us = timestampSample_us != 0 ? timestampSample_us : timestamp_us;
-  return static_cast<std::int64_t>(us) * kNsPerUs;
+  return static_cast<std::int64_t>(us) * kNsPer_us;
 }
 
 Eigen::Quaterniond canonical(const Eigen::Quaterniond& q) {

@@ -107,9 +107,9 @@ ssize_t SerialPort::write(std::span<const std::uint8_t> bytes) {
   return n;
 }
 
-bool SerialPort::waitReadable(int timeoutMs) const {
+bool SerialPort::waitReadable(int timeout_ms) const {
   pollfd descriptor{fd_, POLLIN, 0};
-  return ::poll(&descriptor, 1, timeoutMs) > 0 && (descriptor.revents & POLLIN) != 0;
+  return ::poll(&descriptor, 1, timeout_ms) > 0 && (descriptor.revents & POLLIN) != 0;
 }
 
 }  // namespace vp::platform::mavlink

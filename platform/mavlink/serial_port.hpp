@@ -36,8 +36,8 @@ class SerialPort {
 
   ssize_t read(std::span<std::uint8_t> buffer);
   ssize_t write(std::span<const std::uint8_t> bytes);
-  // Waits up to timeoutMs for input: true when bytes wait; false on timeout or hang-up.
-  bool waitReadable(int timeoutMs) const;
+  // Waits up to timeout_ms for input: true when bytes wait; false on timeout or hang-up.
+  bool waitReadable(int timeout_ms) const;
 
  private:
   int fd_ = -1;

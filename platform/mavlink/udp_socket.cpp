@@ -122,9 +122,9 @@ ssize_t UdpSocket::send(std::span<const std::uint8_t> bytes) {
   return n < 0 ? -errno : n;
 }
 
-bool UdpSocket::waitReadable(int timeoutMs) const {
+bool UdpSocket::waitReadable(int timeout_ms) const {
   pollfd descriptor{fd_, POLLIN, 0};
-  return ::poll(&descriptor, 1, timeoutMs) > 0 && (descriptor.revents & POLLIN) != 0;
+  return ::poll(&descriptor, 1, timeout_ms) > 0 && (descriptor.revents & POLLIN) != 0;
 }
 
 }  // namespace vp::platform::mavlink

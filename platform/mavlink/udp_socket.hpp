@@ -41,8 +41,8 @@ class UdpSocket {
   ssize_t receive(std::span<std::uint8_t> buffer, bool* truncated = nullptr);
   // Sends one datagram to the connected peer: bytes sent or -errno.
   ssize_t send(std::span<const std::uint8_t> bytes);
-  // Waits up to timeoutMs for a datagram: true when one waits.
-  bool waitReadable(int timeoutMs) const;
+  // Waits up to timeout_ms for a datagram: true when one waits.
+  bool waitReadable(int timeout_ms) const;
 
  private:
   int fd_ = -1;

@@ -18,13 +18,13 @@ const char* toString(ReplayStatus status) {
   return "?";
 }
 
-std::int64_t loopPeriodNs(const sequence::SequenceReader& reader) {
+std::int64_t loopPeriod_ns(const sequence::SequenceReader& reader) {
   const auto& frames = reader.frames();
-  const double rateHz = reader.info().frameRateHz > 0 ? reader.info().frameRateHz : 10.0;
+  const double rate_hz = reader.info().frameRate_hz > 0 ? reader.info().frameRate_hz : 10.0;
   if (frames.size() < 2) {
-    return static_cast<std::int64_t>(std::llround(1e9 / rateHz));
+    return static_cast<std::int64_t>(std::llround(1e9 / rate_hz));
   }
-  const std::int64_t span = frames.back().timestampNs - frames.front().timestampNs;
+  const std::int64_t span = frames.back().timestamp_ns - frames.front().timestamp_ns;
   return span + span / static_cast<std::int64_t>(frames.size() - 1);
 }
 
@@ -38,7 +38,7 @@ bool SequenceReplay::open(const std::string& directory, const ReplayOptions& opt
   loop_ = 0;
   started_ = false;
   counters_ = ReplayCounters{};
-  loopPeriodNs_ = replay::loopPeriodNs(reader_);
+  loopPeriodNs_ = replay::loopPeriod_ns(reader_);
   const auto& frames = reader_.frames();
   idSpan_ = frames.empty() ? 0 : frames.back().frameId - frames.front().frameId + 1;
   return true;
@@ -46,12 +46,13 @@ bool SequenceReplay::open(const std::string& directory, const ReplayOptions& opt
 
 ReplayStatus SequenceReplay::next(Frame& out, std::string* why) {
   const auto& frames = reader_.frames();
-  if (out.image.type() != CV_8UC3 || out.image.cols != widthPx() || out.image.rows != heightPx()) {
+  if (out.image.type() != CV_8UC3 || out.image.cols != width_px() ||
+      out.image.rows != height_px()) {
     if (why != nullptr) {
       *why = reader_.directory() + ": output frame is " + std::to_string(out.image.cols) + "x" +
              std::to_string(out.image.rows) + " type " + std::to_string(out.image.type()) +
-             ", the sequence's camera gives " + std::to_string(widthPx()) + "x" +
-             std::to_string(heightPx()) + " BGR8";
+             ", the sequence's camera gives " + std::to_string(width_px()) + "x" +
+             std::to_string(height_px()) + " BGR8";
     }
     return ReplayStatus::Error;
   }
@@ -65,11 +66,11 @@ ReplayStatus SequenceReplay::next(Frame& out, std::string* why) {
   }
   const std::size_t index = next_++;
   const sequence::FrameRecord& record = frames[index];
-  const std::int64_t shiftNs = static_cast<std::int64_t>(loop_) * loopPeriodNs_;
-  const std::int64_t timestampNs = record.timestampNs + shiftNs;
+  const std::int64_t shift_ns = static_cast<std::int64_t>(loop_) * loopPeriodNs_;
+  const std::int64_t timestamp_ns = record.timestamp_ns + shift_ns;
   if (!started_) {
     started_ = true;
-    startNs_ = clock_.nowNs();
+    startNs_ = clock_.now_ns();
   }
 
   // loadFrame copies into out.image in place: its size and type match the rig (checked above).
@@ -86,9 +87,9 @@ ReplayStatus SequenceReplay::next(Frame& out, std::string* why) {
     return ReplayStatus::BadFrame;
   }
   if (options_.paced) {
-    clock_.sleepUntilNs(startNs_ + (timestampNs - frames.front().timestampNs));
+    clock_.sleepUntil_ns(startNs_ + (timestamp_ns - frames.front().timestamp_ns));
   }
-  out.timestampNs = timestampNs;
+  out.timestamp_ns = timestamp_ns;
   out.frameId = record.frameId + static_cast<std::int64_t>(loop_) * idSpan_;
   out.status = FrameStatus::Ok;
   ++counters_.frames;
@@ -96,17 +97,17 @@ ReplayStatus SequenceReplay::next(Frame& out, std::string* why) {
 }
 
 void TelemetryReplay::open(std::span<const sequence::TelemetryRecord> records, bool loop,
-                           std::int64_t loopPeriodNs) {
+                           std::int64_t loopPeriod_ns) {
   records_ = records;
-  loop_ = loop && !records.empty() && loopPeriodNs > 0;
-  loopPeriodNs_ = loopPeriodNs;
+  loop_ = loop && !records.empty() && loopPeriod_ns > 0;
+  loopPeriodNs_ = loopPeriod_ns;
   next_ = 0;
   pass_ = 0;
   delivered_ = false;
   lastTimestampNs_ = 0;
 }
 
-const sequence::TelemetryRecord* TelemetryReplay::nextDue(std::int64_t timeNs) {
+const sequence::TelemetryRecord* TelemetryReplay::nextDue(std::int64_t time_ns) {
   for (;;) {
     if (next_ >= records_.size()) {
       if (!loop_) {
@@ -115,21 +116,21 @@ const sequence::TelemetryRecord* TelemetryReplay::nextDue(std::int64_t timeNs) {
       next_ = 0;
       ++pass_;
     }
-    const std::int64_t timestampNs =
-        records_[next_].timestampNs + static_cast<std::int64_t>(pass_) * loopPeriodNs_;
+    const std::int64_t timestamp_ns =
+        records_[next_].timestamp_ns + static_cast<std::int64_t>(pass_) * loopPeriodNs_;
     // Telemetry reaching past the last frame overlaps the next loop's start: keep the stream
     // non-decreasing by skipping what would go back in time.
-    if (delivered_ && timestampNs < lastTimestampNs_) {
+    if (delivered_ && timestamp_ns < lastTimestampNs_) {
       ++next_;
       continue;
     }
-    if (timestampNs > timeNs) {
+    if (timestamp_ns > time_ns) {
       return nullptr;
     }
     current_ = records_[next_++];
-    current_.timestampNs = timestampNs;
+    current_.timestamp_ns = timestamp_ns;
     delivered_ = true;
-    lastTimestampNs_ = timestampNs;
+    lastTimestampNs_ = timestamp_ns;
     return &current_;
   }
 }

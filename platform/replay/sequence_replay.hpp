@@ -7,7 +7,7 @@
 // recorded frame id and capture timestamp. Paced, it first waits until the frame is due on
 // the given clock: t0 + (t_i - t_first), t0 being the time of the first next(); unpaced it
 // returns as fast as frames decode. Looping, the sequence starts over after its last frame and
-// timestamps and frame ids keep increasing (each loop adds loopPeriodNs(), the recorded span
+// timestamps and frame ids keep increasing (each loop adds loopPeriod_ns(), the recorded span
 // plus one mean frame interval, and the id span). A missing, corrupt or truncated image is a
 // BadFrame status whose message names the file and the frame; the next call goes on with the
 // next frame. Nothing throws.
@@ -54,7 +54,7 @@ struct ReplayCounters {
 
 // The shift of one loop: recorded span of the frames plus their mean interval (1 / frame rate
 // of sequence.yaml for a one-frame sequence).
-std::int64_t loopPeriodNs(const sequence::SequenceReader& reader);
+std::int64_t loopPeriod_ns(const sequence::SequenceReader& reader);
 
 class SequenceReplay {
  public:
@@ -65,9 +65,9 @@ class SequenceReplay {
   ReplayStatus next(Frame& out, std::string* why);
 
   const sequence::SequenceReader& reader() const { return reader_; }
-  int widthPx() const { return reader_.rig().intrinsics.widthPx; }
-  int heightPx() const { return reader_.rig().intrinsics.heightPx; }
-  std::int64_t loopPeriodNs() const { return loopPeriodNs_; }
+  int width_px() const { return reader_.rig().intrinsics.width_px; }
+  int height_px() const { return reader_.rig().intrinsics.height_px; }
+  std::int64_t loopPeriod_ns() const { return loopPeriodNs_; }
   std::size_t position() const { return next_; }  // index of the next frame in frames.csv
   const ReplayCounters& counters() const { return counters_; }
 
@@ -88,11 +88,11 @@ class TelemetryReplay {
  public:
   // Borrows the records (e.g. SequenceReplay::reader().telemetry()); they must outlive this.
   void open(std::span<const sequence::TelemetryRecord> records, bool loop,
-            std::int64_t loopPeriodNs);
+            std::int64_t loopPeriod_ns);
 
-  // The next record with timestamp <= timeNs, or nullptr when none is due yet (or all were
+  // The next record with timestamp <= time_ns, or nullptr when none is due yet (or all were
   // given out). The pointer is valid until the next call.
-  const sequence::TelemetryRecord* nextDue(std::int64_t timeNs);
+  const sequence::TelemetryRecord* nextDue(std::int64_t time_ns);
 
   bool finished() const { return !loop_ && next_ >= records_.size(); }
 

@@ -31,7 +31,7 @@ class SystemdNotifier {
   bool enabled() const { return fd_ >= 0; }
   // Interval at which watchdog() must be called (half of WatchdogSec, as systemd advises);
   // 0 when the service has no watchdog or $WATCHDOG_PID names another process.
-  std::int64_t watchdogIntervalNs() const { return watchdogIntervalNs_; }
+  std::int64_t watchdogInterval_ns() const { return watchdogIntervalNs_; }
 
   bool ready() { return send("READY=1"); }
   bool watchdog() { return send("WATCHDOG=1"); }

@@ -16,8 +16,8 @@
 namespace vp::platform::v4l2 {
 namespace {
 
-constexpr std::int64_t kNsPerMs = 1'000'000;
-constexpr std::int64_t kNsPerUs = 1'000;
+constexpr std::int64_t kNsPer_ms = 1'000'000;
+constexpr std::int64_t kNsPer_us = 1'000;
 
 std::string errorText(int error) {
   return std::strerror(error);
@@ -104,9 +104,9 @@ bool V4l2Camera::open(const V4l2CameraConfig& config, std::string* why) {
   if (config.devicePath.empty() && config.busInfo.empty()) {
     return failWith(why, "v4l2: neither a device path nor a bus_info to find the camera by");
   }
-  if (config.widthPx <= 0 || config.heightPx <= 0) {
-    return failWith(why, who + ": frame size " + std::to_string(config.widthPx) + "x" +
-                             std::to_string(config.heightPx) + " must be positive");
+  if (config.width_px <= 0 || config.height_px <= 0) {
+    return failWith(why, who + ": frame size " + std::to_string(config.width_px) + "x" +
+                             std::to_string(config.height_px) + " must be positive");
   }
   if (config.bufferCount < 2 || config.bufferCount > kMaxBuffers) {
     return failWith(why, who + ": buffer count " + std::to_string(config.bufferCount) +
@@ -115,8 +115,8 @@ bool V4l2Camera::open(const V4l2CameraConfig& config, std::string* why) {
   if (config.preferredFormats.empty()) {
     return failWith(why, who + ": no preferred pixel format");
   }
-  if (config.dequeueTimeoutMs < 0 || config.reopenInitialBackoffMs <= 0 ||
-      config.reopenMaxBackoffMs < config.reopenInitialBackoffMs) {
+  if (config.dequeueTimeout_ms < 0 || config.reopenInitialBackoff_ms <= 0 ||
+      config.reopenMaxBackoff_ms < config.reopenInitialBackoff_ms) {
     return failWith(why, who + ": timeouts must be >= 0 and 0 < initial backoff <= max backoff");
   }
   config_ = config;
@@ -201,8 +201,8 @@ bool V4l2Camera::negotiate(const std::string& path, std::string* why) {
   for (const PixelFormat wanted : config_.preferredFormats) {
     v4l2_format format{};
     format.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    format.fmt.pix.width = static_cast<__u32>(config_.widthPx);
-    format.fmt.pix.height = static_cast<__u32>(config_.heightPx);
+    format.fmt.pix.width = static_cast<__u32>(config_.width_px);
+    format.fmt.pix.height = static_cast<__u32>(config_.height_px);
     format.fmt.pix.pixelformat = fourcc(wanted);
     format.fmt.pix.field = V4L2_FIELD_NONE;
     int rc = device_.ioctl(fd_, VIDIOC_S_FMT, &format);
@@ -223,8 +223,8 @@ bool V4l2Camera::negotiate(const std::string& path, std::string* why) {
     }
     const v4l2_pix_format& pix = actual.fmt.pix;
     // (S_FMT wrote the driver's choice back into `format`: compare with the configuration.)
-    if (pix.pixelformat != fourcc(wanted) || static_cast<int>(pix.width) != config_.widthPx ||
-        static_cast<int>(pix.height) != config_.heightPx) {
+    if (pix.pixelformat != fourcc(wanted) || static_cast<int>(pix.width) != config_.width_px ||
+        static_cast<int>(pix.height) != config_.height_px) {
       tried += std::string(" ") + toString(wanted) + ": driver set " + fourccText(pix.pixelformat) +
                " " + std::to_string(pix.width) + "x" + std::to_string(pix.height) + ";";
       continue;
@@ -232,15 +232,15 @@ bool V4l2Camera::negotiate(const std::string& path, std::string* why) {
     const std::uint32_t minLine =
         wanted == PixelFormat::Yuyv ? pix.width * 2 : (wanted == PixelFormat::Nv12 ? pix.width : 0);
     format_.format = wanted;
-    format_.widthPx = static_cast<int>(pix.width);
-    format_.heightPx = static_cast<int>(pix.height);
+    format_.width_px = static_cast<int>(pix.width);
+    format_.height_px = static_cast<int>(pix.height);
     format_.bytesPerLine = std::max(pix.bytesperline, minLine);
     format_.sizeImage = pix.sizeimage;
     return true;
   }
   return failWith(why, "v4l2 " + path + ": no preferred format at " +
-                           std::to_string(config_.widthPx) + "x" +
-                           std::to_string(config_.heightPx) + ":" + tried);
+                           std::to_string(config_.width_px) + "x" +
+                           std::to_string(config_.height_px) + ":" + tried);
 }
 
 bool V4l2Camera::mapAndQueueBuffers(const std::string& path, std::string* why) {
@@ -333,16 +333,16 @@ CaptureStatus V4l2Camera::loseDevice(int error, const char* where) {
   release();
   lost_ = true;
   ++counters_.deviceLosses;
-  backoffNs_ = config_.reopenInitialBackoffMs * kNsPerMs;
-  nextReopenNs_ = clock_.nowNs() + backoffNs_;
+  backoffNs_ = config_.reopenInitialBackoff_ms * kNsPer_ms;
+  nextReopenNs_ = clock_.now_ns() + backoffNs_;
   return CaptureStatus::DeviceLost;
 }
 
 CaptureStatus V4l2Camera::tryReopen() {
-  std::int64_t now = clock_.nowNs();
+  std::int64_t now = clock_.now_ns();
   if (now < nextReopenNs_) {
-    clock_.sleepUntilNs(std::min(nextReopenNs_, now + config_.dequeueTimeoutMs * kNsPerMs));
-    now = clock_.nowNs();
+    clock_.sleepUntil_ns(std::min(nextReopenNs_, now + config_.dequeueTimeout_ms * kNsPer_ms));
+    now = clock_.now_ns();
     if (now < nextReopenNs_) {
       return CaptureStatus::DeviceLost;
     }
@@ -355,7 +355,7 @@ CaptureStatus V4l2Camera::tryReopen() {
     return CaptureStatus::Reopened;
   }
   setError("%s", why.c_str());
-  backoffNs_ = std::min(2 * backoffNs_, config_.reopenMaxBackoffMs * kNsPerMs);
+  backoffNs_ = std::min(2 * backoffNs_, config_.reopenMaxBackoff_ms * kNsPer_ms);
   nextReopenNs_ = now + backoffNs_;
   return CaptureStatus::DeviceLost;
 }
@@ -369,7 +369,7 @@ CaptureStatus V4l2Camera::capture(Frame& out) {
     return CaptureStatus::Error;
   }
   short revents = 0;
-  int rc = device_.poll(fd_, config_.dequeueTimeoutMs, &revents);
+  int rc = device_.poll(fd_, config_.dequeueTimeout_ms, &revents);
   if (rc < 0) {
     return loseDevice(-rc, "poll");
   }
@@ -400,10 +400,10 @@ CaptureStatus V4l2Camera::capture(Frame& out) {
   const bool converted = convert(buffers_[buffer.index], buffer.bytesused, out);
   if (converted) {
     if ((buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC) {
-      out.timestampNs = static_cast<std::int64_t>(buffer.timestamp.tv_sec) * kNsPerSecond +
-                        static_cast<std::int64_t>(buffer.timestamp.tv_usec) * kNsPerUs;
+      out.timestamp_ns = static_cast<std::int64_t>(buffer.timestamp.tv_sec) * kNsPerSecond +
+                         static_cast<std::int64_t>(buffer.timestamp.tv_usec) * kNsPer_us;
     } else {
-      out.timestampNs = clock_.nowNs();
+      out.timestamp_ns = clock_.now_ns();
       ++counters_.stampedAtDequeue;
     }
     out.frameId = frameIdBase_ + buffer.sequence;
@@ -428,8 +428,8 @@ CaptureStatus V4l2Camera::capture(Frame& out) {
 }
 
 bool V4l2Camera::convert(const MappedBuffer& buffer, std::uint32_t bytesUsed, Frame& out) {
-  const int width = format_.widthPx;
-  const int height = format_.heightPx;
+  const int width = format_.width_px;
+  const int height = format_.height_px;
   if (out.image.type() != CV_8UC3 || out.image.cols != width || out.image.rows != height) {
     setError("v4l2 %s: output frame is %dx%d type %d, camera gives %dx%d BGR8",
              format_.path.c_str(), out.image.cols, out.image.rows, out.image.type(), width, height);

@@ -48,21 +48,21 @@ const char* toString(PixelFormat format);
 struct V4l2CameraConfig {
   std::string devicePath;  // "/dev/video0"; when empty, busInfo picks the device
   std::string busInfo;     // VIDIOC_QUERYCAP bus_info, e.g. "usb-0000:00:14.0-2"
-  int widthPx = FramePool::kDefaultWidthPx;
-  int heightPx = FramePool::kDefaultHeightPx;
+  int width_px = FramePool::kDefaultWidth_px;
+  int height_px = FramePool::kDefaultHeight_px;
   // Tried in order; the first the driver keeps (read back) at the requested size wins.
   std::vector<PixelFormat> preferredFormats{PixelFormat::Yuyv, PixelFormat::Nv12,
                                             PixelFormat::Mjpeg};
-  unsigned bufferCount = 4;          // mmap buffers requested; the driver may grant 2..kMaxBuffers
-  int dequeueTimeoutMs = 1000;       // longest capture() waits for a frame
-  int reopenInitialBackoffMs = 100;  // first wait after a loss, doubled per failed attempt
-  int reopenMaxBackoffMs = 5000;
+  unsigned bufferCount = 4;           // mmap buffers requested; the driver may grant 2..kMaxBuffers
+  int dequeueTimeout_ms = 1000;       // longest capture() waits for a frame
+  int reopenInitialBackoff_ms = 100;  // first wait after a loss, doubled per failed attempt
+  int reopenMaxBackoff_ms = 5000;
 };
 
 struct NegotiatedFormat {
   PixelFormat format = PixelFormat::Yuyv;
-  int widthPx = 0;
-  int heightPx = 0;
+  int width_px = 0;
+  int height_px = 0;
   std::uint32_t bytesPerLine = 0;
   std::uint32_t sizeImage = 0;
   unsigned bufferCount = 0;  // granted by the driver
@@ -100,7 +100,7 @@ class V4l2Camera {
   V4l2Camera& operator=(const V4l2Camera&) = delete;
 
   bool open(const V4l2CameraConfig& config, std::string* why);
-  // The next frame into `out` (its image must be CV_8UC3 of format().widthPx x heightPx).
+  // The next frame into `out` (its image must be CV_8UC3 of format().width_px x height_px).
   CaptureStatus capture(Frame& out);
   void close();
 

@@ -44,9 +44,9 @@ int SystemV4l2Device::munmap(void* address, std::size_t length) {
   return ::munmap(address, length) != 0 ? -errno : 0;
 }
 
-int SystemV4l2Device::poll(int fd, int timeoutMs, short* revents) {
+int SystemV4l2Device::poll(int fd, int timeout_ms, short* revents) {
   pollfd descriptor{fd, POLLIN, 0};
-  const int rc = ::poll(&descriptor, 1, timeoutMs);
+  const int rc = ::poll(&descriptor, 1, timeout_ms);
   if (rc < 0) {
     return errno == EINTR ? 0 : -errno;
   }

@@ -26,7 +26,7 @@ class V4l2Device {
   virtual void* mmap(int fd, std::size_t length, std::int64_t offset, int* error) = 0;
   virtual int munmap(void* address, std::size_t length) = 0;
   // Waits for the descriptor to be readable: > 0 with *revents set, 0 on timeout, or -errno.
-  virtual int poll(int fd, int timeoutMs, short* revents) = 0;
+  virtual int poll(int fd, int timeout_ms, short* revents) = 0;
   // The video device nodes present now (sorted paths), for finding a camera by bus.
   virtual std::vector<std::string> listVideoNodes() = 0;
 };
@@ -38,7 +38,7 @@ class SystemV4l2Device final : public V4l2Device {
   int ioctl(int fd, unsigned long request, void* argument) override;
   void* mmap(int fd, std::size_t length, std::int64_t offset, int* error) override;
   int munmap(void* address, std::size_t length) override;
-  int poll(int fd, int timeoutMs, short* revents) override;
+  int poll(int fd, int timeout_ms, short* revents) override;
   std::vector<std::string> listVideoNodes() override;
 };
 

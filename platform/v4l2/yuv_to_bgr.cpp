@@ -37,22 +37,22 @@ inline void writePixel(int luma, const Chroma& c, std::uint8_t* bgr) {
   bgr[2] = clampToByte((y + c.r) >> kShift);
 }
 
-bool fits(const cv::Mat& bgr, int widthPx, int heightPx) {
-  return widthPx > 0 && heightPx > 0 && widthPx % 2 == 0 && bgr.type() == CV_8UC3 &&
-         bgr.cols == widthPx && bgr.rows == heightPx;
+bool fits(const cv::Mat& bgr, int width_px, int height_px) {
+  return width_px > 0 && height_px > 0 && width_px % 2 == 0 && bgr.type() == CV_8UC3 &&
+         bgr.cols == width_px && bgr.rows == height_px;
 }
 
 }  // namespace
 
-bool yuyvToBgr(const std::uint8_t* yuyv, std::size_t strideBytes, int widthPx, int heightPx,
+bool yuyvToBgr(const std::uint8_t* yuyv, std::size_t strideBytes, int width_px, int height_px,
                cv::Mat& bgr) {
-  if (!fits(bgr, widthPx, heightPx) || strideBytes < static_cast<std::size_t>(widthPx) * 2) {
+  if (!fits(bgr, width_px, height_px) || strideBytes < static_cast<std::size_t>(width_px) * 2) {
     return false;
   }
-  for (int row = 0; row < heightPx; ++row) {
+  for (int row = 0; row < height_px; ++row) {
     const std::uint8_t* in = yuyv + static_cast<std::size_t>(row) * strideBytes;
     std::uint8_t* out = bgr.ptr<std::uint8_t>(row);
-    for (int col = 0; col < widthPx; col += 2, in += 4, out += 6) {
+    for (int col = 0; col < width_px; col += 2, in += 4, out += 6) {
       const Chroma c = chroma(in[1], in[3]);
       writePixel(in[0], c, out);
       writePixel(in[2], c, out + 3);
@@ -62,19 +62,19 @@ bool yuyvToBgr(const std::uint8_t* yuyv, std::size_t strideBytes, int widthPx, i
 }
 
 bool nv12ToBgr(const std::uint8_t* yPlane, std::size_t yStrideBytes, const std::uint8_t* uvPlane,
-               std::size_t uvStrideBytes, int widthPx, int heightPx, cv::Mat& bgr) {
-  if (!fits(bgr, widthPx, heightPx) || heightPx % 2 != 0 ||
-      yStrideBytes < static_cast<std::size_t>(widthPx) ||
-      uvStrideBytes < static_cast<std::size_t>(widthPx)) {
+               std::size_t uvStrideBytes, int width_px, int height_px, cv::Mat& bgr) {
+  if (!fits(bgr, width_px, height_px) || height_px % 2 != 0 ||
+      yStrideBytes < static_cast<std::size_t>(width_px) ||
+      uvStrideBytes < static_cast<std::size_t>(width_px)) {
     return false;
   }
-  for (int row = 0; row < heightPx; row += 2) {
+  for (int row = 0; row < height_px; row += 2) {
     const std::uint8_t* y0 = yPlane + static_cast<std::size_t>(row) * yStrideBytes;
     const std::uint8_t* y1 = y0 + yStrideBytes;
     const std::uint8_t* uv = uvPlane + static_cast<std::size_t>(row / 2) * uvStrideBytes;
     std::uint8_t* out0 = bgr.ptr<std::uint8_t>(row);
     std::uint8_t* out1 = bgr.ptr<std::uint8_t>(row + 1);
-    for (int col = 0; col < widthPx; col += 2) {
+    for (int col = 0; col < width_px; col += 2) {
       const Chroma c = chroma(uv[col], uv[col + 1]);
       writePixel(y0[col], c, out0 + 3 * col);
       writePixel(y0[col + 1], c, out0 + 3 * col + 3);

@@ -17,11 +17,11 @@
 namespace vp::platform::v4l2 {
 
 // YUYV 4:2:2 (V4L2_PIX_FMT_YUYV, "YUY2"): Y0 U Y1 V per pixel pair.
-bool yuyvToBgr(const std::uint8_t* yuyv, std::size_t strideBytes, int widthPx, int heightPx,
+bool yuyvToBgr(const std::uint8_t* yuyv, std::size_t strideBytes, int width_px, int height_px,
                cv::Mat& bgr);
 
 // NV12 4:2:0 (V4L2_PIX_FMT_NV12): a Y plane, then an interleaved U V plane at half resolution.
 bool nv12ToBgr(const std::uint8_t* yPlane, std::size_t yStrideBytes, const std::uint8_t* uvPlane,
-               std::size_t uvStrideBytes, int widthPx, int heightPx, cv::Mat& bgr);
+               std::size_t uvStrideBytes, int width_px, int height_px, cv::Mat& bgr);
 
 }  // namespace vp::platform::v4l2

@@ -20,15 +20,15 @@ struct LiftedCar {
   perception::FrameLiftSummary summary;
   perception::VehicleObservation observation;
 
-  explicit LiftedCar(double headingRad) {
+  explicit LiftedCar(double heading_rad) {
     const lifting::DronePose pose = testworld::hoveringPose(20.0, -75.0);
     const auto cameraPose = scene.lifter.cameraPose(pose);
     EXPECT_TRUE(cameraPose);
     testworld::TruthVehicle truth;
     truth.footprint.centreEnu = *scene.terrain.groundPointEnu(3.0, 12.0);
-    truth.footprint.headingEnuRad = headingRad;
-    truth.footprint.lengthM = 4.6;
-    truth.footprint.widthM = 1.85;
+    truth.footprint.headingEnu_rad = heading_rad;
+    truth.footprint.length_m = 4.6;
+    truth.footprint.width_m = 1.85;
     detection::Detection d;
     EXPECT_TRUE(testworld::perfectDetection(scene, *cameraPose, truth, &d));
     summary = scene.detectionLifter.liftFrame(scene.lifter, 5, telemetry::PoseStatus::Ok, pose,
@@ -95,9 +95,9 @@ TEST(Annotator, InitRejectsABadStyleNamingTheField) {
   Annotator annotator;
   std::string why;
   AnnotationStyle style;
-  style.lineThicknessPx = 0;
+  style.lineThickness_px = 0;
   EXPECT_FALSE(annotator.init(style, &why));
-  EXPECT_NE(why.find("lineThicknessPx"), std::string::npos) << why;
+  EXPECT_NE(why.find("lineThickness_px"), std::string::npos) << why;
   style = {};
   style.fontScale = 9.0;
   EXPECT_FALSE(annotator.init(style, &why));
@@ -112,7 +112,7 @@ TEST(Annotator, DrawsBoxArrowLabelAndWireframeOnlyAroundTheVehicle) {
   std::string why;
   ASSERT_TRUE(annotator.init({}, &why)) << why;
   const camera::Intrinsics& in = car.scene.camera.intrinsics();
-  cv::Mat image(in.heightPx, in.widthPx, CV_8UC3, cv::Scalar::all(0));
+  cv::Mat image(in.height_px, in.width_px, CV_8UC3, cv::Scalar::all(0));
   const cv::Rect drawn = annotator.drawObservation(image, car.observation, 17, &car.scene.lifter,
                                                    &car.summary.cameraPose);
   ASSERT_FALSE(drawn.empty());
@@ -171,7 +171,7 @@ TEST(Annotator, NotLiftedObservationsAreOrangeWithTheirStatusAndNoWireframe) {
   Annotator annotator;
   ASSERT_TRUE(annotator.init({}));
   const camera::Intrinsics& in = car.scene.camera.intrinsics();
-  cv::Mat image(in.heightPx, in.widthPx, CV_8UC3, cv::Scalar::all(0));
+  cv::Mat image(in.height_px, in.width_px, CV_8UC3, cv::Scalar::all(0));
   ASSERT_TRUE(
       annotator.drawFrame(image, std::span(&o, 1), {}, &car.scene.lifter, &car.summary.cameraPose));
   const auto corners = geometry::corners(o.detection.box);
@@ -191,7 +191,7 @@ TEST(Annotator, DrawingAFrameDoesNotAllocate) {
   Annotator annotator;
   ASSERT_TRUE(annotator.init({}));
   const camera::Intrinsics& in = car.scene.camera.intrinsics();
-  cv::Mat image(in.heightPx, in.widthPx, CV_8UC3, cv::Scalar::all(0));
+  cv::Mat image(in.height_px, in.width_px, CV_8UC3, cv::Scalar::all(0));
   // 50 observations spread over the image, one of them not lifted; half with track ids.
   std::vector<perception::VehicleObservation> observations(50, car.observation);
   std::vector<int> ids(observations.size());

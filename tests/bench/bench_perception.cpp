@@ -30,18 +30,18 @@ using vp::detection::DetectionStage;
 using vp::detection::DetectionStageOptions;
 using vp::detection::DetectionStatus;
 
-constexpr int kFrameWidthPx = 2592;
-constexpr int kFrameHeightPx = 2048;
+constexpr int kFrameWidth_px = 2592;
+constexpr int kFrameHeight_px = 2048;
 constexpr int kCropsPerFrame = 30;  // a busy intersection
 
 vp::camera::CameraModel benchCamera() {
   vp::camera::Intrinsics k;
-  k.widthPx = kFrameWidthPx;
-  k.heightPx = kFrameHeightPx;
-  k.fxPx = 3000.0;
-  k.fyPx = 3000.0;
-  k.cxPx = 1295.5;
-  k.cyPx = 1023.5;
+  k.width_px = kFrameWidth_px;
+  k.height_px = kFrameHeight_px;
+  k.fx_px = 3000.0;
+  k.fy_px = 3000.0;
+  k.cx_px = 1295.5;
+  k.cy_px = 1023.5;
   vp::camera::Distortion d;
   d.model = vp::camera::LensModel::BrownConrady;
   d.k1 = -0.1;
@@ -52,7 +52,7 @@ vp::camera::CameraModel benchCamera() {
 }
 
 cv::Mat benchFrame() {
-  return vp::test::syntheticCarFrame(kFrameWidthPx, kFrameHeightPx, 2024, 60);
+  return vp::test::syntheticCarFrame(kFrameWidth_px, kFrameHeight_px, 2024, 60);
 }
 
 void frameStages(benchmark::State& state, int threads, int cropThreads) {
@@ -63,7 +63,7 @@ void frameStages(benchmark::State& state, int threads, int cropThreads) {
   preOptions.threads = threads;
   vp::preprocess::Preprocessor pre;
   std::string why;
-  if (!pre.init(preOptions, benchCamera(), {kFrameWidthPx, kFrameHeightPx}, &why)) {
+  if (!pre.init(preOptions, benchCamera(), {kFrameWidth_px, kFrameHeight_px}, &why)) {
     state.SkipWithError(why.c_str());
     return;
   }

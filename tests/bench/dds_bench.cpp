@@ -77,7 +77,7 @@ vp::messages::VehicleState vehicle(std::uint32_t id, std::int64_t time_ns, doubl
   vp::messages::VehicleState s;
   s.droneId = 1;
   s.trackId = id;
-  s.measurementTimeNs = time_ns;
+  s.measurementTime_ns = time_ns;
   s.trackAge_s = static_cast<float>(t_s);
   const double east = -50.0 + 0.5 * (id % 200) + 10.0 * t_s;
   const double north = -50.0 + 0.5 * (id / 2);

@@ -67,11 +67,11 @@ void terrainRay(benchmark::State& state) {
   vp::terrain::TerrainGrid grid;
   grid.cols = grid.rows = 161;
   grid.crs = {vp::terrain::HorizontalCrs::Utm, centre.zone, centre.northp};
-  grid.transform = {centre.eastingM - 400.0, 5.0, 0.0, centre.northingM + 400.0, 0.0, -5.0};
-  grid.heightsM.resize(161 * 161);
+  grid.transform = {centre.easting_m - 400.0, 5.0, 0.0, centre.northing_m + 400.0, 0.0, -5.0};
+  grid.heights_m.resize(161 * 161);
   for (int r = 0; r < 161; ++r) {
     for (int c = 0; c < 161; ++c) {
-      grid.heightsM[static_cast<std::size_t>(r * 161 + c)] =
+      grid.heights_m[static_cast<std::size_t>(r * 161 + c)] =
           static_cast<float>(260.0 + 3.0 * std::sin(c / 9.0) * std::cos(r / 7.0));
     }
   }

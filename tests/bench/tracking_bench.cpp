@@ -16,10 +16,10 @@ std::vector<WorldDetection> convoy(int count, int frame) {
   const double t = frame / 10.0;
   for (int i = 0; i < count; ++i) {
     WorldDetection& d = out[static_cast<std::size_t>(i)];
-    d.timestampNs = static_cast<std::int64_t>(std::llround(t * 1e9));
+    d.timestamp_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
     d.centreEnu = Eigen::Vector2d(-100.0 + 12.0 * (i / 20) + 10.0 * t, -50.0 + 5.0 * (i % 20));
-    d.lengthM = 4.5;
-    d.widthM = 1.8;
+    d.length_m = 4.5;
+    d.width_m = 1.8;
     d.score = 0.9f;
     d.typeProbabilities.fill(0.05f);
     d.typeProbabilities[3] = 0.7f;
@@ -51,7 +51,7 @@ void trackerStep(benchmark::State& state) {
     }
     auto& f = frames[static_cast<std::size_t>(k)];
     for (auto& d : f) {
-      d.timestampNs = offset + k * 100'000'000LL;
+      d.timestamp_ns = offset + k * 100'000'000LL;
     }
     auto r = tracker.step(offset + k * 100'000'000LL, f);
     benchmark::DoNotOptimize(r);

@@ -17,12 +17,12 @@ namespace {
 // A 5 MP machine-vision camera with a realistic mildly barrel-distorting lens.
 Intrinsics sensorIntrinsics() {
   Intrinsics k;
-  k.widthPx = 2592;
-  k.heightPx = 2048;
-  k.fxPx = 2900.0;
-  k.fyPx = 2904.0;
-  k.cxPx = 1299.3;
-  k.cyPx = 1021.8;
+  k.width_px = 2592;
+  k.height_px = 2048;
+  k.fx_px = 2900.0;
+  k.fy_px = 2904.0;
+  k.cx_px = 1299.3;
+  k.cy_px = 1021.8;
   return k;
 }
 
@@ -47,8 +47,8 @@ CameraModel brownConradyCamera() {
 // per-axis normalisation is exercised.
 CameraModel sphericalCamera() {
   Intrinsics k = sensorIntrinsics();
-  k.fxPx = 1500.0;
-  k.fyPx = 1512.0;
+  k.fx_px = 1500.0;
+  k.fy_px = 1512.0;
   Distortion d;
   d.model = LensModel::EquivalentSpherical;
   CameraModel camera;
@@ -57,28 +57,28 @@ CameraModel sphericalCamera() {
 }
 
 cv::Matx33d cameraMatrix(const Intrinsics& k) {
-  return {k.fxPx, 0.0, k.cxPx, 0.0, k.fyPx, k.cyPx, 0.0, 0.0, 1.0};
+  return {k.fx_px, 0.0, k.cx_px, 0.0, k.fy_px, k.cy_px, 0.0, 0.0, 1.0};
 }
 
 cv::Vec<double, 5> coefficients(const Distortion& d) {
   return {d.k1, d.k2, d.p1, d.p2, d.k3};
 }
 
-std::vector<Eigen::Vector2d> pixelGrid(const Intrinsics& k, int stepPx) {
+std::vector<Eigen::Vector2d> pixelGrid(const Intrinsics& k, int step_px) {
   std::vector<Eigen::Vector2d> pixels;
-  for (int v = 0; v < k.heightPx; v += stepPx) {
-    for (int u = 0; u < k.widthPx; u += stepPx) {
+  for (int v = 0; v < k.height_px; v += step_px) {
+    for (int u = 0; u < k.width_px; u += step_px) {
       pixels.emplace_back(u, v);
     }
   }
   // Include the far edges and corners exactly, where distortion is largest.
-  for (int v = 0; v < k.heightPx; v += stepPx) {
-    pixels.emplace_back(k.widthPx - 1, v);
+  for (int v = 0; v < k.height_px; v += step_px) {
+    pixels.emplace_back(k.width_px - 1, v);
   }
-  for (int u = 0; u < k.widthPx; u += stepPx) {
-    pixels.emplace_back(u, k.heightPx - 1);
+  for (int u = 0; u < k.width_px; u += step_px) {
+    pixels.emplace_back(u, k.height_px - 1);
   }
-  pixels.emplace_back(k.widthPx - 1, k.heightPx - 1);
+  pixels.emplace_back(k.width_px - 1, k.height_px - 1);
   return pixels;
 }
 
@@ -111,13 +111,13 @@ TEST(CameraModelInit, RejectsInvalidValuesNamingTheField) {
     mutate(c.intrinsics, c.distortion);
     cases.push_back(c);
   };
-  add([](Intrinsics& k, Distortion&) { k.fxPx = -3.0; }, "fx_px must be > 0, got -3");
-  add([](Intrinsics& k, Distortion&) { k.fyPx = 0.0; }, "fy_px must be > 0, got 0");
-  add([&](Intrinsics& k, Distortion&) { k.fxPx = nan; }, "fx_px must be finite, got nan");
-  add([](Intrinsics& k, Distortion&) { k.widthPx = 0; }, "width_px must be > 0, got 0");
-  add([](Intrinsics& k, Distortion&) { k.heightPx = -5; }, "height_px must be > 0, got -5");
-  add([&](Intrinsics& k, Distortion&) { k.cxPx = nan; }, "cx_px must be finite, got nan");
-  add([&](Intrinsics& k, Distortion&) { k.cyPx = inf; }, "cy_px must be finite, got inf");
+  add([](Intrinsics& k, Distortion&) { k.fx_px = -3.0; }, "fx_px must be > 0, got -3");
+  add([](Intrinsics& k, Distortion&) { k.fy_px = 0.0; }, "fy_px must be > 0, got 0");
+  add([&](Intrinsics& k, Distortion&) { k.fx_px = nan; }, "fx_px must be finite, got nan");
+  add([](Intrinsics& k, Distortion&) { k.width_px = 0; }, "width_px must be > 0, got 0");
+  add([](Intrinsics& k, Distortion&) { k.height_px = -5; }, "height_px must be > 0, got -5");
+  add([&](Intrinsics& k, Distortion&) { k.cx_px = nan; }, "cx_px must be finite, got nan");
+  add([&](Intrinsics& k, Distortion&) { k.cy_px = inf; }, "cy_px must be finite, got inf");
   add([&](Intrinsics&, Distortion& d) { d.k1 = inf; }, "k1 must be finite, got inf");
   add([&](Intrinsics&, Distortion& d) { d.p2 = nan; }, "p2 must be finite, got nan");
   add([&](Intrinsics&, Distortion& d) { d.k3 = -inf; }, "k3 must be finite, got -inf");
@@ -134,16 +134,16 @@ TEST(CameraModelInit, RejectsInvalidValuesNamingTheField) {
 TEST(CameraModelInit, FailedInitKeepsThePreviousModel) {
   CameraModel camera = brownConradyCamera();
   Intrinsics bad = sensorIntrinsics();
-  bad.fxPx = -1.0;
+  bad.fx_px = -1.0;
   EXPECT_FALSE(camera.init(bad, realisticBrownConrady()));
-  EXPECT_EQ(camera.intrinsics().fxPx, 2900.0);
+  EXPECT_EQ(camera.intrinsics().fx_px, 2900.0);
   EXPECT_EQ(camera.distortion().model, LensModel::BrownConrady);
 }
 
 TEST(CameraModelInit, AcceptsPrincipalPointOutsideTheImage) {
   Intrinsics k = sensorIntrinsics();
-  k.cxPx = -200.0;
-  k.cyPx = 3000.0;
+  k.cx_px = -200.0;
+  k.cy_px = 3000.0;
   CameraModel camera;
   EXPECT_TRUE(camera.init(k, realisticBrownConrady()));
 }
@@ -162,24 +162,24 @@ TEST(BrownConrady, DistortionMatchesProjectPoints) {
   cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cameraMatrix(k),
                     coefficients(camera.distortion()), expected);
 
-  double maxErrorPx = 0.0;
+  double maxError_px = 0.0;
   for (size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d p(points[i].x, points[i].y, points[i].z);
     const auto projected = camera.projectToPixel(p);
     ASSERT_TRUE(projected.hasValue()) << i;
     const Eigen::Vector2d cvPixel(expected[i].x, expected[i].y);
-    maxErrorPx = std::max(maxErrorPx, (*projected - cvPixel).norm());
+    maxError_px = std::max(maxError_px, (*projected - cvPixel).norm());
 
     const Eigen::Vector2d distorted = camera.distortNormalized(p.head<2>() / p.z());
-    const Eigen::Vector2d viaNormalized(k.cxPx + k.fxPx * distorted.x(),
-                                        k.cyPx + k.fyPx * distorted.y());
-    maxErrorPx = std::max(maxErrorPx, (viaNormalized - cvPixel).norm());
+    const Eigen::Vector2d viaNormalized(k.cx_px + k.fx_px * distorted.x(),
+                                        k.cy_px + k.fy_px * distorted.y());
+    maxError_px = std::max(maxError_px, (viaNormalized - cvPixel).norm());
 
-    const Eigen::Vector2d idealPixel(k.cxPx + k.fxPx * p.x() / p.z(),
-                                     k.cyPx + k.fyPx * p.y() / p.z());
-    maxErrorPx = std::max(maxErrorPx, (camera.distortPixel(idealPixel) - cvPixel).norm());
+    const Eigen::Vector2d idealPixel(k.cx_px + k.fx_px * p.x() / p.z(),
+                                     k.cy_px + k.fy_px * p.y() / p.z());
+    maxError_px = std::max(maxError_px, (camera.distortPixel(idealPixel) - cvPixel).norm());
   }
-  EXPECT_LT(maxErrorPx, 1e-6);
+  EXPECT_LT(maxError_px, 1e-6);
 }
 
 TEST(BrownConrady, UndistortionMatchesUndistortPoints) {
@@ -198,32 +198,32 @@ TEST(BrownConrady, UndistortionMatchesUndistortPoints) {
       distorted, expected, cameraMatrix(k), coefficients(camera.distortion()), cv::noArray(),
       cameraMatrix(k),
       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 1000, 1e-12));
-  double maxErrorPx = 0.0;
+  double maxError_px = 0.0;
   for (size_t i = 0; i < grid.size(); ++i) {
     const auto ideal = camera.undistortPixel(grid[i]);
     ASSERT_TRUE(ideal.hasValue()) << grid[i].transpose();
-    maxErrorPx =
-        std::max(maxErrorPx, (*ideal - Eigen::Vector2d(expected[i].x, expected[i].y)).norm());
+    maxError_px =
+        std::max(maxError_px, (*ideal - Eigen::Vector2d(expected[i].x, expected[i].y)).norm());
   }
-  EXPECT_LT(maxErrorPx, 1e-6);
+  EXPECT_LT(maxError_px, 1e-6);
 }
 
 // Acceptance: undistort then re-distort returns the point within 0.01 px for both lens
 // models, everywhere in the image.
 void expectDistortedRoundTrip(const CameraModel& camera, const char* label) {
-  double maxErrorPx = 0.0;
+  double maxError_px = 0.0;
   int count = 0;
   for (const Eigen::Vector2d& pixel : pixelGrid(camera.intrinsics(), 16)) {
     const auto ideal = camera.undistortPixel(pixel);
     ASSERT_TRUE(ideal.hasValue()) << label << " at " << pixel.transpose() << ": "
                                   << toString(ideal.error());
-    maxErrorPx = std::max(maxErrorPx, (camera.distortPixel(*ideal) - pixel).norm());
+    maxError_px = std::max(maxError_px, (camera.distortPixel(*ideal) - pixel).norm());
     ++count;
   }
   std::printf("[ %s ] undistort->distort over %d pixels: max error %.3g px\n", label, count,
-              maxErrorPx);
-  EXPECT_LT(maxErrorPx, 0.01);
-  EXPECT_LT(maxErrorPx, 1e-6);  // what the Newton tolerance actually delivers
+              maxError_px);
+  EXPECT_LT(maxError_px, 0.01);
+  EXPECT_LT(maxError_px, 1e-6);  // what the Newton tolerance actually delivers
 }
 
 TEST(RoundTrip, UndistortThenDistortBrownConrady) {
@@ -235,18 +235,18 @@ TEST(RoundTrip, UndistortThenDistortEquivalentSpherical) {
 }
 
 void expectIdealRoundTrip(const CameraModel& camera, const char* label) {
-  double maxErrorPx = 0.0;
+  double maxError_px = 0.0;
   int count = 0;
   for (const Eigen::Vector2d& idealPixel : pixelGrid(camera.intrinsics(), 16)) {
     const Eigen::Vector2d distorted = camera.distortPixel(idealPixel);
     const auto back = camera.undistortPixel(distorted);
     ASSERT_TRUE(back.hasValue()) << label << " at " << idealPixel.transpose();
-    maxErrorPx = std::max(maxErrorPx, (*back - idealPixel).norm());
+    maxError_px = std::max(maxError_px, (*back - idealPixel).norm());
     ++count;
   }
   std::printf("[ %s ] distort->undistort over %d pixels: max error %.3g px\n", label, count,
-              maxErrorPx);
-  EXPECT_LT(maxErrorPx, 1e-6);
+              maxError_px);
+  EXPECT_LT(maxError_px, 1e-6);
 }
 
 TEST(RoundTrip, DistortThenUndistortBrownConrady) {
@@ -259,7 +259,7 @@ TEST(RoundTrip, DistortThenUndistortEquivalentSpherical) {
 
 TEST(RoundTrip, RayThenProject) {
   for (const CameraModel& camera : {brownConradyCamera(), sphericalCamera()}) {
-    double maxErrorPx = 0.0;
+    double maxError_px = 0.0;
     for (const Eigen::Vector2d& pixel : pixelGrid(camera.intrinsics(), 128)) {
       const auto ray = camera.pixelToRay(pixel);
       ASSERT_TRUE(ray.hasValue());
@@ -267,16 +267,16 @@ TEST(RoundTrip, RayThenProject) {
       EXPECT_GT(ray->z(), 0.0);
       const auto back = camera.projectToPixel(*ray * 37.5);  // any depth along the ray
       ASSERT_TRUE(back.hasValue());
-      maxErrorPx = std::max(maxErrorPx, (*back - pixel).norm());
+      maxError_px = std::max(maxError_px, (*back - pixel).norm());
     }
-    EXPECT_LT(maxErrorPx, 1e-6) << toString(camera.distortion().model);
+    EXPECT_LT(maxError_px, 1e-6) << toString(camera.distortion().model);
   }
 }
 
 TEST(RoundTrip, PrincipalPointIsTheOpticalAxis) {
   for (const CameraModel& camera : {brownConradyCamera(), sphericalCamera()}) {
     const Intrinsics& k = camera.intrinsics();
-    const auto ray = camera.pixelToRay({k.cxPx, k.cyPx});
+    const auto ray = camera.pixelToRay({k.cx_px, k.cy_px});
     ASSERT_TRUE(ray.hasValue());
     EXPECT_LT((*ray - Eigen::Vector3d::UnitZ()).norm(), 1e-12);
   }
@@ -285,17 +285,17 @@ TEST(RoundTrip, PrincipalPointIsTheOpticalAxis) {
 // The seed's formula in pixels, with the centre at the principal point and f = fx = fy.
 TEST(EquivalentSpherical, MatchesSeedPixelFormula) {
   Intrinsics k = sensorIntrinsics();
-  k.fxPx = 1500.0;
-  k.fyPx = 1500.0;
+  k.fx_px = 1500.0;
+  k.fy_px = 1500.0;
   Distortion d;
   d.model = LensModel::EquivalentSpherical;
   CameraModel camera;
   ASSERT_TRUE(camera.init(k, d));
-  const double f = k.fxPx;
+  const double f = k.fx_px;
   for (double l1 : {0.0, 1.0, 100.0, 500.0, 1000.0, 1500.0, 2000.0}) {
     for (double angle : {0.0, 0.7, 2.0, -2.5}) {
       const Eigen::Vector2d direction(std::cos(angle), std::sin(angle));
-      const Eigen::Vector2d centre(k.cxPx, k.cyPx);
+      const Eigen::Vector2d centre(k.cx_px, k.cy_px);
       const auto ideal = camera.undistortPixel(centre + l1 * direction);
       ASSERT_TRUE(ideal.hasValue()) << l1;
       const double l2 = f * std::tan(2.0 * std::asin(l1 / (2.0 * f)));
@@ -310,16 +310,16 @@ TEST(EquivalentSpherical, MatchesSeedPixelFormula) {
     }
   }
   // Spot values: L1 = f gives 2 asin(1/2) = 60 deg, so L2 = f tan(60 deg).
-  const auto sixtyDeg = camera.undistortPixel({k.cxPx + f, k.cyPx});
-  ASSERT_TRUE(sixtyDeg.hasValue());
-  EXPECT_NEAR(sixtyDeg->x() - k.cxPx, f * std::sqrt(3.0), 1e-9);
+  const auto sixty_deg = camera.undistortPixel({k.cx_px + f, k.cy_px});
+  ASSERT_TRUE(sixty_deg.hasValue());
+  EXPECT_NEAR(sixty_deg->x() - k.cx_px, f * std::sqrt(3.0), 1e-9);
 }
 
 TEST(EquivalentSpherical, AnisotropicFocalUsesNormalisedRadius) {
   const CameraModel camera = sphericalCamera();
   const Intrinsics& k = camera.intrinsics();
-  const Eigen::Vector2d pixel(k.cxPx + 900.0, k.cyPx - 700.0);
-  const Eigen::Vector2d xd((pixel.x() - k.cxPx) / k.fxPx, (pixel.y() - k.cyPx) / k.fyPx);
+  const Eigen::Vector2d pixel(k.cx_px + 900.0, k.cy_px - 700.0);
+  const Eigen::Vector2d xd((pixel.x() - k.cx_px) / k.fx_px, (pixel.y() - k.cy_px) / k.fy_px);
   const double rd = xd.norm();
   const Eigen::Vector2d expected = xd * (std::tan(2.0 * std::asin(rd / 2.0)) / rd);
   const auto ideal = camera.undistortToNormalized(pixel);
@@ -338,7 +338,7 @@ TEST(EquivalentSpherical, ValidFieldEndsShortOfNinetyDegrees) {
   EXPECT_GT(camera.maxDistortedRadius(), std::sqrt(2.0) - 1e-3);
   // Distorted radius sqrt(2) is exactly 90 deg off-axis, and beyond that nothing exists.
   for (double rd : {std::sqrt(2.0), 1.5, 3.0}) {
-    const auto ideal = camera.undistortPixel({k.cxPx + rd * k.fxPx, k.cyPx});
+    const auto ideal = camera.undistortPixel({k.cx_px + rd * k.fx_px, k.cy_px});
     ASSERT_FALSE(ideal.hasValue()) << rd;
     EXPECT_EQ(ideal.error(), CameraError::OutsideValidField);
   }
@@ -354,7 +354,7 @@ TEST(EquivalentSpherical, ValidFieldEndsShortOfNinetyDegrees) {
 TEST(BrownConrady, ValidFieldStopsAtTheFoldOver) {
   // r (1 - 0.3 r^2) has its maximum at r = 1/sqrt(0.9), well inside 3x the corner radius.
   Intrinsics k = sensorIntrinsics();
-  k.fxPx = k.fyPx = 1000.0;
+  k.fx_px = k.fy_px = 1000.0;
   Distortion d;
   d.model = LensModel::BrownConrady;
   d.k1 = -0.3;
@@ -372,21 +372,21 @@ TEST(BrownConrady, ValidFieldStopsAtTheFoldOver) {
   EXPECT_TRUE(camera.projectToPixel({1.0, 0.0, 1.0}).hasValue());
 
   // Distorted radius beyond the polynomial's maximum has no preimage at all.
-  const auto ideal = camera.undistortPixel({k.cxPx + 0.75 * k.fxPx, k.cyPx});
+  const auto ideal = camera.undistortPixel({k.cx_px + 0.75 * k.fx_px, k.cy_px});
   ASSERT_FALSE(ideal.hasValue());
   EXPECT_EQ(ideal.error(), CameraError::OutsideValidField);
   // Just inside, the solution is on the monotonic branch and round-trips.
-  const Eigen::Vector2d inside(k.cxPx + 0.70 * k.fxPx, k.cyPx);
+  const Eigen::Vector2d inside(k.cx_px + 0.70 * k.fx_px, k.cy_px);
   const auto near = camera.undistortPixel(inside);
   ASSERT_TRUE(near.hasValue());
-  EXPECT_LE((*near - Eigen::Vector2d(k.cxPx, k.cyPx)).norm() / k.fxPx, foldRadius);
+  EXPECT_LE((*near - Eigen::Vector2d(k.cx_px, k.cy_px)).norm() / k.fx_px, foldRadius);
   EXPECT_LT((camera.distortPixel(*near) - inside).norm(), 1e-6);
 }
 
 TEST(BrownConrady, MonotonicLensHasFieldBeyondTheImage) {
   const CameraModel camera = brownConradyCamera();
   const Intrinsics& k = camera.intrinsics();
-  const double cornerRadius = std::hypot(k.cxPx / k.fxPx, k.cyPx / k.fyPx);
+  const double cornerRadius = std::hypot(k.cx_px / k.fx_px, k.cy_px / k.fy_px);
   EXPECT_GT(camera.maxIdealRadius(), 1.5 * cornerRadius);
   EXPECT_GT(camera.maxDistortedRadius(), 1.5 * cornerRadius);
 }
@@ -448,8 +448,8 @@ TEST(Pinhole, IdentityDistortion) {
   const auto projected = camera.projectToPixel({2.0, -1.0, 4.0});
   ASSERT_TRUE(projected.hasValue());
   const Intrinsics& k = camera.intrinsics();
-  EXPECT_NEAR(projected->x(), k.cxPx + k.fxPx * 0.5, 1e-9);
-  EXPECT_NEAR(projected->y(), k.cyPx - k.fyPx * 0.25, 1e-9);
+  EXPECT_NEAR(projected->x(), k.cx_px + k.fx_px * 0.5, 1e-9);
+  EXPECT_NEAR(projected->y(), k.cy_px - k.fy_px * 0.25, 1e-9);
   // The pinhole has no field limit in front of the camera.
   EXPECT_TRUE(camera.projectToPixel({1e6, 0.0, 1.0}).hasValue());
 }

@@ -12,14 +12,14 @@
 namespace vp::camera {
 namespace {
 
-Intrinsics smallIntrinsics(double focalPx) {
+Intrinsics smallIntrinsics(double focal_px) {
   Intrinsics k;
-  k.widthPx = 640;
-  k.heightPx = 512;
-  k.fxPx = focalPx;
-  k.fyPx = focalPx * 1.004;
-  k.cxPx = 321.7;
-  k.cyPx = 254.2;
+  k.width_px = 640;
+  k.height_px = 512;
+  k.fx_px = focal_px;
+  k.fy_px = focal_px * 1.004;
+  k.cx_px = 321.7;
+  k.cy_px = 254.2;
   return k;
 }
 
@@ -56,10 +56,10 @@ double texture(const Eigen::Vector2d& normalised) {
 
 // What an ideal pinhole camera with intrinsics k sees.
 cv::Mat renderIdeal(const Intrinsics& k) {
-  cv::Mat image(k.heightPx, k.widthPx, CV_8UC1);
-  for (int v = 0; v < k.heightPx; ++v) {
-    for (int u = 0; u < k.widthPx; ++u) {
-      const Eigen::Vector2d xy((u - k.cxPx) / k.fxPx, (v - k.cyPx) / k.fyPx);
+  cv::Mat image(k.height_px, k.width_px, CV_8UC1);
+  for (int v = 0; v < k.height_px; ++v) {
+    for (int u = 0; u < k.width_px; ++u) {
+      const Eigen::Vector2d xy((u - k.cx_px) / k.fx_px, (v - k.cy_px) / k.fy_px);
       image.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(texture(xy));
     }
   }
@@ -72,32 +72,32 @@ cv::Mat renderIdeal(const Intrinsics& k) {
 cv::Mat renderDistorted(const CameraModel& camera) {
   const Intrinsics& k = camera.intrinsics();
   std::vector<cv::Point2d> pixels;
-  pixels.reserve(static_cast<size_t>(k.widthPx) * k.heightPx);
-  for (int v = 0; v < k.heightPx; ++v) {
-    for (int u = 0; u < k.widthPx; ++u) {
+  pixels.reserve(static_cast<size_t>(k.width_px) * k.height_px);
+  for (int v = 0; v < k.height_px; ++v) {
+    for (int u = 0; u < k.width_px; ++u) {
       pixels.emplace_back(u, v);
     }
   }
   std::vector<cv::Point2d> normalised;
   const Distortion& d = camera.distortion();
   if (d.model == LensModel::BrownConrady) {
-    const cv::Matx33d cameraMatrix(k.fxPx, 0.0, k.cxPx, 0.0, k.fyPx, k.cyPx, 0.0, 0.0, 1.0);
+    const cv::Matx33d cameraMatrix(k.fx_px, 0.0, k.cx_px, 0.0, k.fy_px, k.cy_px, 0.0, 0.0, 1.0);
     cv::undistortPoints(
         pixels, normalised, cameraMatrix, cv::Vec<double, 5>(d.k1, d.k2, d.p1, d.p2, d.k3),
         cv::noArray(), cv::noArray(),
         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-6));
   } else {
     for (const cv::Point2d& p : pixels) {
-      const cv::Point2d xd((p.x - k.cxPx) / k.fxPx, (p.y - k.cyPx) / k.fyPx);
+      const cv::Point2d xd((p.x - k.cx_px) / k.fx_px, (p.y - k.cy_px) / k.fy_px);
       const double rd = std::hypot(xd.x, xd.y);
       const double scale = rd > 0.0 ? std::tan(2.0 * std::asin(rd / 2.0)) / rd : 1.0;
       normalised.push_back(xd * scale);
     }
   }
-  cv::Mat image(k.heightPx, k.widthPx, CV_8UC1);
-  for (int v = 0; v < k.heightPx; ++v) {
-    for (int u = 0; u < k.widthPx; ++u) {
-      const cv::Point2d& xy = normalised[static_cast<size_t>(v) * k.widthPx + u];
+  cv::Mat image(k.height_px, k.width_px, CV_8UC1);
+  for (int v = 0; v < k.height_px; ++v) {
+    for (int u = 0; u < k.width_px; ++u) {
+      const cv::Point2d& xy = normalised[static_cast<size_t>(v) * k.width_px + u];
       image.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(texture({xy.x, xy.y}));
     }
   }
@@ -116,12 +116,12 @@ Comparison compareInterior(const CameraModel& camera, const Intrinsics& out,
                            const cv::Mat& undistorted, const cv::Mat& ideal) {
   Comparison c;
   double sum = 0.0;
-  for (int v = 0; v < out.heightPx; ++v) {
-    for (int u = 0; u < out.widthPx; ++u) {
-      const Eigen::Vector2d xy((u - out.cxPx) / out.fxPx, (v - out.cyPx) / out.fyPx);
+  for (int v = 0; v < out.height_px; ++v) {
+    for (int u = 0; u < out.width_px; ++u) {
+      const Eigen::Vector2d xy((u - out.cx_px) / out.fx_px, (v - out.cy_px) / out.fy_px);
       const Eigen::Vector2d source =
-          camera.distortPixel({camera.intrinsics().cxPx + camera.intrinsics().fxPx * xy.x(),
-                               camera.intrinsics().cyPx + camera.intrinsics().fyPx * xy.y()});
+          camera.distortPixel({camera.intrinsics().cx_px + camera.intrinsics().fx_px * xy.x(),
+                               camera.intrinsics().cy_px + camera.intrinsics().fy_px * xy.y()});
       if (!camera.inImage(source, 2.0)) {
         continue;
       }
@@ -139,7 +139,7 @@ void expectUndistortsToIdeal(const CameraModel& camera, const Intrinsics& out, c
   Undistorter undistorter;
   std::string why;
   ASSERT_TRUE(undistorter.init(camera, out, &why)) << why;
-  EXPECT_EQ(undistorter.outputSize(), cv::Size(out.widthPx, out.heightPx));
+  EXPECT_EQ(undistorter.outputSize(), cv::Size(out.width_px, out.height_px));
 
   const cv::Mat distorted = renderDistorted(camera);
   const cv::Mat ideal = renderIdeal(out);
@@ -151,7 +151,7 @@ void expectUndistortsToIdeal(const CameraModel& camera, const Intrinsics& out, c
   const Comparison after = compareInterior(camera, out, undistorted, ideal);
   std::printf("[ %s ] mean |diff| %.2f -> %.2f grey levels (max %.0f) over %d px\n", label,
               before.meanAbsDiff, after.meanAbsDiff, after.maxAbsDiff, after.pixels);
-  EXPECT_GT(after.pixels, out.widthPx * out.heightPx / 3);
+  EXPECT_GT(after.pixels, out.width_px * out.height_px / 3);
   EXPECT_LT(after.meanAbsDiff, 1.0);
   EXPECT_LT(after.maxAbsDiff, 8.0);  // bilinear + 1/32 px map quantisation at peak slopes
   EXPECT_GT(before.meanAbsDiff, 10.0 * after.meanAbsDiff);
@@ -171,11 +171,11 @@ TEST(Undistorter, ChosenOutputIntrinsics) {
   // A narrower, smaller output camera (zoom on the centre) for both models.
   for (const CameraModel& camera : {brownConradyCamera(), sphericalCamera()}) {
     Intrinsics out;
-    out.widthPx = 400;
-    out.heightPx = 300;
-    out.fxPx = out.fyPx = 1.3 * camera.intrinsics().fxPx;
-    out.cxPx = 199.5;
-    out.cyPx = 149.5;
+    out.width_px = 400;
+    out.height_px = 300;
+    out.fx_px = out.fy_px = 1.3 * camera.intrinsics().fx_px;
+    out.cx_px = 199.5;
+    out.cy_px = 149.5;
     expectUndistortsToIdeal(camera, out, toString(camera.distortion().model));
   }
 }
@@ -209,9 +209,9 @@ TEST(Undistorter, BlanksOutputBeyondTheFoldOver) {
   const Intrinsics& k = camera.intrinsics();
   int beyond = 0;
   int inside = 0;
-  for (int v = 0; v < k.heightPx; ++v) {
-    for (int u = 0; u < k.widthPx; ++u) {
-      const double r = std::hypot((u - k.cxPx) / k.fxPx, (v - k.cyPx) / k.fyPx);
+  for (int v = 0; v < k.height_px; ++v) {
+    for (int u = 0; u < k.width_px; ++u) {
+      const double r = std::hypot((u - k.cx_px) / k.fx_px, (v - k.cy_px) / k.fy_px);
       if (r > camera.maxIdealRadius() + 0.01) {
         EXPECT_EQ(dst.at<uint8_t>(v, u), 0) << u << "," << v;
         ++beyond;
@@ -280,11 +280,11 @@ TEST(Undistorter, InitValidatesOutput) {
   Undistorter undistorter;
   std::string why;
   Intrinsics out = camera.intrinsics();
-  out.widthPx = 0;
+  out.width_px = 0;
   EXPECT_FALSE(undistorter.init(camera, out, &why));
   EXPECT_NE(why.find("output size"), std::string::npos) << why;
   out = camera.intrinsics();
-  out.fyPx = -1.0;
+  out.fy_px = -1.0;
   EXPECT_FALSE(undistorter.init(camera, out, &why));
   EXPECT_NE(why.find("fy_px"), std::string::npos) << why;
   EXPECT_FALSE(undistorter.init(CameraModel{}, &why));

@@ -246,17 +246,17 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
   EXPECT_TRUE(config.warnings.empty()) << config.warnings.front();
   EXPECT_EQ(config.sourcePath, path);
 
-  EXPECT_DOUBLE_EQ(config.origin.latitudeDeg, 43.0731);
-  EXPECT_DOUBLE_EQ(config.origin.longitudeDeg, -89.4012);
-  EXPECT_DOUBLE_EQ(config.origin.heightM, 260.0);
+  EXPECT_DOUBLE_EQ(config.origin.latitude_deg, 43.0731);
+  EXPECT_DOUBLE_EQ(config.origin.longitude_deg, -89.4012);
+  EXPECT_DOUBLE_EQ(config.origin.height_m, 260.0);
 
   const camera::Intrinsics& in = config.camera.intrinsics;
-  EXPECT_EQ(in.widthPx, 2592);
-  EXPECT_EQ(in.heightPx, 2048);
-  EXPECT_DOUBLE_EQ(in.fxPx, 2900.0);
-  EXPECT_DOUBLE_EQ(in.fyPx, 2900.0);
-  EXPECT_DOUBLE_EQ(in.cxPx, 1295.5);
-  EXPECT_DOUBLE_EQ(in.cyPx, 1023.5);
+  EXPECT_EQ(in.width_px, 2592);
+  EXPECT_EQ(in.height_px, 2048);
+  EXPECT_DOUBLE_EQ(in.fx_px, 2900.0);
+  EXPECT_DOUBLE_EQ(in.fy_px, 2900.0);
+  EXPECT_DOUBLE_EQ(in.cx_px, 1295.5);
+  EXPECT_DOUBLE_EQ(in.cy_px, 1023.5);
   const camera::Distortion& lens = config.camera.distortion;
   EXPECT_EQ(lens.model, camera::LensModel::BrownConrady);
   EXPECT_DOUBLE_EQ(lens.k1, -0.12);
@@ -265,14 +265,14 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
   EXPECT_DOUBLE_EQ(lens.p2, -0.0002);
   EXPECT_DOUBLE_EQ(lens.k3, -0.01);
 
-  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.rollDeg, 0.0);
-  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.pitchDeg, 0.0);
-  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.yawDeg, 0.0);
-  EXPECT_EQ(config.mount.mount.leverArmM, Eigen::Vector3d(0.0, 0.0, 0.1));
+  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.roll_deg, 0.0);
+  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.pitch_deg, 0.0);
+  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.yaw_deg, 0.0);
+  EXPECT_EQ(config.mount.mount.leverArm_m, Eigen::Vector3d(0.0, 0.0, 0.1));
   EXPECT_EQ(config.mount.gimbal.reference, geodesy::GimbalReference::Body);
-  EXPECT_DOUBLE_EQ(config.mount.gimbal.angles.rollDeg, 0.0);
-  EXPECT_DOUBLE_EQ(config.mount.gimbal.angles.pitchDeg, -90.0);
-  EXPECT_DOUBLE_EQ(config.mount.gimbal.angles.yawDeg, 0.0);
+  EXPECT_DOUBLE_EQ(config.mount.gimbal.angles.roll_deg, 0.0);
+  EXPECT_DOUBLE_EQ(config.mount.gimbal.angles.pitch_deg, -90.0);
+  EXPECT_DOUBLE_EQ(config.mount.gimbal.angles.yaw_deg, 0.0);
 
   const fs::path dtm =
       (fs::path(VP_SOURCE_DIR) / "tests/fixtures/dtm/sloped_utm16n.tif").lexically_normal();
@@ -340,12 +340,12 @@ TEST(ConfigDefaults, RequiredKeysOnlyGetTheDocumentedDefaults) {
   EXPECT_EQ(config.sourcePath, kSource);
 
   const camera::Intrinsics& in = config.camera.intrinsics;
-  EXPECT_EQ(in.widthPx, 640);
-  EXPECT_EQ(in.heightPx, 480);
-  EXPECT_DOUBLE_EQ(in.fxPx, 500.0);
-  EXPECT_DOUBLE_EQ(in.fyPx, 501.0);
-  EXPECT_DOUBLE_EQ(in.cxPx, 319.5);  // (width_px - 1) / 2
-  EXPECT_DOUBLE_EQ(in.cyPx, 239.5);  // (height_px - 1) / 2
+  EXPECT_EQ(in.width_px, 640);
+  EXPECT_EQ(in.height_px, 480);
+  EXPECT_DOUBLE_EQ(in.fx_px, 500.0);
+  EXPECT_DOUBLE_EQ(in.fy_px, 501.0);
+  EXPECT_DOUBLE_EQ(in.cx_px, 319.5);  // (width_px - 1) / 2
+  EXPECT_DOUBLE_EQ(in.cy_px, 239.5);  // (height_px - 1) / 2
   const camera::Distortion& lens = config.camera.distortion;
   EXPECT_EQ(lens.model, camera::LensModel::Pinhole);
   EXPECT_EQ(lens.k1, 0.0);
@@ -354,14 +354,14 @@ TEST(ConfigDefaults, RequiredKeysOnlyGetTheDocumentedDefaults) {
   EXPECT_EQ(lens.p2, 0.0);
   EXPECT_EQ(lens.k3, 0.0);
 
-  EXPECT_EQ(config.mount.mount.bodyToBase.rollDeg, 0.0);
-  EXPECT_EQ(config.mount.mount.bodyToBase.pitchDeg, 0.0);
-  EXPECT_EQ(config.mount.mount.bodyToBase.yawDeg, 0.0);
-  EXPECT_EQ(config.mount.mount.leverArmM, Eigen::Vector3d::Zero());
+  EXPECT_EQ(config.mount.mount.bodyToBase.roll_deg, 0.0);
+  EXPECT_EQ(config.mount.mount.bodyToBase.pitch_deg, 0.0);
+  EXPECT_EQ(config.mount.mount.bodyToBase.yaw_deg, 0.0);
+  EXPECT_EQ(config.mount.mount.leverArm_m, Eigen::Vector3d::Zero());
   EXPECT_EQ(config.mount.gimbal.reference, geodesy::GimbalReference::Body);
-  EXPECT_EQ(config.mount.gimbal.angles.rollDeg, 0.0);
-  EXPECT_EQ(config.mount.gimbal.angles.pitchDeg, -90.0);  // nadir
-  EXPECT_EQ(config.mount.gimbal.angles.yawDeg, 0.0);
+  EXPECT_EQ(config.mount.gimbal.angles.roll_deg, 0.0);
+  EXPECT_EQ(config.mount.gimbal.angles.pitch_deg, -90.0);  // nadir
+  EXPECT_EQ(config.mount.gimbal.angles.yaw_deg, 0.0);
 
   EXPECT_EQ(config.terrain.dtmPath, "/data/site/dtm.tif");
   EXPECT_FALSE(config.terrain.crs.has_value());  // auto
@@ -370,10 +370,10 @@ TEST(ConfigDefaults, RequiredKeysOnlyGetTheDocumentedDefaults) {
 TEST(ConfigValues, FullConfigReadsEveryKey) {
   const AppConfig config = parse(kFullConfig);
   EXPECT_TRUE(config.warnings.empty());
-  EXPECT_DOUBLE_EQ(config.camera.intrinsics.fyPx, 2910.0);
-  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.rollDeg, 1.0);
-  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.pitchDeg, 2.0);
-  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.yawDeg, 3.0);
+  EXPECT_DOUBLE_EQ(config.camera.intrinsics.fy_px, 2910.0);
+  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.roll_deg, 1.0);
+  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.pitch_deg, 2.0);
+  EXPECT_DOUBLE_EQ(config.mount.mount.bodyToBase.yaw_deg, 3.0);
   ASSERT_TRUE(config.terrain.crs.has_value());
   EXPECT_EQ(config.terrain.crs->kind, terrain::HorizontalCrs::Utm);
   EXPECT_EQ(config.terrain.crs->utmZone, 16);
@@ -392,7 +392,7 @@ TEST(ConfigValues, OtherEnumValuesAndNumberSpellings) {
   EXPECT_EQ(config.mount.gimbal.reference, geodesy::GimbalReference::Earth);
   ASSERT_TRUE(config.terrain.crs.has_value());
   EXPECT_EQ(config.terrain.crs->kind, terrain::HorizontalCrs::Wgs84Geographic);
-  EXPECT_DOUBLE_EQ(config.camera.intrinsics.fxPx, 2900.0);
+  EXPECT_DOUBLE_EQ(config.camera.intrinsics.fx_px, 2900.0);
   ASSERT_EQ(config.warnings.size(), 1U);  // the renamed distortion section
   EXPECT_EQ(config.warnings[0], "site.yaml: unknown key 'camera.x_distortion'");
 }
@@ -1016,7 +1016,7 @@ TEST(ConfigWarnings, UnknownKeysAtEveryLevelAreNamedButNotFatal) {
       "site.yaml: unknown key 'logging'",  // a whole unknown section is one warning
   };
   EXPECT_EQ(config.warnings, expected);
-  EXPECT_DOUBLE_EQ(config.camera.intrinsics.fxPx, 2900.0);
+  EXPECT_DOUBLE_EQ(config.camera.intrinsics.fx_px, 2900.0);
 }
 
 TEST(ConfigWarnings, DistortionWithAnotherLensModelIsIgnoredWithAWarning) {
@@ -1256,16 +1256,16 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_TRUE(pre.whiteBalance);
   EXPECT_EQ(pre.whiteBalanceOptions.regionRows, 2);
   EXPECT_EQ(pre.whiteBalanceOptions.regionCols, 5);
-  EXPECT_EQ(pre.whiteBalanceOptions.sampleStridePx, 8);
+  EXPECT_EQ(pre.whiteBalanceOptions.sampleStride_px, 8);
   EXPECT_DOUBLE_EQ(pre.whiteBalanceOptions.whitePointShare, 0.2);
   EXPECT_DOUBLE_EQ(pre.whiteBalanceOptions.maxGain, 3.0);
   EXPECT_DOUBLE_EQ(pre.workingScale, 0.5);
-  EXPECT_EQ(pre.tileOverlapPx, 64);
+  EXPECT_EQ(pre.tileOverlap_px, 64);
   EXPECT_FLOAT_EQ(det.decoder.scoreThreshold, 0.35F);
   EXPECT_EQ(det.decoder.topKPerTile, 100);
   EXPECT_DOUBLE_EQ(det.decoder.nmsIou, 0.45);
   EXPECT_DOUBLE_EQ(det.decoder.duplicateOverlap, 0.6);
-  EXPECT_DOUBLE_EQ(det.decoder.cutEdgeMarginPx, 5.0);
+  EXPECT_DOUBLE_EQ(det.decoder.cutEdgeMargin_px, 5.0);
   EXPECT_EQ(det.maxCrops, 64);
   EXPECT_FALSE(det.secondStage.applyFlip);
   EXPECT_FALSE(det.secondStage.applyRefine);
@@ -1276,7 +1276,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(det.gsd.fixedGsd_m, 0.03);
   EXPECT_DOUBLE_EQ(det.gsd.nominalCarLength_m, 4.4);
   EXPECT_DOUBLE_EQ(config.perception.lift.boxHeightShare, 0.4);
-  EXPECT_EQ(config.pose.maxAgeNs, 300'000'000);
+  EXPECT_EQ(config.pose.maxAge_ns, 300'000'000);
   EXPECT_EQ(config.pose.capacity, 128U);
   const tracking::TrackerConfig& t = config.tracking;
   EXPECT_EQ(t.maxTracks, 300);
@@ -1309,12 +1309,12 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_TRUE(src.loop);
   EXPECT_EQ(src.v4l2.device, "/dev/video2");
   EXPECT_EQ(src.v4l2.busInfo, "usb-0000:00:14.0-2");
-  EXPECT_EQ(src.v4l2.widthPx, 1920);
-  EXPECT_EQ(src.v4l2.heightPx, 1080);
+  EXPECT_EQ(src.v4l2.width_px, 1920);
+  EXPECT_EQ(src.v4l2.height_px, 1080);
   EXPECT_EQ(src.v4l2.formats,
             (std::vector<CameraPixelFormat>{CameraPixelFormat::Nv12, CameraPixelFormat::Yuyv}));
   EXPECT_EQ(src.v4l2.buffers, 6);
-  EXPECT_EQ(src.v4l2.dequeueTimeoutMs, 500);
+  EXPECT_EQ(src.v4l2.dequeueTimeout_ms, 500);
   const TelemetryLinkConfig& link = config.telemetry;
   EXPECT_EQ(link.source, TelemetrySourceKind::MavlinkUdp);
   EXPECT_EQ(link.udpBindAddress, "127.0.0.1");
@@ -1352,10 +1352,10 @@ TEST(ConfigLoop, AbsentSectionsGiveTheDocumentedDefaults) {
   EXPECT_FALSE(pre.undistort);
   EXPECT_FALSE(pre.whiteBalance);
   EXPECT_DOUBLE_EQ(pre.workingScale, 0.25);
-  EXPECT_EQ(pre.tileOverlapPx, 96);
+  EXPECT_EQ(pre.tileOverlap_px, 96);
   EXPECT_FLOAT_EQ(det.decoder.scoreThreshold, 0.4F);
   EXPECT_EQ(det.maxCrops, 512);
-  EXPECT_EQ(config.pose.maxAgeNs, 200'000'000);
+  EXPECT_EQ(config.pose.maxAge_ns, 200'000'000);
   EXPECT_EQ(config.pose.capacity, 256U);
   EXPECT_EQ(config.tracking.maxTracks, 256);
   EXPECT_EQ(config.tracking.confirmHits, 3);
@@ -1424,15 +1424,15 @@ TEST(RigConfig, ReadsTheRigSectionsAsTheWholeConfiguration) {
   const RigConfig rig = parseRig(kFullConfig);
   EXPECT_TRUE(rig.warnings.empty());
   EXPECT_EQ(rig.sourcePath, app.sourcePath);
-  EXPECT_EQ(rig.origin.latitudeDeg, app.origin.latitudeDeg);
-  EXPECT_EQ(rig.origin.heightM, app.origin.heightM);
-  EXPECT_EQ(rig.camera.intrinsics.fxPx, app.camera.intrinsics.fxPx);
-  EXPECT_EQ(rig.camera.intrinsics.cyPx, app.camera.intrinsics.cyPx);
+  EXPECT_EQ(rig.origin.latitude_deg, app.origin.latitude_deg);
+  EXPECT_EQ(rig.origin.height_m, app.origin.height_m);
+  EXPECT_EQ(rig.camera.intrinsics.fx_px, app.camera.intrinsics.fx_px);
+  EXPECT_EQ(rig.camera.intrinsics.cy_px, app.camera.intrinsics.cy_px);
   EXPECT_EQ(rig.camera.distortion.model, app.camera.distortion.model);
   EXPECT_EQ(rig.camera.distortion.k3, app.camera.distortion.k3);
-  EXPECT_EQ(rig.mount.mount.leverArmM, app.mount.mount.leverArmM);
+  EXPECT_EQ(rig.mount.mount.leverArm_m, app.mount.mount.leverArm_m);
   EXPECT_EQ(rig.mount.gimbal.reference, app.mount.gimbal.reference);
-  EXPECT_EQ(rig.mount.gimbal.angles.pitchDeg, app.mount.gimbal.angles.pitchDeg);
+  EXPECT_EQ(rig.mount.gimbal.angles.pitch_deg, app.mount.gimbal.angles.pitch_deg);
   EXPECT_EQ(rig.terrain.dtmPath, app.terrain.dtmPath);
   EXPECT_EQ(rig.terrain.crs.has_value(), app.terrain.crs.has_value());
 }

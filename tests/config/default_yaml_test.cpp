@@ -34,14 +34,14 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   const preprocess::WhiteBalanceOptions& wbCode = code.preprocess.whiteBalanceOptions;
   EXPECT_EQ(wb.regionRows, wbCode.regionRows);
   EXPECT_EQ(wb.regionCols, wbCode.regionCols);
-  EXPECT_EQ(wb.sampleStridePx, wbCode.sampleStridePx);
+  EXPECT_EQ(wb.sampleStride_px, wbCode.sampleStride_px);
   EXPECT_EQ(wb.whitePointShare, wbCode.whitePointShare);
   EXPECT_EQ(wb.minRegionDeviation, wbCode.minRegionDeviation);
   EXPECT_EQ(wb.maxGain, wbCode.maxGain);
   EXPECT_EQ(pre.workingScale, code.preprocess.workingScale);
-  EXPECT_EQ(pre.networkWidthPx, code.preprocess.networkWidthPx);
-  EXPECT_EQ(pre.networkHeightPx, code.preprocess.networkHeightPx);
-  EXPECT_EQ(pre.tileOverlapPx, code.preprocess.tileOverlapPx);
+  EXPECT_EQ(pre.networkWidth_px, code.preprocess.networkWidth_px);
+  EXPECT_EQ(pre.networkHeight_px, code.preprocess.networkHeight_px);
+  EXPECT_EQ(pre.tileOverlap_px, code.preprocess.tileOverlap_px);
   EXPECT_EQ(pre.padValue, code.preprocess.padValue);
   EXPECT_EQ(pre.threads, code.preprocess.threads);
 
@@ -61,7 +61,7 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(det.decoder.topKPerTile, detCode.decoder.topKPerTile);
   EXPECT_EQ(det.decoder.nmsIou, detCode.decoder.nmsIou);
   EXPECT_EQ(det.decoder.duplicateOverlap, detCode.decoder.duplicateOverlap);
-  EXPECT_EQ(det.decoder.cutEdgeMarginPx, detCode.decoder.cutEdgeMarginPx);
+  EXPECT_EQ(det.decoder.cutEdgeMargin_px, detCode.decoder.cutEdgeMargin_px);
   EXPECT_EQ(det.decoder.dropCentresOutsideFrame, detCode.decoder.dropCentresOutsideFrame);
   const detection::SecondStageOptions& second = det.secondStage;
   const detection::SecondStageOptions& secondCode = detCode.secondStage;
@@ -80,15 +80,15 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(det.maxCrops, detCode.maxCrops);
 
   EXPECT_EQ(file.lift.boxHeightShare, code.lift.boxHeightShare);
-  EXPECT_EQ(file.lift.nominalHeightM, code.lift.nominalHeightM);
+  EXPECT_EQ(file.lift.nominalHeight_m, code.lift.nominalHeight_m);
 }
 
 TEST(DefaultYaml, PoseIsThePoseBuffersDefaults) {
   const telemetry::PoseBufferConfig code;
   const telemetry::PoseBufferConfig file = shippedDefaults().pose;
   EXPECT_EQ(file.capacity, code.capacity);
-  EXPECT_EQ(file.maxAgeNs, code.maxAgeNs);
-  EXPECT_EQ(file.startToleranceNs, code.startToleranceNs);
+  EXPECT_EQ(file.maxAge_ns, code.maxAge_ns);
+  EXPECT_EQ(file.startTolerance_ns, code.startTolerance_ns);
 }
 
 TEST(DefaultYaml, TrackingIsTheTrackersDefaults) {

@@ -138,7 +138,7 @@ TEST(FrameChannel, CaptureAndPipelineThreadsHammeringIt) {
       }
       Frame& frame = pool.frame(*index);
       frame.frameId = id;
-      frame.timestampNs = id * 1000;
+      frame.timestamp_ns = id * 1000;
       frame.image.at<cv::Vec3b>(0, 0) = cv::Vec3b(static_cast<uchar>(id), 0, 0);
       channel.publish(*index);
       // First half: let the pipeline keep up most of the time (few drops); second half: a
@@ -161,7 +161,7 @@ TEST(FrameChannel, CaptureAndPipelineThreadsHammeringIt) {
     orderOk = orderOk && frame.frameId > lastId;
     contentOk = contentOk &&
                 frame.image.at<cv::Vec3b>(0, 0)[0] == static_cast<uchar>(frame.frameId) &&
-                frame.timestampNs == frame.frameId * 1000;
+                frame.timestamp_ns == frame.frameId * 1000;
     lastId = frame.frameId;
     seen[static_cast<std::size_t>(frame.frameId)] += 1;
     ++received;

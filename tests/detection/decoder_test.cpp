@@ -27,10 +27,10 @@ preprocess::TileView tileAt(int index, int x0, int y0, int width, int height, bo
                             bool innerRight) {
   preprocess::TileView tile;
   tile.index = index;
-  tile.rect.x0Px = x0;
-  tile.rect.y0Px = y0;
-  tile.rect.widthPx = width;
-  tile.rect.heightPx = height;
+  tile.rect.x0_px = x0;
+  tile.rect.y0_px = y0;
+  tile.rect.width_px = width;
+  tile.rect.height_px = height;
   tile.rect.innerLeft = innerLeft;
   tile.rect.innerRight = innerRight;
   return tile;
@@ -38,12 +38,12 @@ preprocess::TileView tileAt(int index, int x0, int y0, int width, int height, bo
 
 preprocess::FrameGeometry geometryFor(int frameW, int frameH, double scale) {
   preprocess::FrameGeometry g;
-  g.frameWidthPx = frameW;
-  g.frameHeightPx = frameH;
-  g.workingWidthPx = static_cast<int>(std::lround(frameW * scale));
-  g.workingHeightPx = static_cast<int>(std::lround(frameH * scale));
-  g.scaleX = static_cast<double>(g.workingWidthPx) / frameW;
-  g.scaleY = static_cast<double>(g.workingHeightPx) / frameH;
+  g.frameWidth_px = frameW;
+  g.frameHeight_px = frameH;
+  g.workingWidth_px = static_cast<int>(std::lround(frameW * scale));
+  g.workingHeight_px = static_cast<int>(std::lround(frameH * scale));
+  g.scaleX = static_cast<double>(g.workingWidth_px) / frameW;
+  g.scaleY = static_cast<double>(g.workingHeight_px) / frameH;
   return g;
 }
 

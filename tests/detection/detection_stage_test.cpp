@@ -23,12 +23,12 @@ const std::string kCropModel = std::string(VP_SOURCE_DIR) + "/models/detector/cr
 
 camera::CameraModel camera2592() {
   camera::Intrinsics k;
-  k.widthPx = 2592;
-  k.heightPx = 2048;
-  k.fxPx = 3000.0;  // ~3 cm/px at 90 m
-  k.fyPx = 3000.0;
-  k.cxPx = 1295.5;
-  k.cyPx = 1023.5;
+  k.width_px = 2592;
+  k.height_px = 2048;
+  k.fx_px = 3000.0;  // ~3 cm/px at 90 m
+  k.fy_px = 3000.0;
+  k.cx_px = 1295.5;
+  k.cy_px = 1023.5;
   camera::Distortion d;
   d.model = camera::LensModel::BrownConrady;
   d.k1 = -0.1;
@@ -77,7 +77,7 @@ TEST(DetectionStage, RunsTheShippedModelsOnAFullFrame) {
   ASSERT_TRUE(stage.init(stageOptions(1), static_cast<int>(pre.tileCount()), &why)) << why;
   EXPECT_EQ(stage.detectorInputWidth(), 672);
   EXPECT_EQ(stage.detectorInputHeight(), 512);
-  EXPECT_EQ(stage.stridePx(), 4);
+  EXPECT_EQ(stage.stride_px(), 4);
   const cv::Mat frame = sceneFrame();
   ASSERT_EQ(pre.process(frame), preprocess::PreprocessStatus::Ok);
   std::array<Detection, kMaxDetectionsPerFrame> out{};
@@ -272,9 +272,9 @@ TEST(DetectionStage, BadInputGivesStatuses) {
 
   // A frame preprocessed for another network size: wrong tiles.
   preprocess::PreprocessOptions small = undistorting();
-  small.networkWidthPx = 320;
-  small.networkHeightPx = 256;
-  small.tileOverlapPx = 64;
+  small.networkWidth_px = 320;
+  small.networkHeight_px = 256;
+  small.tileOverlap_px = 64;
   preprocess::Preprocessor pre;
   ASSERT_TRUE(pre.init(small, camera2592(), {2592, 2048}, &why)) << why;
   ASSERT_EQ(pre.process(sceneFrame()), preprocess::PreprocessStatus::Ok);

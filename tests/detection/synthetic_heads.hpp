@@ -12,10 +12,10 @@ namespace vp::detection::test {
 
 class SyntheticHeads {
  public:
-  SyntheticHeads(int gridWidth, int gridHeight, int stridePx = 4, float background = 0.01F)
+  SyntheticHeads(int gridWidth, int gridHeight, int stride_px = 4, float background = 0.01F)
       : width_(gridWidth),
         height_(gridHeight),
-        stride_(stridePx),
+        stride_(stride_px),
         heatmap_(static_cast<std::size_t>(gridWidth * gridHeight), background),
         offset_(static_cast<std::size_t>(2 * gridWidth * gridHeight), 0.0F),
         size_(static_cast<std::size_t>(2 * gridWidth * gridHeight), 0.0F),
@@ -64,7 +64,7 @@ class SyntheticHeads {
     h.direction = direction_.data();
     h.gridWidth = width_;
     h.gridHeight = height_;
-    h.stridePx = stride_;
+    h.stride_px = stride_;
     return h;
   }
 

@@ -40,18 +40,18 @@ bool crossesInnerEdge(const RotatedBox& box, const vp::preprocess::TileRect& t) 
     minV = std::min(minV, c.y());
     maxV = std::max(maxV, c.y());
   }
-  const double right = t.x0Px + t.widthPx, bottom = t.y0Px + t.heightPx;
-  const bool overlapsTile = maxU > t.x0Px && minU < right && maxV > t.y0Px && minV < bottom;
+  const double right = t.x0_px + t.width_px, bottom = t.y0_px + t.height_px;
+  const bool overlapsTile = maxU > t.x0_px && minU < right && maxV > t.y0_px && minV < bottom;
   return overlapsTile && ((t.innerRight && minU < right && maxU > right) ||
                           (t.innerBottom && minV < bottom && maxV > bottom) ||
-                          (t.innerLeft && minU < t.x0Px && maxU > t.x0Px) ||
-                          (t.innerTop && minV < t.y0Px && maxV > t.y0Px));
+                          (t.innerLeft && minU < t.x0_px && maxU > t.x0_px) ||
+                          (t.innerTop && minV < t.y0_px && maxV > t.y0_px));
 }
 
 bool insideTile(const RotatedBox& box, const vp::preprocess::TileRect& t) {
   for (const auto& c : vp::geometry::corners(box)) {
-    if (c.x() < t.x0Px + 1 || c.x() > t.x0Px + t.widthPx - 2 || c.y() < t.y0Px + 1 ||
-        c.y() > t.y0Px + t.heightPx - 2)
+    if (c.x() < t.x0_px + 1 || c.x() > t.x0_px + t.width_px - 2 || c.y() < t.y0_px + 1 ||
+        c.y() > t.y0_px + t.height_px - 2)
       return false;
   }
   return true;
@@ -106,8 +106,8 @@ void prepare(const vp::sim::SimOptions& sim, float scoreThreshold, double workin
   vp::preprocess::PreprocessOptions pre;
   pre.undistort = false;
   pre.workingScale = workingScale;
-  pre.networkWidthPx = stage.detectorInputWidth();
-  pre.networkHeightPx = stage.detectorInputHeight();
+  pre.networkWidth_px = stage.detectorInputWidth();
+  pre.networkHeight_px = stage.detectorInputHeight();
   ASSERT_TRUE(preprocessor.init(pre, simulator.camera(), frame.image.size(), &why)) << why;
   ASSERT_EQ(preprocessor.process(frame.image), vp::preprocess::PreprocessStatus::Ok);
 }
@@ -116,8 +116,8 @@ TEST(TileBorder, AStraddlingVehicleIsDetectedOnceWheneverItsWholeTileFindsIt) {
   // Many cars, some across the tile borders; ~10 cm per pixel at this size (the detector's
   // working GSD), so frame pixels = working pixels and the frame needs tiles.
   vp::sim::SimOptions sim = heldOutFrame(vp::sim::SceneKind::Parking, 9101);
-  sim.altitudeM = 125.0;
-  sim.tiltDeg = 0.0;
+  sim.altitude_m = 125.0;
+  sim.tilt_deg = 0.0;
   vp::sim::Simulator simulator;
   vp::sim::FrameOutput frame;
   vp::detection::DetectionStage stage;

@@ -62,7 +62,7 @@ TEST(VehicleCropper, CropMapEqualsPythonCropAffine) {
   // Crop centre -> box centre; crop +x -> the driving direction.
   const CropMap map = cropAffine(500.0, 300.0, 1.0, 0.03);
   const Eigen::Vector2d centre =
-      map * Eigen::Vector3d((kCropWidthPx - 1) / 2.0, (kCropHeightPx - 1) / 2.0, 1.0);
+      map * Eigen::Vector3d((kCropWidth_px - 1) / 2.0, (kCropHeight_px - 1) / 2.0, 1.0);
   EXPECT_NEAR(centre.x(), 500.0, 1e-9);
   EXPECT_NEAR(centre.y(), 300.0, 1e-9);
   const Eigen::Vector2d forward = map.leftCols<2>() * Eigen::Vector2d(1.0, 0.0);
@@ -86,7 +86,7 @@ TEST(VehicleCropper, CropIsBitIdenticalToOpenCvWarpAffine) {
       {250.0, 150.0, 5.5, 0.12},      // crop finer than the frame (upsampling)
       {-40.0, 420.0, 1.2, 0.05},      // centre outside the frame
   };
-  cv::Mat ours(kCropHeightPx, kCropWidthPx, CV_8UC3);
+  cv::Mat ours(kCropHeight_px, kCropWidth_px, CV_8UC3);
   for (const Pose& p : poses) {
     SCOPED_TRACE(std::to_string(p.u) + ", " + std::to_string(p.v));
     const CropMap map = cropAffine(p.u, p.v, p.angle, p.gsd);
@@ -98,7 +98,7 @@ TEST(VehicleCropper, CropIsBitIdenticalToOpenCvWarpAffine) {
       }
     }
     cv::Mat reference;
-    cv::warpAffine(frame, reference, m, {kCropWidthPx, kCropHeightPx},
+    cv::warpAffine(frame, reference, m, {kCropWidth_px, kCropHeight_px},
                    cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
     EXPECT_EQ(cv::norm(ours, reference, cv::NORM_INF), 0.0);
   }

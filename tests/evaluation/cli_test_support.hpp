@@ -54,11 +54,11 @@ inline output_files::DetectionRecord perfectDetection(std::int64_t frameId, int 
   r.gamma = object.shape;
   r.liftStatus = output_files::LiftStatus::Ok;
   r.positionEnu = object.positionEnu;
-  r.latitudeDeg = 43.0731;
-  r.longitudeDeg = -89.4012;
-  r.heightM = object.positionEnu.z();
-  r.headingEnuRad = object.headingEnuRad;
-  r.dimensionsM = object.dimensionsM;
+  r.latitude_deg = 43.0731;
+  r.longitude_deg = -89.4012;
+  r.height_m = object.positionEnu.z();
+  r.headingEnu_rad = object.headingEnu_rad;
+  r.dimensions_m = object.dimensions_m;
   return r;
 }
 

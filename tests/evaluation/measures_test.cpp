@@ -131,15 +131,15 @@ TEST(Evaluator, DetectionPoseAndTypeMeasures) {
   EXPECT_DOUBLE_EQ(s.recall, 0.75);
   EXPECT_DOUBLE_EQ(s.f1, 0.75);
   // Position: 5, 0, 0 px -> median 0 px; in metres 0.25, 0, 0.
-  EXPECT_DOUBLE_EQ(s.positionPx.median, 0.0);
-  EXPECT_EQ(s.positionM.count, 3);
-  EXPECT_NEAR(s.positionM.median, 0.0, 1e-12);
+  EXPECT_DOUBLE_EQ(s.position_px.median, 0.0);
+  EXPECT_EQ(s.position_m.count, 3);
+  EXPECT_NEAR(s.position_m.median, 0.0, 1e-12);
   // Orientation: 0, 180, 10 deg: median 10; |e - 10| = {10, 170, 0} -> MAD 1.4826 * 10.
-  EXPECT_NEAR(s.orientationDeg.median, 10.0, 1e-9);
-  EXPECT_NEAR(s.orientationDeg.mad, 14.826, 1e-9);
+  EXPECT_NEAR(s.orientation_deg.median, 10.0, 1e-9);
+  EXPECT_NEAR(s.orientation_deg.mad, 14.826, 1e-9);
   EXPECT_NEAR(s.flipShare, 1.0 / 3.0, 1e-12);
-  EXPECT_NEAR(s.shareBelow10Deg, 2.0 / 3.0, 1e-12);     // 10 deg itself is "<= 10"
-  EXPECT_NEAR(s.axisOrientationDeg.median, 0.0, 1e-9);  // the flip is no axis error
+  EXPECT_NEAR(s.shareBelow10_deg, 2.0 / 3.0, 1e-12);     // 10 deg itself is "<= 10"
+  EXPECT_NEAR(s.axisOrientation_deg.median, 0.0, 1e-9);  // the flip is no axis error
   ASSERT_EQ(s.orientationCumulative.size(), 181U);
   EXPECT_NEAR(s.orientationCumulative[9], 1.0 / 3.0, 1e-12);
   EXPECT_NEAR(s.orientationCumulative[179], 2.0 / 3.0, 1e-12);
@@ -169,9 +169,9 @@ TEST(Evaluator, PositionInMetresUsesTheReferenceGsd) {
   const std::vector<PredictedObject> preds{prediction({103, 104, 40, 16, 0.0}, 0.9F, 3, 4)};
   evaluator.addImage(refs, preds);
   const EvaluationSummary s = evaluator.summary();
-  EXPECT_DOUBLE_EQ(s.positionPx.median, 5.0);
-  EXPECT_NEAR(s.positionM.median, 0.2, 1e-12);
-  EXPECT_DOUBLE_EQ(s.positionM.mad, 0.0);
+  EXPECT_DOUBLE_EQ(s.position_px.median, 5.0);
+  EXPECT_NEAR(s.position_m.median, 0.2, 1e-12);
+  EXPECT_DOUBLE_EQ(s.position_m.mad, 0.0);
 }
 
 TEST(Evaluator, IgnoredReferencesAndAxisAlignedMatching) {
@@ -205,7 +205,7 @@ TEST(Evaluator, IgnoredReferencesAndAxisAlignedMatching) {
   EXPECT_EQ(s.falseNegatives, 0);
   EXPECT_EQ(s.ignoredPredictions, 1);
   EXPECT_EQ(s.ignoredReferences, 1);
-  EXPECT_EQ(s.orientationDeg.count, 0);  // axis-aligned references carry no direction
+  EXPECT_EQ(s.orientation_deg.count, 0);  // axis-aligned references carry no direction
   EXPECT_DOUBLE_EQ(s.precision, 0.5);
   EXPECT_DOUBLE_EQ(s.recall, 1.0);
 }
@@ -251,8 +251,8 @@ class ShapeMeasures : public ::testing::Test {
     r.shape = gamma(0.0F, 0.0F);
     r.hasWorld = true;
     r.positionEnu = {10, 20, 250};
-    r.headingEnuRad = 2.0;
-    r.dimensionsM = {4.5, 1.8, 1.5};
+    r.headingEnu_rad = 2.0;
+    r.dimensions_m = {4.5, 1.8, 1.5};
     return r;
   }
 
@@ -261,8 +261,8 @@ class ShapeMeasures : public ::testing::Test {
     p.shape = gamma(0.0F, 0.0F);
     p.lifted = true;
     p.positionEnu = {10, 20, 250};
-    p.headingEnuRad = 2.0;
-    p.dimensionsM = {4.5, 1.8, 1.5};
+    p.headingEnu_rad = 2.0;
+    p.dimensions_m = {4.5, 1.8, 1.5};
     return p;
   }
 
@@ -279,7 +279,7 @@ TEST_F(ShapeMeasures, PerfectPredictionHasZeroErrors) {
   for (const double e :
        {s.rmsLength_m, s.rmsWidth_m, s.rmsHeight_m, s.keypointsBox.planimetricRms_m,
         s.keypointsBox.heightRms_m, s.keypointsWorld.planimetricRms_m, s.keypointsWorld.heightRms_m,
-        s.rmsLiftedLength_m, s.positionWorldM.median}) {
+        s.rmsLiftedLength_m, s.positionWorld_m.median}) {
     EXPECT_NEAR(e, 0.0, 1e-12);
   }
 }
@@ -310,22 +310,22 @@ TEST_F(ShapeMeasures, ForwardComponentAndPoseErrorsGiveKnownDistances) {
   p = pred();
   p.box.cx += 3.0;
   p.positionEnu += Eigen::Vector3d(0.4, 0.0, 0.1);
-  p.dimensionsM.x() += 0.2;
+  p.dimensions_m.x() += 0.2;
   s = evaluate(ref(), p);
   EXPECT_NEAR(s.keypointsBox.planimetricRms_m, 0.3, 1e-9);
   EXPECT_NEAR(s.keypointsBox.heightRms_m, 0.0, 1e-12);
   EXPECT_NEAR(s.keypointsWorld.planimetricRms_m, 0.4, 1e-9);
   EXPECT_NEAR(s.keypointsWorld.heightRms_m, 0.1, 1e-9);
   EXPECT_NEAR(s.keypointsVehicle.planimetricRms_m, 0.0, 1e-12);
-  EXPECT_NEAR(s.positionWorldM.median, 0.4, 1e-9);
+  EXPECT_NEAR(s.positionWorld_m.median, 0.4, 1e-9);
   EXPECT_NEAR(s.rmsLiftedLength_m, 0.2, 1e-9);
-  EXPECT_NEAR(s.positionM.median, 0.3, 1e-9);
+  EXPECT_NEAR(s.position_m.median, 0.3, 1e-9);
 }
 
 TEST_F(ShapeMeasures, ReversedDirectionMirrorsTheKeypoints) {
   PredictedObject p = pred();
   p.box.angle = geometry::wrapTwoPi(p.box.angle + kPi);
-  p.headingEnuRad = geometry::wrapTwoPi(p.headingEnuRad + kPi);
+  p.headingEnu_rad = geometry::wrapTwoPi(p.headingEnu_rad + kPi);
   const EvaluationSummary s = evaluate(ref(), p);
   // Turned by 180 degrees about the centre: keypoint (x, y) moves by 2 |(x, y)|.
   double sum = 0.0;
@@ -335,8 +335,8 @@ TEST_F(ShapeMeasures, ReversedDirectionMirrorsTheKeypoints) {
   const double expected = std::sqrt(sum / shape::kEvaluationKeypointCount);
   EXPECT_NEAR(s.keypointsBox.planimetricRms_m, expected, 1e-9);
   EXPECT_NEAR(s.keypointsWorld.planimetricRms_m, expected, 1e-9);
-  EXPECT_NEAR(s.orientationDeg.median, 180.0, 1e-9);
-  EXPECT_NEAR(s.headingWorldDeg.median, 180.0, 1e-9);
+  EXPECT_NEAR(s.orientation_deg.median, 180.0, 1e-9);
+  EXPECT_NEAR(s.headingWorld_deg.median, 180.0, 1e-9);
   EXPECT_NEAR(s.keypointsVehicle.planimetricRms_m, 0.0, 1e-12);
 }
 

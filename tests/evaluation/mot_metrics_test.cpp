@@ -72,14 +72,14 @@ TEST(MotMetrics, MostlyLostSpeedHeadingAndType) {
   MotAccumulator acc;
   for (int k = 0; k < 10; ++k) {
     MotObject t = obj(1, k);
-    t.speedMps = 10.0;
-    t.headingRad = 0.0;
+    t.speed_mps = 10.0;
+    t.heading_rad = 0.0;
     t.type = 3;
     std::vector<MotObject> hyp;
     if (k < 2) {
       MotObject h = obj(9, k);
-      h.speedMps = k == 0 ? 12.0 : 10.0;
-      h.headingRad = k == 0 ? 3.0 : 0.1;
+      h.speed_mps = k == 0 ? 12.0 : 10.0;
+      h.heading_rad = k == 0 ? 3.0 : 0.1;
       h.type = k == 0 ? 3 : 2;
       hyp.push_back(h);
     }

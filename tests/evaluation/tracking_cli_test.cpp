@@ -45,15 +45,15 @@ class TrackingCli : public EvaluateCliTest {
         tracking::TrackState t;
         t.id = trackId(frame.frameId, object.trackId);
         t.status = tracking::TrackStatus::Confirmed;
-        t.timestampNs = frame.timestampNs;
+        t.timestamp_ns = frame.timestamp_ns;
         t.centreEnu = object.positionEnu.head<2>();
-        t.headingEnuRad = geometry::wrapTwoPi(object.headingEnuRad);
-        t.rearAxleEnu = t.centreEnu -
-                        1.4 * Eigen::Vector2d(std::cos(t.headingEnuRad), std::sin(t.headingEnuRad));
-        t.speedMps = object.speedMps;
-        t.lengthM = object.dimensionsM.x();
-        t.widthM = object.dimensionsM.y();
-        t.wheelbaseM = 0.6 * t.lengthM;
+        t.headingEnu_rad = geometry::wrapTwoPi(object.headingEnu_rad);
+        t.rearAxleEnu = t.centreEnu - 1.4 * Eigen::Vector2d(std::cos(t.headingEnu_rad),
+                                                            std::sin(t.headingEnu_rad));
+        t.speed_mps = object.speed_mps;
+        t.length_m = object.dimensions_m.x();
+        t.width_m = object.dimensions_m.y();
+        t.wheelbase_m = 0.6 * t.length_m;
         t.typeProbabilities.fill(0.0F);
         t.typeProbabilities[static_cast<std::size_t>(object.type)] = 1.0F;
         t.type = object.type;
@@ -90,8 +90,8 @@ class TrackingCli : public EvaluateCliTest {
           r.typeProbabilities.fill(0.0F);
           r.typeProbabilities[static_cast<std::size_t>(shape::VehicleType::Van)] = 1.0F;
         }
-        r.headingEnuRad =
-            geometry::wrapTwoPi(object.headingEnuRad + (frame.frameId == 1 && !large ? kPi : 0.0));
+        r.headingEnu_rad =
+            geometry::wrapTwoPi(object.headingEnu_rad + (frame.frameId == 1 && !large ? kPi : 0.0));
         EXPECT_TRUE(writer.writeRow(r, &why)) << why;
       }
     }

@@ -24,8 +24,8 @@ TruthVehicle vehicle(std::int64_t id, double east, double north, double speed = 
   TruthVehicle t;
   t.id = id;
   t.positionEnu = {east, north};
-  t.headingEnuRad = heading;
-  t.speedMps = speed;
+  t.headingEnu_rad = heading;
+  t.speed_mps = speed;
   t.type = type;
   return t;
 }
@@ -35,8 +35,8 @@ TrackObservation trackOn(std::int64_t id, const TruthVehicle& t, double offset =
   TrackObservation o;
   o.id = id;
   o.centreEnu = t.positionEnu + Eigen::Vector2d(offset, 0.0);
-  o.headingEnuRad = t.headingEnuRad;
-  o.speedMps = t.speedMps;
+  o.headingEnu_rad = t.headingEnu_rad;
+  o.speed_mps = t.speed_mps;
   o.type = t.type;
   return o;
 }
@@ -172,25 +172,25 @@ TEST(TrackingMeasures, SpeedAndHeadingOfMovingVehiclesOnly) {
     const TruthVehicle b = vehicle(2, 20.0, 20.0, 0.2);
     TrackObservation onA = trackOn(1, a);
     if (f < 8) {
-      onA.speedMps = f % 2 == 0 ? 11.0 : 9.0;
+      onA.speed_mps = f % 2 == 0 ? 11.0 : 9.0;
     } else {
-      onA.speedMps = -10.0;
-      onA.headingEnuRad = kPi;
+      onA.speed_mps = -10.0;
+      onA.headingEnu_rad = kPi;
     }
     TrackObservation onB = trackOn(2, b);
-    onB.speedMps = 3.0;
-    onB.headingEnuRad = kPi;
+    onB.speed_mps = 3.0;
+    onB.headingEnu_rad = kPi;
     e.addFrame(std::vector<TruthVehicle>{a, b}, std::vector<TrackObservation>{onA, onB});
     // The detector alone: on A flipped in frames 0..2, front/back unknown in frame 3; on B
     // flipped (parked: not counted); one detection far from everything.
     DetectionObservation dA;
     dA.positionEnu = a.positionEnu + Eigen::Vector2d(0.0, 1.5);
-    dA.headingEnuRad = f < 3 ? kPi + 0.3 : 6.2;
+    dA.headingEnu_rad = f < 3 ? kPi + 0.3 : 6.2;
     dA.headingKnown = f != 3;
     dA.type = kSedan;
     DetectionObservation dB;
     dB.positionEnu = b.positionEnu;
-    dB.headingEnuRad = kPi;
+    dB.headingEnu_rad = kPi;
     dB.type = f < 4 ? kSuv : kSedan;
     DetectionObservation far;
     far.positionEnu = {-100.0, 0.0};
@@ -227,12 +227,12 @@ TEST(TrackingMeasures, LargestSpeedErrorsListTheTracksThatCarryTheRmse) {
     const TruthVehicle b = vehicle(2, f, 10.0, 5.0, kVan, kPi);
     const TruthVehicle parked = vehicle(3, 40.0, 0.0, 0.0);
     TrackObservation onA = trackOn(11, a);
-    onA.speedMps = 11.0;
+    onA.speed_mps = 11.0;
     TrackObservation onB = trackOn(12, b);
-    onB.speedMps = -8.0;  // |-8| - 5 = 3 m/s
-    onB.headingEnuRad = f < 1 ? 0.0 : kPi;
+    onB.speed_mps = -8.0;  // |-8| - 5 = 3 m/s
+    onB.headingEnu_rad = f < 1 ? 0.0 : kPi;
     TrackObservation onParked = trackOn(13, parked);
-    onParked.speedMps = 2.0;
+    onParked.speed_mps = 2.0;
     e.addFrame(std::vector<TruthVehicle>{a, b, parked},
                std::vector<TrackObservation>{onA, onB, onParked});
   }
@@ -240,7 +240,7 @@ TEST(TrackingMeasures, LargestSpeedErrorsListTheTracksThatCarryTheRmse) {
   for (int f = 0; f < 2; ++f) {
     const TruthVehicle c = vehicle(1, f, 0.0, 10.0, kSuv);
     TrackObservation onC = trackOn(11, c);
-    onC.speedMps = 9.5;
+    onC.speed_mps = 9.5;
     e.addFrame(std::vector<TruthVehicle>{c}, std::vector<TrackObservation>{onC});
   }
   const TrackingSummary s = e.summary();
@@ -314,7 +314,7 @@ TEST(TrackingMeasures, MatchingIsMotAccumulatorsRule) {
       if (unit(rng) < 0.85) {
         TrackObservation t = trackOn(unit(rng) < 0.1 ? 100 + v : v, truth.back());
         t.centreEnu += Eigen::Vector2d(noise(rng), noise(rng));
-        t.speedMps = 11.0;  // whichever vehicle it matches: error 1 m/s
+        t.speed_mps = 11.0;  // whichever vehicle it matches: error 1 m/s
         tracks.push_back(t);
       }
     }

@@ -32,8 +32,8 @@ namespace fs = std::filesystem;
 
 // Small frames: the detector's one 672 x 512 tile at working scale 1 (the real pipeline runs in
 // seconds), 24 frames at 10 Hz.
-constexpr int kWidthPx = test::kLoopWidthPx;
-constexpr int kHeightPx = test::kLoopHeightPx;
+constexpr int kWidth_px = test::kLoopWidth_px;
+constexpr int kHeight_px = test::kLoopHeight_px;
 constexpr int kFrames = test::kLoopFrames;
 
 std::string sequence() {
@@ -114,7 +114,7 @@ TEST(AppLoop, ZeroAllocationsPerFrameOnTheProcessingThreadWithThePipeline) {
     std::printf(
         "real pipeline, %d x %d, %d frames: %llu detections (%llu lifted) by the "
         "shipped detector; %s\n",
-        kWidthPx, kHeightPx, kFrames, static_cast<unsigned long long>(c.detections),
+        kWidth_px, kHeight_px, kFrames, static_cast<unsigned long long>(c.detections),
         static_cast<unsigned long long>(c.lifted), app.summaryLine().c_str());
   }
   ASSERT_TRUE(window.counted());
@@ -222,23 +222,24 @@ TEST(AppFaults, CorruptAndTruncatedFramesAreCountedAndSkipped) {
   EXPECT_EQ(app.framesInPool(), app.poolCapacity());
 }
 
-// Keeps the recorded telemetry but replaces the position of the samples in [fromNs, toNs)
+// Keeps the recorded telemetry but replaces the position of the samples in [from_ns, to_ns)
 // with NaN, as a broken link would deliver them.
 class NanPoseInput final : public PoseInput {
  public:
-  NanPoseInput(const sequence::SequenceReader& reader, std::int64_t fromNs, std::int64_t toNs)
-      : records_(reader.telemetry()), fromNs_(fromNs), toNs_(toNs) {}
-  void poll(std::int64_t frameTimeNs, telemetry::PoseBuffer& buffer) override {
-    constexpr std::int64_t kLookaheadNs = 200'000'000;
-    while (next_ < records_.size() && records_[next_].timestampNs <= frameTimeNs + kLookaheadNs) {
+  NanPoseInput(const sequence::SequenceReader& reader, std::int64_t from_ns, std::int64_t to_ns)
+      : records_(reader.telemetry()), fromNs_(from_ns), toNs_(to_ns) {}
+  void poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) override {
+    constexpr std::int64_t kLookahead_ns = 200'000'000;
+    while (next_ < records_.size() &&
+           records_[next_].timestamp_ns <= frameTime_ns + kLookahead_ns) {
       const sequence::TelemetryRecord& record = records_[next_++];
       telemetry::PoseSample sample;
-      sample.timestampNs = record.timestampNs;
+      sample.timestamp_ns = record.timestamp_ns;
       sample.position = record.position;
       sample.bodyToNed = record.bodyToNed;
       sample.gimbal = record.gimbal;
-      if (record.timestampNs >= fromNs_ && record.timestampNs < toNs_) {
-        sample.position.latitudeDeg = std::numeric_limits<double>::quiet_NaN();
+      if (record.timestamp_ns >= fromNs_ && record.timestamp_ns < toNs_) {
+        sample.position.latitude_deg = std::numeric_limits<double>::quiet_NaN();
       }
       push(sample, buffer);
     }
@@ -272,8 +273,8 @@ TEST(AppFaults, NanPoseIsRefusedCountedAndTheLoopRecovers) {
   const auto& frames = reader.frames();
   // NaN from just after frame 8's time to frame 15's: frames 9..14 find no good sample after
   // them (Invalid while extrapolating past the last good one), later frames are fine again.
-  const std::int64_t from = frames[8].timestampNs + 1;
-  const std::int64_t to = frames[15].timestampNs;
+  const std::int64_t from = frames[8].timestamp_ns + 1;
+  const std::int64_t to = frames[15].timestamp_ns;
   const std::string out = test::scratchDir("nan_pose");
   config::AppConfig config = loopConfig(dir);
   config.app.detectionsCsv = out + "/detections.csv";
@@ -310,8 +311,8 @@ TEST(AppFaults, TelemetryGapGivesStalePosesAndLiftingResumesAfterIt) {
   std::string why;
   ASSERT_TRUE(reader.open(dir, &why)) << why;
   const auto& frames = reader.frames();
-  const std::int64_t gapFrom = frames[8].timestampNs;
-  const std::int64_t gapTo = frames[16].timestampNs;
+  const std::int64_t gapFrom = frames[8].timestamp_ns;
+  const std::int64_t gapTo = frames[16].timestamp_ns;
   {
     // Drop the telemetry rows of the gap (a recorder that lost the link omits rows).
     std::ifstream in(dir + "/telemetry.csv");
@@ -360,14 +361,14 @@ TEST(AppFaults, TelemetryGapGivesStalePosesAndLiftingResumesAfterIt) {
 // camera's second reopen attempt, with 5 more frames. Every call comes from the capture thread.
 class UnpluggingCamera final : public platform::v4l2::V4l2Device {
  public:
-  static constexpr int kCameraWidthPx = 64;
-  static constexpr int kCameraHeightPx = 48;
+  static constexpr int kCameraWidth_px = 64;
+  static constexpr int kCameraHeight_px = 48;
 
   UnpluggingCamera() {
     test::FakeNodeSpec spec;
     spec.formats = {V4L2_PIX_FMT_YUYV};
-    spec.widthPx = kCameraWidthPx;
-    spec.heightPx = kCameraHeightPx;
+    spec.width_px = kCameraWidth_px;
+    spec.height_px = kCameraHeight_px;
     device_.addNode(spec);
     pushFrames(5);
   }
@@ -391,12 +392,12 @@ class UnpluggingCamera final : public platform::v4l2::V4l2Device {
     return device_.mmap(fd, length, offset, error);
   }
   int munmap(void* address, std::size_t length) override { return device_.munmap(address, length); }
-  int poll(int fd, int timeoutMs, short* revents) override {
+  int poll(int fd, int timeout_ms, short* revents) override {
     if (dequeued_ == 5 && !unplugged_) {
       device_.unplug(kPath);
       unplugged_ = true;
     }
-    return device_.poll(fd, timeoutMs, revents);
+    return device_.poll(fd, timeout_ms, revents);
   }
   std::vector<std::string> listVideoNodes() override { return device_.listVideoNodes(); }
   const test::FakeV4l2Device& fake() const { return device_; }
@@ -406,18 +407,18 @@ class UnpluggingCamera final : public platform::v4l2::V4l2Device {
   void pushFrames(int count) {
     for (int i = 0; i < count; ++i) {
       test::FakeFrame frame;
-      frame.bytes.assign(static_cast<std::size_t>(kCameraWidthPx * kCameraHeightPx * 2),
+      frame.bytes.assign(static_cast<std::size_t>(kCameraWidth_px * kCameraHeight_px * 2),
                          static_cast<std::uint8_t>(100 + 10 * i));
       // 10 Hz capture times (the driver's timeval has only microseconds: frames made in a
       // tight loop would share one, and the loop skips a frame whose time does not advance).
-      frame.timestampNs = nextTimestampNs_;
+      frame.timestamp_ns = nextTimestampNs_;
       nextTimestampNs_ += 100'000'000;
       device_.pushFrame(kPath, std::move(frame));
     }
   }
 
   test::FakeV4l2Device device_;
-  std::int64_t nextTimestampNs_ = platform::monotonicNowNs();
+  std::int64_t nextTimestampNs_ = platform::monotonicNow_ns();
   int dequeued_ = 0;
   int reopenAttempts_ = 0;
   bool unplugged_ = false;
@@ -429,15 +430,15 @@ TEST(AppFaults, CameraDisappearsAndComesBackAndProcessingResumes) {
   // processed image-only: NoPose is counted, never a made-up position).
   config::AppConfig config = test::defaultConfigFor("");
   config.source.kind = config::FrameSourceKind::V4l2;
-  config.source.v4l2.widthPx = UnpluggingCamera::kCameraWidthPx;
-  config.source.v4l2.heightPx = UnpluggingCamera::kCameraHeightPx;
-  config.source.v4l2.dequeueTimeoutMs = 50;
-  config.camera.intrinsics.widthPx = UnpluggingCamera::kCameraWidthPx;
-  config.camera.intrinsics.heightPx = UnpluggingCamera::kCameraHeightPx;
-  config.camera.intrinsics.fxPx = 80.0;
-  config.camera.intrinsics.fyPx = 80.0;
-  config.camera.intrinsics.cxPx = 31.5;
-  config.camera.intrinsics.cyPx = 23.5;
+  config.source.v4l2.width_px = UnpluggingCamera::kCameraWidth_px;
+  config.source.v4l2.height_px = UnpluggingCamera::kCameraHeight_px;
+  config.source.v4l2.dequeueTimeout_ms = 50;
+  config.camera.intrinsics.width_px = UnpluggingCamera::kCameraWidth_px;
+  config.camera.intrinsics.height_px = UnpluggingCamera::kCameraHeight_px;
+  config.camera.intrinsics.fx_px = 80.0;
+  config.camera.intrinsics.fy_px = 80.0;
+  config.camera.intrinsics.cx_px = 31.5;
+  config.camera.intrinsics.cy_px = 23.5;
   config.camera.distortion = camera::Distortion{};
   config.telemetry.source = config::TelemetrySourceKind::None;
   config.dds.enabled = false;
@@ -488,8 +489,8 @@ TEST(AppSource, FasterThanTheLoopDropsTheOldestAndAccountsForEveryFrame) {
       static_cast<unsigned long long>(c.framesIn),
       static_cast<unsigned long long>(c.framesProcessed),
       static_cast<unsigned long long>(c.framesDropped),
-      static_cast<double>(app.stats().total(Stage::Queue).maxNs()) / 1e6,
-      static_cast<double>(app.stats().total(Stage::EndToEnd).maxNs()) / 1e6);
+      static_cast<double>(app.stats().total(Stage::Queue).max_ns()) / 1e6,
+      static_cast<double>(app.stats().total(Stage::EndToEnd).max_ns()) / 1e6);
 }
 
 }  // namespace

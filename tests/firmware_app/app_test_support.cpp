@@ -32,7 +32,7 @@ std::string scratchDir(const std::string& name) {
   return dir.string();
 }
 
-std::string simulatedSequence(const std::string& name, int frames, int widthPx, int heightPx,
+std::string simulatedSequence(const std::string& name, int frames, int width_px, int height_px,
                               std::uint64_t seed) {
   static std::mutex mutex;
   static std::map<std::string, std::string> rendered;
@@ -48,8 +48,8 @@ std::string simulatedSequence(const std::string& name, int frames, int widthPx, 
   options.seed = seed;
   options.frames = frames;
   options.outDir = dir.string();
-  options.width = widthPx;
-  options.height = heightPx;
+  options.width = width_px;
+  options.height = height_px;
   options.png = true;
   options.supersampling = 1;
   options.asmPath = std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml";
@@ -64,7 +64,7 @@ std::string simulatedSequence(const std::string& name, int frames, int widthPx, 
 }
 
 std::string loopSequence() {
-  return simulatedSequence("loop", kLoopFrames, kLoopWidthPx, kLoopHeightPx, 7);
+  return simulatedSequence("loop", kLoopFrames, kLoopWidth_px, kLoopHeight_px, 7);
 }
 
 std::string copySequence(const std::string& from, const std::string& name) {
@@ -99,16 +99,16 @@ bool TruthPerception::init(const std::string& sequenceDir, std::string* why) {
     return false;
   }
   for (const sequence::FrameRecord& frame : reader_.frames()) {
-    timestamps_.push_back(frame.timestampNs);
+    timestamps_.push_back(frame.timestamp_ns);
   }
-  loopPeriodNs_ = platform::replay::loopPeriodNs(reader_);
+  loopPeriodNs_ = platform::replay::loopPeriod_ns(reader_);
   detections_.resize(detection::kMaxDetectionsPerFrame);
   observations_.resize(detection::kMaxDetectionsPerFrame);
   return true;
 }
 
 perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
-                                                    std::int64_t timestampNs,
+                                                    std::int64_t timestamp_ns,
                                                     const telemetry::PoseEstimate& pose) {
   frame_ = bgrFrame;  // a header: shares the pool's pixels, no copy
   summary_ = perception::FrameLiftSummary{};
@@ -117,7 +117,7 @@ perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
     return perception::PipelineStatus::DetectionFailed;
   }
   // A looping replay shifts every timestamp by whole loop periods.
-  std::int64_t t = timestampNs;
+  std::int64_t t = timestamp_ns;
   const std::int64_t first = timestamps_.front();
   if (t > timestamps_.back() && loopPeriodNs_ > 0) {
     t = first + (t - first) % loopPeriodNs_;
@@ -143,7 +143,7 @@ perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
     d.gamma = object.shape;
   }
   summary_ = detectionLifter_.liftFrame(
-      lifter_, timestampNs, pose, std::span<const detection::Detection>(detections_.data(), count),
+      lifter_, timestamp_ns, pose, std::span<const detection::Detection>(detections_.data(), count),
       observations_);
   footprint_ = perception::frameFootprint(lifter_, summary_, bgrFrame.cols, bgrFrame.rows);
   return perception::PipelineStatus::Ok;

@@ -17,14 +17,14 @@ namespace vp::test {
 
 // Renders (once per process and name) a simulated sequence into a temporary directory and
 // returns it. Pinhole-free: the simulator's own rig (lens distortion included).
-std::string simulatedSequence(const std::string& name, int frames, int widthPx, int heightPx,
+std::string simulatedSequence(const std::string& name, int frames, int width_px, int height_px,
                               std::uint64_t seed);
 
 // The sequence the loop's tests share (rendered once per process): intersection, seed 7,
-// kLoopFrames frames of kLoopWidthPx x kLoopHeightPx (one detector tile at working scale 1).
+// kLoopFrames frames of kLoopWidth_px x kLoopHeight_px (one detector tile at working scale 1).
 constexpr int kLoopFrames = 24;
-constexpr int kLoopWidthPx = 320;
-constexpr int kLoopHeightPx = 256;
+constexpr int kLoopWidth_px = 320;
+constexpr int kLoopHeight_px = 256;
 std::string loopSequence();
 
 // Copies a sequence directory (to damage the copy).
@@ -43,7 +43,7 @@ class TruthPerception final : public app::FramePerception {
  public:
   bool init(const std::string& sequenceDir, std::string* why);
 
-  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                      const telemetry::PoseEstimate& pose) override;
   std::span<const perception::VehicleObservation> observations() const override {
     return {observations_.data(), summary_.written};

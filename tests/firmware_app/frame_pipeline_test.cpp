@@ -45,9 +45,9 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   FramePipeline pipeline;
   ASSERT_TRUE(pipeline.init(options, camera, rig.mount, terrain, world, shapeModel, &why)) << why;
 
-  cv::Mat frame(rig.intrinsics.heightPx, rig.intrinsics.widthPx, CV_8UC3);
+  cv::Mat frame(rig.intrinsics.height_px, rig.intrinsics.width_px, CV_8UC3);
   ASSERT_TRUE(reader.loadFrame(0, frame, &why)) << why;
-  const std::int64_t t = reader.frames()[0].timestampNs;
+  const std::int64_t t = reader.frames()[0].timestamp_ns;
 
   // A frame of the wrong size is refused with a message naming both sizes.
   const cv::Mat wrong(100, 120, CV_8UC3, cv::Scalar(0, 0, 0));
@@ -70,7 +70,7 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   ASSERT_TRUE(poses.init(telemetry::PoseBufferConfig{}, &why)) << why;
   for (const sequence::TelemetryRecord& record : reader.telemetry()) {
     telemetry::PoseSample sample;
-    sample.timestampNs = record.timestampNs;
+    sample.timestamp_ns = record.timestamp_ns;
     sample.position = record.position;
     sample.bodyToNed = record.bodyToNed;
     sample.gimbal = record.gimbal;
@@ -89,8 +89,8 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   for (const VehicleObservation& observation : pipeline.observations()) {
     lifted += observation.liftStatus == LiftStatus::Ok ? 1 : 0;
     if (observation.liftStatus == LiftStatus::Ok) {
-      EXPECT_GT(observation.ground.lengthM, 0.0);
-      EXPECT_TRUE(std::isfinite(observation.ground.centreWgs84.latitudeDeg));
+      EXPECT_GT(observation.ground.length_m, 0.0);
+      EXPECT_TRUE(std::isfinite(observation.ground.centreWgs84.latitude_deg));
     }
   }
   EXPECT_EQ(lifted, pipeline.liftSummary().lifted);

@@ -16,12 +16,12 @@ TEST(VehicleState, CarriesTheTrackersCovarianceScoreAndAge) {
   tracking::TrackState track;
   track.id = 42;
   track.status = tracking::TrackStatus::Confirmed;
-  track.birthNs = 5 * kNsPerS;
-  track.timestampNs = 7 * kNsPerS + kNsPerS / 2;
+  track.birth_ns = 5 * kNsPerS;
+  track.timestamp_ns = 7 * kNsPerS + kNsPerS / 2;
   track.centreEnu = {10.0, -4.0};
-  track.headingEnuRad = 0.5 * geometry::kPi;  // north
-  track.speedMps = 8.0;
-  track.speedSigmaMps = 0.5;
+  track.headingEnu_rad = 0.5 * geometry::kPi;  // north
+  track.speed_mps = 8.0;
+  track.speedSigma_mps = 0.5;
   track.yawRateRadps = 0.1;
   track.yawRateSigmaRadps = 0.02;
   track.poseCovariance << 0.04, 0.01, 0.002, 0.01, 0.09, -0.003, 0.002, -0.003, 0.0025;
@@ -33,7 +33,7 @@ TEST(VehicleState, CarriesTheTrackersCovarianceScoreAndAge) {
   const messages::VehicleState s = toVehicleState(track, 3, toUtc, frame, nullptr, nullptr);
   EXPECT_EQ(s.trackId, 42u);
   EXPECT_EQ(s.droneId, 3u);
-  EXPECT_EQ(s.measurementTimeNs, track.timestampNs + toUtc);
+  EXPECT_EQ(s.measurementTime_ns, track.timestamp_ns + toUtc);
   EXPECT_FLOAT_EQ(s.trackAge_s, 2.5F);
   // Upper triangle of (east, north, heading), row by row.
   const std::array<float, 6> expected{0.04F, 0.01F, 0.002F, 0.09F, -0.003F, 0.0025F};

@@ -7,8 +7,8 @@ namespace {
 
 constexpr double kTol = 1e-12;
 
-Eigen::Quaterniond bodyAttitude(double rollDeg, double pitchDeg, double yawDeg) {
-  return Eigen::Quaterniond(rotationFromEuler({rollDeg, pitchDeg, yawDeg}));
+Eigen::Quaterniond bodyAttitude(double roll_deg, double pitch_deg, double yaw_deg) {
+  return Eigen::Quaterniond(rotationFromEuler({roll_deg, pitch_deg, yaw_deg}));
 }
 
 void expectNear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double tol = 1e-12) {
@@ -20,9 +20,9 @@ TEST(Euler, RoundTrip) {
     for (double pitch : {-89.0, -45.0, 0.0, 20.0, 89.0}) {
       for (double yaw : {-179.0, -90.0, 0.0, 45.0, 170.0}) {
         const EulerAnglesDeg e = eulerFromRotation(rotationFromEuler({roll, pitch, yaw}));
-        EXPECT_NEAR(e.rollDeg, roll, 1e-9);
-        EXPECT_NEAR(e.pitchDeg, pitch, 1e-9);
-        EXPECT_NEAR(e.yawDeg, yaw, 1e-9);
+        EXPECT_NEAR(e.roll_deg, roll, 1e-9);
+        EXPECT_NEAR(e.pitch_deg, pitch, 1e-9);
+        EXPECT_NEAR(e.yaw_deg, yaw, 1e-9);
       }
     }
   }

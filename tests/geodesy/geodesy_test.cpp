@@ -21,14 +21,14 @@ TEST(LocalFrame, AxesPointEastNorthUp) {
   const LocalFrame frame(kMadison);
   // 0.001 deg of latitude is about 111 m north; of longitude about 81 m east at 43 deg.
   const Eigen::Vector3d north =
-      frame.toEnu({kMadison.latitudeDeg + 0.001, kMadison.longitudeDeg, kMadison.heightM});
+      frame.toEnu({kMadison.latitude_deg + 0.001, kMadison.longitude_deg, kMadison.height_m});
   EXPECT_NEAR(north.x(), 0.0, 1e-6);
   EXPECT_NEAR(north.y(), 111.1, 0.5);
   const Eigen::Vector3d east =
-      frame.toEnu({kMadison.latitudeDeg, kMadison.longitudeDeg + 0.001, kMadison.heightM});
+      frame.toEnu({kMadison.latitude_deg, kMadison.longitude_deg + 0.001, kMadison.height_m});
   EXPECT_NEAR(east.x(), 81.4, 0.5);
   EXPECT_GT(east.x(), 0.0);
-  const Eigen::Vector3d up = frame.toEnu({kMadison.latitudeDeg, kMadison.longitudeDeg, 300.0});
+  const Eigen::Vector3d up = frame.toEnu({kMadison.latitude_deg, kMadison.longitude_deg, 300.0});
   EXPECT_NEAR(up.z(), 40.0, 1e-6);
 }
 
@@ -45,8 +45,8 @@ TEST(LocalFrame, RoundTripIsExact) {
 
 TEST(LocalFrame, LocalToWorldRotationMatchesGeographicLib) {
   const LocalFrame frame(kMadison);
-  const GeographicLib::LocalCartesian reference(kMadison.latitudeDeg, kMadison.longitudeDeg,
-                                                kMadison.heightM);
+  const GeographicLib::LocalCartesian reference(kMadison.latitude_deg, kMadison.longitude_deg,
+                                                kMadison.height_m);
   const GeodeticPoint far{43.09, -89.37, 400.0};
   Eigen::Matrix3d m;
   const Eigen::Vector3d enu = frame.toEnu(far, &m);
@@ -54,7 +54,7 @@ TEST(LocalFrame, LocalToWorldRotationMatchesGeographicLib) {
   double x = 0.0;
   double y = 0.0;
   double z = 0.0;
-  reference.Forward(far.latitudeDeg, far.longitudeDeg, far.heightM, x, y, z, expected);
+  reference.Forward(far.latitude_deg, far.longitude_deg, far.height_m, x, y, z, expected);
   EXPECT_NEAR(enu.x(), x, 1e-9);
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
@@ -72,20 +72,20 @@ TEST(Utm, MadisonIsInZone16NorthAndRoundTrips) {
   EXPECT_EQ(utm.zone, 16);
   EXPECT_TRUE(utm.northp);
   // Madison's capitol area lies near 306 km E, 4771 km N in UTM 16N.
-  EXPECT_NEAR(utm.eastingM, 305800.0, 1500.0);
-  EXPECT_NEAR(utm.northingM, 4771500.0, 1500.0);
+  EXPECT_NEAR(utm.easting_m, 305800.0, 1500.0);
+  EXPECT_NEAR(utm.northing_m, 4771500.0, 1500.0);
   const GeodeticPoint back = fromUtm(utm);
-  EXPECT_NEAR(back.latitudeDeg, kMadison.latitudeDeg, 1e-10);
-  EXPECT_NEAR(back.longitudeDeg, kMadison.longitudeDeg, 1e-10);
-  EXPECT_DOUBLE_EQ(back.heightM, kMadison.heightM);
+  EXPECT_NEAR(back.latitude_deg, kMadison.latitude_deg, 1e-10);
+  EXPECT_NEAR(back.longitude_deg, kMadison.longitude_deg, 1e-10);
+  EXPECT_DOUBLE_EQ(back.height_m, kMadison.height_m);
 }
 
 TEST(Utm, ForcedZoneIsHonouredAndRoundTrips) {
   const UtmPoint utm = toUtm(kMadison, 15);
   EXPECT_EQ(utm.zone, 15);
   const GeodeticPoint back = fromUtm(utm);
-  EXPECT_NEAR(back.latitudeDeg, kMadison.latitudeDeg, 1e-10);
-  EXPECT_NEAR(back.longitudeDeg, kMadison.longitudeDeg, 1e-10);
+  EXPECT_NEAR(back.latitude_deg, kMadison.latitude_deg, 1e-10);
+  EXPECT_NEAR(back.longitude_deg, kMadison.longitude_deg, 1e-10);
 }
 
 TEST(Utm, SouthernHemisphere) {
@@ -95,14 +95,14 @@ TEST(Utm, SouthernHemisphere) {
 }
 
 TEST(Azimuth, CardinalDirections) {
-  const GeodeticPoint north{kMadison.latitudeDeg + 0.01, kMadison.longitudeDeg, 0.0};
-  const GeodeticPoint east{kMadison.latitudeDeg, kMadison.longitudeDeg + 0.01, 0.0};
-  const GeodeticPoint south{kMadison.latitudeDeg - 0.01, kMadison.longitudeDeg, 0.0};
-  const GeodeticPoint west{kMadison.latitudeDeg, kMadison.longitudeDeg - 0.01, 0.0};
-  EXPECT_NEAR(azimuthDeg(kMadison, north), 0.0, 1e-9);
-  EXPECT_NEAR(azimuthDeg(kMadison, east), 90.0, 0.01);
-  EXPECT_NEAR(azimuthDeg(kMadison, south), 180.0, 1e-9);
-  EXPECT_NEAR(azimuthDeg(kMadison, west), 270.0, 0.01);
+  const GeodeticPoint north{kMadison.latitude_deg + 0.01, kMadison.longitude_deg, 0.0};
+  const GeodeticPoint east{kMadison.latitude_deg, kMadison.longitude_deg + 0.01, 0.0};
+  const GeodeticPoint south{kMadison.latitude_deg - 0.01, kMadison.longitude_deg, 0.0};
+  const GeodeticPoint west{kMadison.latitude_deg, kMadison.longitude_deg - 0.01, 0.0};
+  EXPECT_NEAR(azimuth_deg(kMadison, north), 0.0, 1e-9);
+  EXPECT_NEAR(azimuth_deg(kMadison, east), 90.0, 0.01);
+  EXPECT_NEAR(azimuth_deg(kMadison, south), 180.0, 1e-9);
+  EXPECT_NEAR(azimuth_deg(kMadison, west), 270.0, 0.01);
 }
 
 TEST(Validity, RejectsNonFiniteAndOutOfRange) {

@@ -33,10 +33,10 @@ TerrainGrid makeGrid(int cols, int rows, const GeoTransform& transform, const Cr
   grid.rows = rows;
   grid.transform = transform;
   grid.crs = crs;
-  grid.heightsM.resize(static_cast<std::size_t>(cols) * rows);
+  grid.heights_m.resize(static_cast<std::size_t>(cols) * rows);
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
-      grid.heightsM[static_cast<std::size_t>(r) * cols + c] =
+      grid.heights_m[static_cast<std::size_t>(r) * cols + c] =
           static_cast<float>(250.0 + 0.37 * c - 1.13 * r + 0.001 * c * r);
     }
   }
@@ -69,12 +69,12 @@ void expectSameGrid(const TerrainGrid& expected, const TerrainGrid& actual, doub
   if (expected.noData && actual.noData) {
     EXPECT_EQ(*actual.noData, *expected.noData);
   }
-  ASSERT_EQ(actual.heightsM.size(), expected.heightsM.size());
-  for (std::size_t i = 0; i < expected.heightsM.size(); ++i) {
-    if (std::isnan(expected.heightsM[i])) {
-      EXPECT_TRUE(std::isnan(actual.heightsM[i])) << i;
+  ASSERT_EQ(actual.heights_m.size(), expected.heights_m.size());
+  for (std::size_t i = 0; i < expected.heights_m.size(); ++i) {
+    if (std::isnan(expected.heights_m[i])) {
+      EXPECT_TRUE(std::isnan(actual.heights_m[i])) << i;
     } else {
-      ASSERT_EQ(actual.heightsM[i], expected.heightsM[i]) << i;
+      ASSERT_EQ(actual.heights_m[i], expected.heights_m[i]) << i;
     }
   }
 }
@@ -100,8 +100,8 @@ class DtmFile : public ::testing::Test {
 TEST_F(DtmFile, GeoTiffRoundTripUtmWithNoData) {
   TerrainGrid grid = makeGrid(37, 23, kUtmTransform, kUtm16N);
   grid.noData = -9999.0F;
-  grid.heightsM[5] = -9999.0F;
-  grid.heightsM[100] = std::numeric_limits<float>::quiet_NaN();
+  grid.heights_m[5] = -9999.0F;
+  grid.heights_m[100] = std::numeric_limits<float>::quiet_NaN();
   std::string why;
   ASSERT_TRUE(writeDtmGeoTiff(file("dtm.tif"), grid, &why)) << why;
   TerrainGrid back;
@@ -126,7 +126,7 @@ TEST_F(DtmFile, GeoTiffRoundTripGeographic) {
   TerrainGrid grid = makeGrid(
       31, 17, GeoTransform{-89.4062, 1.0 / 9000.0, 0.0, 43.08, 0.0, -1.0 / 9000.0}, kWgs84);
   grid.noData = std::numeric_limits<float>::quiet_NaN();
-  grid.heightsM[7] = std::numeric_limits<float>::quiet_NaN();
+  grid.heights_m[7] = std::numeric_limits<float>::quiet_NaN();
   std::string why;
   ASSERT_TRUE(writeDtmGeoTiff(file("geo.tif"), grid, &why)) << why;
   TerrainGrid back;
@@ -164,7 +164,7 @@ TEST_F(DtmFile, WorldFileWithExplicitCrs) {
   TerrainGrid grid = makeGrid(
       15, 11, GeoTransform{305000.5, 5.0 * c, 5.0 * s, 4771000.5, 5.0 * s, -5.0 * c}, kUtm16N);
   grid.noData = -32768.0F;
-  grid.heightsM[3] = -32768.0F;
+  grid.heights_m[3] = -32768.0F;
   std::string why;
   ASSERT_TRUE(writeDtmWithWorldFile(file("plain.tif"), grid, &why)) << why;
   ASSERT_TRUE(fs::exists(file("plain.tfw")));
@@ -353,7 +353,7 @@ TEST_F(DtmFile, TiledFloat64PixelIsPoint) {
   ASSERT_EQ(back.cols, cols);
   ASSERT_EQ(back.rows, rows);
   for (std::size_t i = 0; i < values.size(); ++i) {
-    ASSERT_EQ(back.heightsM[i], static_cast<float>(values[i])) << i;
+    ASSERT_EQ(back.heights_m[i], static_cast<float>(values[i])) << i;
   }
   // PixelIsPoint: the tiepoint is the first sample's centre.
   expectSameTransform(GeoTransform{305000.0, 2.0, 0.0, 4771000.0, 0.0, -3.0}, back.transform, 1e-9);
@@ -369,7 +369,7 @@ TEST_F(DtmFile, CompressedStripsPixelIsArea) {
   std::string why;
   ASSERT_TRUE(loadDtm(file("strips.tif"), std::nullopt, back, &why)) << why;
   for (std::size_t i = 0; i < values.size(); ++i) {
-    ASSERT_EQ(back.heightsM[i], static_cast<float>(values[i])) << i;
+    ASSERT_EQ(back.heights_m[i], static_cast<float>(values[i])) << i;
   }
   // PixelIsArea: the tiepoint is the first pixel's corner, its centre half a pixel in.
   expectSameTransform(GeoTransform{305001.0, 2.0, 0.0, 4770998.5, 0.0, -3.0}, back.transform, 1e-9);
@@ -439,7 +439,7 @@ TEST_F(DtmFile, UnsupportedEpsg) {
 
 TEST_F(DtmFile, WriteRejectsInconsistentGrid) {
   TerrainGrid grid = makeGrid(5, 5, kUtmTransform, kUtm16N);
-  grid.heightsM.pop_back();
+  grid.heights_m.pop_back();
   std::string why;
   EXPECT_FALSE(writeDtmGeoTiff(file("x.tif"), grid, &why));
   EXPECT_NE(why.find("x.tif"), std::string::npos) << why;
@@ -462,7 +462,7 @@ TEST(DtmFixture, ShippedSampleIsReadable) {
   expectSameTransform(GeoTransform{304410.0, 5.0, 0.0, 4771831.0, 0.0, -5.0}, grid.transform, 1e-9);
   ASSERT_TRUE(grid.noData.has_value());
   EXPECT_EQ(*grid.noData, -9999.0F);
-  EXPECT_EQ(grid.heightsM[40 * 41 + 40], -9999.0F);
+  EXPECT_EQ(grid.heights_m[40 * 41 + 40], -9999.0F);
   // h = 260 + 0.03 e + 2 exp(-((e - 20)^2 + (n - 30)^2) / (2 * 25^2)), e/n from the centre.
   const auto formula = [](double e, double n) {
     return 260.0 + 0.03 * e +
@@ -476,7 +476,7 @@ TEST(DtmFixture, ShippedSampleIsReadable) {
       }
       const double e = (c - 20) * 5.0;
       const double n = (20 - r) * 5.0;
-      EXPECT_NEAR(grid.heightsM[static_cast<std::size_t>(r) * 41 + c], formula(e, n), 1e-4)
+      EXPECT_NEAR(grid.heights_m[static_cast<std::size_t>(r) * 41 + c], formula(e, n), 1e-4)
           << c << "," << r;
     }
   }

@@ -48,7 +48,7 @@ void parseAll(MavlinkParser& parser, const Bytes& bytes, Collected& out) {
 
 AttitudeQuaternion sampleAttitudeQuaternion() {
   AttitudeQuaternion m;
-  m.timeBootMs = 123456;
+  m.timeBoot_ms = 123456;
   const Eigen::Quaterniond q(geodesy::rotationFromEuler({3.0, -4.0, 75.0}));
   m.q = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
          static_cast<float>(q.z())};
@@ -60,7 +60,7 @@ AttitudeQuaternion sampleAttitudeQuaternion() {
 
 GlobalPositionInt samplePosition() {
   GlobalPositionInt m;
-  m.timeBootMs = 123400;
+  m.timeBoot_ms = 123400;
   m.latitudeDegE7 = 430731000;
   m.longitudeDegE7 = -894012000;
   m.altitudeMslMm = 292500;
@@ -108,7 +108,7 @@ TEST(MavlinkParser, ReadsAHandBuiltGlobalPositionIntFrame) {
   const auto message = decode(got.frames[0]);
   ASSERT_TRUE(message.has_value());
   const auto& position = std::get<GlobalPositionInt>(*message);
-  EXPECT_EQ(position.timeBootMs, 5000u);
+  EXPECT_EQ(position.timeBoot_ms, 5000u);
   EXPECT_EQ(position.latitudeDegE7, 473977420);
   EXPECT_EQ(position.longitudeDegE7, 85455940);
   EXPECT_EQ(position.altitudeMslMm, 488000);
@@ -119,12 +119,12 @@ TEST(MavlinkParser, ReadsAHandBuiltGlobalPositionIntFrame) {
 
 TEST(MavlinkCodec, EveryMessageRoundTrips) {
   GimbalDeviceAttitudeStatus gimbal;
-  gimbal.timeBootMs = 999;
+  gimbal.timeBoot_ms = 999;
   gimbal.q = {0.7071068f, 0.0f, -0.7071068f, 0.0f};
   gimbal.flags = kGimbalFlagYawInVehicleFrame;
   gimbal.failureFlags = 0x20;
   gimbal.targetSystem = 1;
-  gimbal.deltaYawRad = 1.25f;
+  gimbal.deltaYaw_rad = 1.25f;
   gimbal.gimbalDeviceId = 1;
   gimbal.hasExtensions = true;
   Attitude attitude{42, 0.1f, -0.2f, 2.5f, 0.0f, 0.0f, 0.3f};
@@ -223,7 +223,7 @@ TEST(MavlinkParser, CountsEveryKindOfDamageAndKeepsTheGoodFrames) {
   EXPECT_TRUE(got.frames[1].isSigned);
   for (const MavlinkFrame& frame : got.frames) {
     const auto attitude = std::get<AttitudeQuaternion>(*decode(frame));
-    EXPECT_EQ(attitude.timeBootMs, 123456u);
+    EXPECT_EQ(attitude.timeBoot_ms, 123456u);
   }
   EXPECT_GE(c.skippedBytes, noise.size());
 }
@@ -251,7 +251,7 @@ TEST(MavlinkParser, RandomCorruptionNeverLosesAnUntouchedFrame) {
   std::vector<std::uint32_t> expectedTimes;
   for (std::uint32_t i = 0; i < 500; ++i) {
     AttitudeQuaternion m = sampleAttitudeQuaternion();
-    m.timeBootMs = 1000 + i;
+    m.timeBoot_ms = 1000 + i;
     Bytes frame = encodeToBytes(Message{m}, {static_cast<std::uint8_t>(i), 1, 1});
     switch (rng() % 4) {
       case 0:  // flip one bit
@@ -267,13 +267,13 @@ TEST(MavlinkParser, RandomCorruptionNeverLosesAnUntouchedFrame) {
         [[fallthrough]];
       default:
         ++untouched;
-        expectedTimes.push_back(m.timeBootMs);
+        expectedTimes.push_back(m.timeBoot_ms);
     }
     stream.insert(stream.end(), frame.begin(), frame.end());
   }
   std::vector<std::uint32_t> times;
   parser.parse(stream, [&times](const MavlinkFrame& frame) {
-    times.push_back(std::get<AttitudeQuaternion>(*decode(frame)).timeBootMs);
+    times.push_back(std::get<AttitudeQuaternion>(*decode(frame)).timeBoot_ms);
   });
   // Every untouched frame arrives, in order; a damaged one never does (CRC).
   EXPECT_EQ(times, expectedTimes);
@@ -285,9 +285,9 @@ TEST(MavlinkParser, ParsingAndAssemblingAllocateNothing) {
   Bytes stream;
   for (std::uint32_t i = 0; i < 50; ++i) {
     AttitudeQuaternion attitude = sampleAttitudeQuaternion();
-    attitude.timeBootMs = 2000 + 20 * i;
+    attitude.timeBoot_ms = 2000 + 20 * i;
     GlobalPositionInt position = samplePosition();
-    position.timeBootMs = 2000 + 20 * i;
+    position.timeBoot_ms = 2000 + 20 * i;
     for (const Message& m : {Message{attitude}, Message{position}}) {
       const Bytes frame = encodeToBytes(m);
       stream.insert(stream.end(), frame.begin(), frame.end());
@@ -297,12 +297,12 @@ TEST(MavlinkParser, ParsingAndAssemblingAllocateNothing) {
   MavlinkParser parser;
   MavlinkPoseAssembler assembler;
   std::size_t samples = 0;
-  std::int64_t receiveNs = 1'000'000'000;
+  std::int64_t receive_ns = 1'000'000'000;
   test::AllocationCounter counter;
   parser.parse(stream, [&](const MavlinkFrame& frame) {
     if (const auto message = decode(frame)) {
-      receiveNs += 10'000'000;
-      samples += assembler.add(*message, frame.systemId, receiveNs) ? 1 : 0;
+      receive_ns += 10'000'000;
+      samples += assembler.add(*message, frame.systemId, receive_ns) ? 1 : 0;
     }
   });
   counter.stop();
@@ -317,7 +317,7 @@ constexpr std::int64_t kMs = 1'000'000;
 
 TEST(MavlinkPoseAssembler, BuildsPoseSamplesInTheProjectsConventions) {
   PoseAssemblerConfig config;
-  config.geoidSeparationM = -33.5;  // h = H_msl + N
+  config.geoidSeparation_m = -33.5;  // h = H_msl + N
   MavlinkPoseAssembler assembler(config);
   const AttitudeQuaternion attitude = sampleAttitudeQuaternion();
   EXPECT_FALSE(assembler.add(Message{attitude}, 1, 5 * kMs));  // no position yet
@@ -325,13 +325,13 @@ TEST(MavlinkPoseAssembler, BuildsPoseSamplesInTheProjectsConventions) {
   EXPECT_FALSE(assembler.add(Message{samplePosition()}, 1, 6 * kMs));
   ASSERT_TRUE(assembler.add(Message{attitude}, 1, 7 * kMs));
   const PoseSample& s = assembler.sample();
-  EXPECT_NEAR(s.position.latitudeDeg, 43.0731, 1e-9);
-  EXPECT_NEAR(s.position.longitudeDeg, -89.4012, 1e-9);
-  EXPECT_NEAR(s.position.heightM, 292.5 - 33.5, 1e-9);
+  EXPECT_NEAR(s.position.latitude_deg, 43.0731, 1e-9);
+  EXPECT_NEAR(s.position.longitude_deg, -89.4012, 1e-9);
+  EXPECT_NEAR(s.position.height_m, 292.5 - 33.5, 1e-9);
   const geodesy::EulerAnglesDeg euler = geodesy::eulerFromRotation(s.bodyToNed.toRotationMatrix());
-  EXPECT_NEAR(euler.rollDeg, 3.0, 1e-4);
-  EXPECT_NEAR(euler.pitchDeg, -4.0, 1e-4);
-  EXPECT_NEAR(euler.yawDeg, 75.0, 1e-4);
+  EXPECT_NEAR(euler.roll_deg, 3.0, 1e-4);
+  EXPECT_NEAR(euler.pitch_deg, -4.0, 1e-4);
+  EXPECT_NEAR(euler.yaw_deg, 75.0, 1e-4);
   EXPECT_FALSE(s.hasGimbal);
 }
 
@@ -371,7 +371,7 @@ TEST(MavlinkPoseAssembler, RejectsBadValuesAndOtherSystems) {
 
 GimbalDeviceAttitudeStatus gimbalAt(const geodesy::EulerAnglesDeg& angles, std::uint16_t flags) {
   GimbalDeviceAttitudeStatus m;
-  m.timeBootMs = 50;
+  m.timeBoot_ms = 50;
   const Eigen::Quaterniond q(geodesy::rotationFromEuler(angles));
   m.q = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
          static_cast<float>(q.z())};
@@ -390,19 +390,19 @@ TEST(MavlinkPoseAssembler, GimbalYawIsTurnedToNorth) {
     const PoseSample& s = assembler.sample();
     ASSERT_TRUE(s.hasGimbal);
     EXPECT_EQ(s.gimbal.reference, geodesy::GimbalReference::Earth);
-    EXPECT_NEAR(s.gimbal.angles.pitchDeg, -60.0, 1e-4);
-    EXPECT_NEAR(s.gimbal.angles.yawDeg, 10.0, 1e-4);
+    EXPECT_NEAR(s.gimbal.angles.pitch_deg, -60.0, 1e-4);
+    EXPECT_NEAR(s.gimbal.angles.yaw_deg, 10.0, 1e-4);
   }
   // Vehicle frame without delta_yaw: yaw relative to the drone's heading (75 deg).
   assembler.add(Message{gimbalAt({0.0, -60.0, 10.0}, kGimbalFlagYawInVehicleFrame)}, 1, 4 * kMs);
-  EXPECT_NEAR(assembler.sample().gimbal.angles.yawDeg, 85.0, 1e-4);
-  EXPECT_NEAR(assembler.sample().gimbal.angles.pitchDeg, -60.0, 1e-4);
+  EXPECT_NEAR(assembler.sample().gimbal.angles.yaw_deg, 85.0, 1e-4);
+  EXPECT_NEAR(assembler.sample().gimbal.angles.pitch_deg, -60.0, 1e-4);
   // With delta_yaw sent (extensions), it wins over the drone's yaw.
   GimbalDeviceAttitudeStatus withDelta = gimbalAt({0.0, -60.0, 10.0}, kGimbalFlagYawInVehicleFrame);
   withDelta.hasExtensions = true;
-  withDelta.deltaYawRad = static_cast<float>(-20.0 * std::numbers::pi / 180.0);
+  withDelta.deltaYaw_rad = static_cast<float>(-20.0 * std::numbers::pi / 180.0);
   assembler.add(Message{withDelta}, 1, 5 * kMs);
-  EXPECT_NEAR(assembler.sample().gimbal.angles.yawDeg, -10.0, 1e-4);
+  EXPECT_NEAR(assembler.sample().gimbal.angles.yaw_deg, -10.0, 1e-4);
   // Neither flag (legacy, no YAW_LOCK): vehicle frame, the drone's yaw.
   assembler.add(Message{gimbalAt({0.0, -90.0 + 1e-3, 0.0}, 0)}, 1, 6 * kMs);
   const Eigen::Vector3d axis =
@@ -414,51 +414,51 @@ TEST(BootClockMapper, EstimatesTheOffsetFromTheLeastDelayedMessages) {
   // Messages at 50 Hz with 2..25 ms of transport delay; the estimate is the true offset plus
   // the smallest delay in the window, to the millisecond of time_boot_ms.
   std::mt19937 rng(3);
-  std::uniform_int_distribution<std::int64_t> delayUs(2000, 25000);
-  const std::int64_t trueOffsetNs = 7'654'321'000'000;
+  std::uniform_int_distribution<std::int64_t> delay_us(2000, 25000);
+  const std::int64_t trueOffset_ns = 7'654'321'000'000;
   BootClockMapper mapper;
-  std::int64_t worstErrorNs = 0;
-  for (std::uint32_t bootMs = 10000; bootMs < 20000; bootMs += 20) {
-    const std::int64_t sendNs = static_cast<std::int64_t>(bootMs) * kMs + trueOffsetNs;
-    mapper.observe(bootMs, sendNs + delayUs(rng) * 1000);
-    if (bootMs > 12000) {
-      worstErrorNs = std::max(worstErrorNs, std::abs(mapper.offsetNs() - trueOffsetNs));
+  std::int64_t worstError_ns = 0;
+  for (std::uint32_t boot_ms = 10000; boot_ms < 20000; boot_ms += 20) {
+    const std::int64_t send_ns = static_cast<std::int64_t>(boot_ms) * kMs + trueOffset_ns;
+    mapper.observe(boot_ms, send_ns + delay_us(rng) * 1000);
+    if (boot_ms > 12000) {
+      worstError_ns = std::max(worstError_ns, std::abs(mapper.offset_ns() - trueOffset_ns));
     }
   }
-  EXPECT_LE(worstErrorNs, 5 * kMs);  // min of 64 uniform delays in 2..25 ms
-  EXPECT_GE(mapper.offsetNs(), trueOffsetNs + 2 * kMs);
-  std::printf("boot clock offset error: worst %.3f ms after warm-up\n", worstErrorNs / 1e6);
+  EXPECT_LE(worstError_ns, 5 * kMs);  // min of 64 uniform delays in 2..25 ms
+  EXPECT_GE(mapper.offset_ns(), trueOffset_ns + 2 * kMs);
+  std::printf("boot clock offset error: worst %.3f ms after warm-up\n", worstError_ns / 1e6);
 
   // The sender reboots: its boot time restarts, so does the estimate.
-  mapper.observe(100, 30'000 * kMs + trueOffsetNs);
+  mapper.observe(100, 30'000 * kMs + trueOffset_ns);
   EXPECT_EQ(mapper.restarts(), 1u);
-  EXPECT_EQ(mapper.toLocalNs(100), 30'000 * kMs + trueOffsetNs);
+  EXPECT_EQ(mapper.toLocal_ns(100), 30'000 * kMs + trueOffset_ns);
 }
 
 TEST(BootClockMapper, FollowsClockDrift) {
   // 100 ppm drift between the autopilot's and the companion's crystals over 100 s.
   BootClockMapper mapper;
-  for (std::uint32_t bootMs = 0; bootMs <= 100000; bootMs += 20) {
-    const double localNs = bootMs * 1e6 * (1.0 + 100e-6) + 1e9;
-    mapper.observe(bootMs, static_cast<std::int64_t>(localNs) + 3 * kMs);
+  for (std::uint32_t boot_ms = 0; boot_ms <= 100000; boot_ms += 20) {
+    const double local_ns = boot_ms * 1e6 * (1.0 + 100e-6) + 1e9;
+    mapper.observe(boot_ms, static_cast<std::int64_t>(local_ns) + 3 * kMs);
   }
-  const double expectedNs = 100000 * 1e6 * (1.0 + 100e-6) + 1e9 + 3e6;
-  EXPECT_NEAR(static_cast<double>(mapper.toLocalNs(100000)), expectedNs, 0.2e6);
+  const double expected_ns = 100000 * 1e6 * (1.0 + 100e-6) + 1e9 + 3e6;
+  EXPECT_NEAR(static_cast<double>(mapper.toLocal_ns(100000)), expected_ns, 0.2e6);
 }
 
 TEST(MavlinkPoseAssembler, SampleTimesAreOnTheLocalClock) {
   PoseAssemblerConfig config;
-  config.linkLatencyNs = 2 * kMs;
+  config.linkLatency_ns = 2 * kMs;
   MavlinkPoseAssembler assembler(config);
-  const std::int64_t offsetNs = 500'000 * kMs;
+  const std::int64_t offset_ns = 500'000 * kMs;
   GlobalPositionInt position = samplePosition();
-  position.timeBootMs = 1000;
-  assembler.add(Message{position}, 1, 1000 * kMs + offsetNs + 2 * kMs);
+  position.timeBoot_ms = 1000;
+  assembler.add(Message{position}, 1, 1000 * kMs + offset_ns + 2 * kMs);
   AttitudeQuaternion attitude = sampleAttitudeQuaternion();
-  attitude.timeBootMs = 1010;
-  ASSERT_TRUE(assembler.add(Message{attitude}, 1, 1010 * kMs + offsetNs + 9 * kMs));
-  EXPECT_EQ(assembler.sample().timestampNs, 1010 * kMs + offsetNs);
-  EXPECT_EQ(assembler.sample().positionTimestampNs, 1000 * kMs + offsetNs);
+  attitude.timeBoot_ms = 1010;
+  ASSERT_TRUE(assembler.add(Message{attitude}, 1, 1010 * kMs + offset_ns + 9 * kMs));
+  EXPECT_EQ(assembler.sample().timestamp_ns, 1010 * kMs + offset_ns);
+  EXPECT_EQ(assembler.sample().positionTimestamp_ns, 1000 * kMs + offset_ns);
 }
 
 }  // namespace

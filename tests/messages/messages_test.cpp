@@ -19,7 +19,7 @@ TEST(Messages, ValidateCatchesBadStates) {
   s.headingTrueNorth_deg = 360.0;
   EXPECT_EQ(validate(s), ValidationError::HeadingOutOfRange);
   s = test::makeState(3, 1);
-  s.position.latitudeDeg = 91.0;
+  s.position.latitude_deg = 91.0;
   EXPECT_EQ(validate(s), ValidationError::InvalidPosition);
   s = test::makeState(3, 1);
   s.typeProbability[2] = 1.5F;

@@ -64,11 +64,11 @@ DetectionRecord randomRecord(std::mt19937_64& rng, std::int64_t frameId, int det
   r.liftStatus = lifted ? LiftStatus::Ok : LiftStatus::OutsideDtm;
   if (lifted) {
     r.positionEnu = {100 * unit(rng) - 50, 100 * unit(rng) - 50, 260 + unit(rng)};
-    r.latitudeDeg = 43.07 + 1e-3 * unit(rng);
-    r.longitudeDeg = -89.4 + 1e-3 * unit(rng);
-    r.heightM = 260 + unit(rng);
-    r.headingEnuRad = 6.28 * unit(rng);
-    r.dimensionsM = {4 + unit(rng), 1.7 + 0.2 * unit(rng), 1.4 + 0.3 * unit(rng)};
+    r.latitude_deg = 43.07 + 1e-3 * unit(rng);
+    r.longitude_deg = -89.4 + 1e-3 * unit(rng);
+    r.height_m = 260 + unit(rng);
+    r.headingEnu_rad = 6.28 * unit(rng);
+    r.dimensions_m = {4 + unit(rng), 1.7 + 0.2 * unit(rng), 1.4 + 0.3 * unit(rng)};
   }
   return r;
 }
@@ -93,11 +93,11 @@ void expectSame(const DetectionRecord& a, const DetectionRecord& b) {
   EXPECT_EQ(a.liftStatus, b.liftStatus);
   if (a.liftStatus == LiftStatus::Ok) {
     EXPECT_EQ(a.positionEnu, b.positionEnu);
-    EXPECT_EQ(a.latitudeDeg, b.latitudeDeg);
-    EXPECT_EQ(a.longitudeDeg, b.longitudeDeg);
-    EXPECT_EQ(a.heightM, b.heightM);
-    EXPECT_EQ(a.headingEnuRad, b.headingEnuRad);
-    EXPECT_EQ(a.dimensionsM, b.dimensionsM);
+    EXPECT_EQ(a.latitude_deg, b.latitude_deg);
+    EXPECT_EQ(a.longitude_deg, b.longitude_deg);
+    EXPECT_EQ(a.height_m, b.height_m);
+    EXPECT_EQ(a.headingEnu_rad, b.headingEnu_rad);
+    EXPECT_EQ(a.dimensions_m, b.dimensions_m);
   }
 }
 
@@ -203,7 +203,7 @@ TEST_F(DetectionsFileTest, WriterRejectsBadRecordsWithoutWriting) {
   EXPECT_FALSE(writer.writeRow(r, &why));
   EXPECT_NE(why.find("box_angle_rad"), std::string::npos) << why;
   r = randomRecord(rng, 1, 0, true);
-  r.headingEnuRad = std::nan("");
+  r.headingEnu_rad = std::nan("");
   EXPECT_FALSE(writer.writeRow(r, &why));
   EXPECT_NE(why.find("heading_enu_rad: not finite"), std::string::npos) << why;
   EXPECT_EQ(writer.rowsWritten(), 0);

@@ -65,18 +65,18 @@ TrackState makeTrack(std::mt19937_64& rng, std::uint32_t id, bool onGrid) {
   TrackState t;
   t.id = id;
   t.status = static_cast<TrackStatus>(id % 3);
-  t.timestampNs = 1'700'000'000'000'000'000 + static_cast<std::int64_t>(id) * 100'000'000;
+  t.timestamp_ns = 1'700'000'000'000'000'000 + static_cast<std::int64_t>(id) * 100'000'000;
   t.centreEnu = {value(2000.0, 0.125), value(2000.0, 0.125)};
   t.rearAxleEnu = t.centreEnu + Eigen::Vector2d(value(4.0, 0.125), value(4.0, 0.125));
-  t.headingEnuRad = std::abs(value(700.0, 0.25)) / kDegPerRad;
-  t.speedMps = value(40.0, 0.125);
-  t.speedSigmaMps = std::abs(value(2.0, 0.125));
+  t.headingEnu_rad = std::abs(value(700.0, 0.25)) / kDegPerRad;
+  t.speed_mps = value(40.0, 0.125);
+  t.speedSigma_mps = std::abs(value(2.0, 0.125));
   t.accelerationMps2 = value(6.0, 0.125);
   t.accelerationSigmaMps2 = std::abs(value(2.0, 0.125));
   t.yawRateRadps = value(60.0, 0.125) / kDegPerRad;
-  t.lengthM = 3.0 + std::abs(value(4.0, 0.125));
-  t.widthM = 1.5 + std::abs(value(1.0, 0.125));
-  t.wheelbaseM = 0.6 * t.lengthM;
+  t.length_m = 3.0 + std::abs(value(4.0, 0.125));
+  t.width_m = 1.5 + std::abs(value(1.0, 0.125));
+  t.wheelbase_m = 0.6 * t.length_m;
   if (onGrid) {
     t.typeProbabilities = {0.0625F, 0.0625F, 0.0625F, 0.0625F, 0.0625F, 0.0625F, 0.625F};
     std::rotate(t.typeProbabilities.begin(), t.typeProbabilities.begin() + id % 7,
@@ -153,16 +153,16 @@ TEST_F(TrajectoryFileTest, RoundTripIsExact) {
     EXPECT_EQ(r.trackId, t.id);
     EXPECT_EQ(r.type, t.type);
     EXPECT_EQ(r.status, t.status);
-    EXPECT_EQ(r.speedMps, t.speedMps);
+    EXPECT_EQ(r.speed_mps, t.speed_mps);
     EXPECT_EQ(r.centreEnu, t.centreEnu);
     EXPECT_EQ(r.rearAxleEnu, t.rearAxleEnu);
-    EXPECT_EQ(r.headingEnuDeg, std::round(t.headingEnuRad * kDegPerRad * 4.0) / 4.0);
+    EXPECT_EQ(r.headingEnu_deg, std::round(t.headingEnu_rad * kDegPerRad * 4.0) / 4.0);
     EXPECT_EQ(r.yawRateDps, std::round(t.yawRateRadps * kDegPerRad * 8.0) / 8.0);
-    EXPECT_EQ(r.speedSigmaMps, t.speedSigmaMps);
+    EXPECT_EQ(r.speedSigma_mps, t.speedSigma_mps);
     EXPECT_EQ(r.accelerationMps2, t.accelerationMps2);
     EXPECT_EQ(r.accelerationSigmaMps2, t.accelerationSigmaMps2);
-    EXPECT_EQ(r.lengthM, t.lengthM);
-    EXPECT_EQ(r.widthM, t.widthM);
+    EXPECT_EQ(r.length_m, t.length_m);
+    EXPECT_EQ(r.width_m, t.width_m);
     EXPECT_EQ(r.typeProbabilities, t.typeProbabilities);
     ASSERT_EQ(r.gamma.count, t.shape.count);
     for (int s = 0; s < t.shape.count; ++s) {
@@ -172,9 +172,9 @@ TEST_F(TrajectoryFileTest, RoundTripIsExact) {
     EXPECT_NEAR(r.timeS, 1.7e9 + 0.1 * t.id, 5e-7);  // the double nearest to the ms text
     ASSERT_EQ(r.centreWgs84.has_value(), i % 2 == 0);
     if (r.centreWgs84) {
-      EXPECT_EQ(r.centreWgs84->latitudeDeg, wgs84.latitudeDeg);
-      EXPECT_EQ(r.centreWgs84->longitudeDeg, wgs84.longitudeDeg);
-      EXPECT_EQ(r.centreWgs84->heightM, wgs84.heightM);
+      EXPECT_EQ(r.centreWgs84->latitude_deg, wgs84.latitude_deg);
+      EXPECT_EQ(r.centreWgs84->longitude_deg, wgs84.longitude_deg);
+      EXPECT_EQ(r.centreWgs84->height_m, wgs84.height_m);
     }
   }
   // Other values come back within half a unit of the column's last digit, and writing what
@@ -186,9 +186,9 @@ TEST_F(TrajectoryFileTest, RoundTripIsExact) {
   for (std::size_t i = 0; i < random.size(); ++i) {
     const TrackState& t = random[i];
     const TrajectoryRecord& r = file.rows[i];
-    EXPECT_LE(std::abs(r.speedMps - t.speedMps), 0.0005 + 1e-12);
+    EXPECT_LE(std::abs(r.speed_mps - t.speed_mps), 0.0005 + 1e-12);
     EXPECT_LE((r.centreEnu - t.centreEnu).lpNorm<Eigen::Infinity>(), 0.0005 + 1e-9);
-    EXPECT_LE(std::abs(r.headingEnuDeg - t.headingEnuRad * kDegPerRad), 0.005 + 1e-9);
+    EXPECT_LE(std::abs(r.headingEnu_deg - t.headingEnu_rad * kDegPerRad), 0.005 + 1e-9);
     for (std::size_t k = 0; k < t.typeProbabilities.size(); ++k) {
       EXPECT_LE(std::abs(r.typeProbabilities[k] - t.typeProbabilities[k]), 0.00005 + 1e-7);
     }
@@ -249,7 +249,7 @@ TEST_F(TrajectoryFileTest, WriterRejectsWhatTheReaderWould) {
   };
   TrackState t = makeTrack(rng, 7, true);
   TrackState bad = t;
-  bad.speedMps = std::nan("");
+  bad.speed_mps = std::nan("");
   expectRejected(bad, 0, "velocity");
   expectRejected(t, -1, "frame_id");
   bad = t;
@@ -262,10 +262,10 @@ TEST_F(TrajectoryFileTest, WriterRejectsWhatTheReaderWould) {
   bad.shape.count = 4;
   expectRejected(bad, 0, "gamma_1");
   bad = t;
-  bad.lengthM = -1.0;
+  bad.length_m = -1.0;
   expectRejected(bad, 0, "length_m");
   bad = t;
-  bad.headingEnuRad = -0.5;
+  bad.headingEnu_rad = -0.5;
   expectRejected(bad, 0, "heading_enu_deg");
   Wgs84Position wgs84{95.0, 8.0, 400.0};
   EXPECT_FALSE(writer.writeRow(0, t, &wgs84, &why));

@@ -28,7 +28,7 @@ struct LiftCase {
   double slopeEast;
   double slopeNorth;
   camera::LensModel lens;
-  double gimbalPitchDeg;
+  double gimbalPitch_deg;
 };
 
 class GroundTruthLift : public ::testing::TestWithParam<LiftCase> {};
@@ -40,7 +40,7 @@ TEST_P(GroundTruthLift, PositionWithinOneCentimetre) {
   const LiftCase& tc = GetParam();
   Scene scene(tc.fixture ? testworld::fixtureDtm() : testworld::plane(tc.slopeEast, tc.slopeNorth),
               tc.lens);
-  const lifting::DronePose pose = testworld::hoveringPose(30.0, tc.gimbalPitchDeg);
+  const lifting::DronePose pose = testworld::hoveringPose(30.0, tc.gimbalPitch_deg);
   const auto cameraPose = scene.lifter.cameraPose(pose);
   ASSERT_TRUE(cameraPose);
 
@@ -63,33 +63,33 @@ TEST_P(GroundTruthLift, PositionWithinOneCentimetre) {
   ASSERT_EQ(summary.lifted, detections.size());
   EXPECT_EQ(summary.dropped, 0U);
 
-  double maxPositionM = 0.0, maxHeadingDeg = 0.0, maxLengthM = 0.0, maxWidthM = 0.0;
-  double maxRearAxleM = 0.0;
+  double maxPosition_m = 0.0, maxHeading_deg = 0.0, maxLength_m = 0.0, maxWidth_m = 0.0;
+  double maxRearAxle_m = 0.0;
   for (std::size_t i = 0; i < detections.size(); ++i) {
     const VehicleObservation& o = out[i];
     const shape::GroundFootprint& truth = seen[i].footprint;
     ASSERT_EQ(o.liftStatus, LiftStatus::Ok) << toString(o.liftStatus);
-    EXPECT_EQ(o.timestampNs, 1234);
+    EXPECT_EQ(o.timestamp_ns, 1234);
     EXPECT_EQ(o.detection.box.cx, detections[i].box.cx);
     EXPECT_EQ(o.type, seen[i].type);
-    maxPositionM = std::max(maxPositionM, (o.ground.centreEnu - truth.centreEnu).norm());
-    maxHeadingDeg = std::max(
-        maxHeadingDeg, geometry::absAngleDifference(o.ground.headingEnuRad, truth.headingEnuRad) *
-                           180.0 / geometry::kPi);
+    maxPosition_m = std::max(maxPosition_m, (o.ground.centreEnu - truth.centreEnu).norm());
+    maxHeading_deg = std::max(maxHeading_deg, geometry::absAngleDifference(o.ground.headingEnu_rad,
+                                                                           truth.headingEnu_rad) *
+                                                  180.0 / geometry::kPi);
     // GroundBox sizes run along the ground: the true ones are the distances between the
     // edge midpoints standing on the DTM.
-    const Eigen::Vector2d fw(std::cos(truth.headingEnuRad), std::sin(truth.headingEnuRad));
+    const Eigen::Vector2d fw(std::cos(truth.headingEnu_rad), std::sin(truth.headingEnu_rad));
     const Eigen::Vector2d nw(-fw.y(), fw.x());
     const auto onGround = [&](const Eigen::Vector2d& xy) {
       return *scene.terrain.groundPointEnu(xy.x(), xy.y());
     };
     const Eigen::Vector2d c = truth.centreEnu.head<2>();
     const double trueLength =
-        (onGround(c + 0.5 * truth.lengthM * fw) - onGround(c - 0.5 * truth.lengthM * fw)).norm();
+        (onGround(c + 0.5 * truth.length_m * fw) - onGround(c - 0.5 * truth.length_m * fw)).norm();
     const double trueWidth =
-        (onGround(c + 0.5 * truth.widthM * nw) - onGround(c - 0.5 * truth.widthM * nw)).norm();
-    maxLengthM = std::max(maxLengthM, std::abs(o.ground.lengthM - trueLength));
-    maxWidthM = std::max(maxWidthM, std::abs(o.ground.widthM - trueWidth));
+        (onGround(c + 0.5 * truth.width_m * nw) - onGround(c - 0.5 * truth.width_m * nw)).norm();
+    maxLength_m = std::max(maxLength_m, std::abs(o.ground.length_m - trueLength));
+    maxWidth_m = std::max(maxWidth_m, std::abs(o.ground.width_m - trueWidth));
     // The WGS84 centre is the ENU centre's.
     EXPECT_LT((scene.frame.toEnu(o.ground.centreWgs84) - o.ground.centreEnu).norm(), 1e-6);
 
@@ -98,11 +98,11 @@ TEST_P(GroundTruthLift, PositionWithinOneCentimetre) {
     ASSERT_TRUE(o.hasRearAxle);
     const shape::VehicleGeometry g =
         shape::vehicleGeometry(scene.asmModel, seen[i].type, detections[i].gamma);
-    EXPECT_NEAR(o.heightM, g.sizeM.z(), 1e-12);
-    const Eigen::Vector2d f(std::cos(truth.headingEnuRad), std::sin(truth.headingEnuRad));
+    EXPECT_NEAR(o.height_m, g.size_m.z(), 1e-12);
+    const Eigen::Vector2d f(std::cos(truth.headingEnu_rad), std::sin(truth.headingEnu_rad));
     const Eigen::Vector2d axleWant =
-        truth.centreEnu.head<2>() + f * (g.rearAxleM.x() * truth.lengthM / g.sizeM.x());
-    maxRearAxleM = std::max(maxRearAxleM, (o.rearAxleEnu.head<2>() - axleWant).norm());
+        truth.centreEnu.head<2>() + f * (g.rearAxle_m.x() * truth.length_m / g.size_m.x());
+    maxRearAxle_m = std::max(maxRearAxle_m, (o.rearAxleEnu.head<2>() - axleWant).norm());
     const auto axleGround = scene.terrain.groundPointEnu(o.rearAxleEnu.x(), o.rearAxleEnu.y());
     ASSERT_TRUE(axleGround);
     EXPECT_NEAR(o.rearAxleEnu.z(), axleGround->z(), 2e-3);
@@ -111,18 +111,19 @@ TEST_P(GroundTruthLift, PositionWithinOneCentimetre) {
     const auto roofGround = scene.terrain.groundPointEnu(o.keypointsEnu(0, roofFrontLeft),
                                                          o.keypointsEnu(1, roofFrontLeft));
     ASSERT_TRUE(roofGround);
-    EXPECT_NEAR(o.keypointsEnu(2, roofFrontLeft) - roofGround->z(), g.keypointsM(2, roofFrontLeft),
+    EXPECT_NEAR(o.keypointsEnu(2, roofFrontLeft) - roofGround->z(), g.keypoints_m(2, roofFrontLeft),
                 2e-3);
   }
   std::printf(
       "[ %s ] %zu vehicles: max position error %.3g m, heading %.3g deg, length %.3g m, width "
       "%.3g m, rear axle %.3g m\n",
-      tc.name, detections.size(), maxPositionM, maxHeadingDeg, maxLengthM, maxWidthM, maxRearAxleM);
-  EXPECT_LT(maxPositionM, 0.01);
-  EXPECT_LT(maxHeadingDeg, 0.01);
-  EXPECT_LT(maxLengthM, 0.005);
-  EXPECT_LT(maxWidthM, 0.01);
-  EXPECT_LT(maxRearAxleM, 0.005);
+      tc.name, detections.size(), maxPosition_m, maxHeading_deg, maxLength_m, maxWidth_m,
+      maxRearAxle_m);
+  EXPECT_LT(maxPosition_m, 0.01);
+  EXPECT_LT(maxHeading_deg, 0.01);
+  EXPECT_LT(maxLength_m, 0.005);
+  EXPECT_LT(maxWidth_m, 0.01);
+  EXPECT_LT(maxRearAxle_m, 0.005);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -153,8 +154,8 @@ std::optional<geometry::RotatedBox> hullBox(const Scene& scene,
     return std::nullopt;
   }
   const Eigen::Vector3d c = truth.footprint.centreEnu;
-  const Eigen::Vector3d ahead = c + Eigen::Vector3d(std::cos(truth.footprint.headingEnuRad),
-                                                    std::sin(truth.footprint.headingEnuRad), 0.0);
+  const Eigen::Vector3d ahead = c + Eigen::Vector3d(std::cos(truth.footprint.headingEnu_rad),
+                                                    std::sin(truth.footprint.headingEnu_rad), 0.0);
   std::vector<Eigen::Vector3d> points;
   for (int k = 0; k < placed.keypointsEnu.cols(); ++k) {
     points.push_back(placed.keypointsEnu.col(k));
@@ -226,8 +227,8 @@ TEST(DetectionLifter, WholeVehicleBoxesLiftAtHalfTheirHeight) {
 
 // Returns true when the observation carries no world value (all zero, flags off).
 bool noWorldValues(const VehicleObservation& o) {
-  return o.ground.centreEnu == Eigen::Vector3d::Zero() && o.ground.lengthM == 0.0 &&
-         o.ground.centreWgs84.latitudeDeg == 0.0 && !o.hasKeypoints && !o.hasRearAxle &&
+  return o.ground.centreEnu == Eigen::Vector3d::Zero() && o.ground.length_m == 0.0 &&
+         o.ground.centreWgs84.latitude_deg == 0.0 && !o.hasKeypoints && !o.hasRearAxle &&
          o.rearAxleEnu == Eigen::Vector3d::Zero() && o.keypointsEnu.isZero();
 }
 
@@ -266,7 +267,7 @@ TEST(DetectionLifter, MissingStaleOrInvalidPoseKeepsDetectionsWithoutWorldPositi
   expectAll(lift(1000 * kMs), LiftStatus::NoPose);
 
   telemetry::PoseSample sample;
-  sample.timestampNs = 1000 * kMs;
+  sample.timestamp_ns = 1000 * kMs;
   sample.position = pose.position;
   sample.bodyToNed = pose.bodyToNed;
   sample.gimbal = pose.gimbal;
@@ -277,15 +278,15 @@ TEST(DetectionLifter, MissingStaleOrInvalidPoseKeepsDetectionsWithoutWorldPositi
   // The frame is before any telemetry.
   expectAll(lift(500 * kMs), LiftStatus::NoPose);
   // The link now sends NaN: rejected, counted, and the next frame has an invalid pose.
-  sample.timestampNs = 1050 * kMs;
-  sample.position.latitudeDeg = std::numeric_limits<double>::quiet_NaN();
+  sample.timestamp_ns = 1050 * kMs;
+  sample.position.latitude_deg = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(buffer.push(sample), telemetry::PushResult::NotFinite);
   EXPECT_EQ(buffer.counters().notFinite, 1U);
   expectAll(lift(1060 * kMs), LiftStatus::InvalidPose);
 
   // A pose handed over directly as Ok but unusable (NaN, zero quaternion) is caught too.
   lifting::DronePose bad = pose;
-  bad.position.heightM = std::numeric_limits<double>::infinity();
+  bad.position.height_m = std::numeric_limits<double>::infinity();
   expectAll(scene.detectionLifter.liftFrame(scene.lifter, 0, telemetry::PoseStatus::Ok, bad,
                                             detections, out),
             LiftStatus::InvalidPose);
@@ -315,14 +316,14 @@ TEST(DetectionLifter, RaysLeavingTheDtmOrMeetingNoDataGiveAStatus) {
   // NoData: the south-east corner sample of the fixture (col 40, row 40) is missing.
   const geodesy::UtmPoint centre = geodesy::toUtm(testworld::kOrigin);
   geodesy::UtmPoint corner = centre;
-  corner.eastingM = 304510.0 + 99.0;
-  corner.northingM = 4771731.0 - 99.0;
-  corner.heightM = 260.0 + 0.03 * 99.0;
+  corner.easting_m = 304510.0 + 99.0;
+  corner.northing_m = 4771731.0 - 99.0;
+  corner.height_m = 260.0 + 0.03 * 99.0;
   const Eigen::Vector3d cornerEnu = scene.frame.toEnu(geodesy::fromUtm(corner));
   // A nadir view from 100 m above that corner.
   lifting::DronePose nadir = testworld::hoveringPose(0.0, -90.0);
   nadir.position = geodesy::fromUtm(corner);
-  nadir.position.heightM += testworld::kAltitudeM;
+  nadir.position.height_m += testworld::kAltitude_m;
   const auto nadirPose = scene.lifter.cameraPose(nadir);
   ASSERT_TRUE(nadirPose);
   const auto cornerPixel = scene.lifter.worldToPixel(*nadirPose, cornerEnu);
@@ -374,7 +375,7 @@ TEST(DetectionLifter, CapacityAndOrderAreKept) {
     EXPECT_EQ(out[i].type, shape::VehicleType::Large);
     EXPECT_FALSE(out[i].hasKeypoints);  // no ASM for large vehicles
     EXPECT_TRUE(out[i].hasRearAxle);    // the length rule
-    EXPECT_EQ(out[i].heightM, 0.0);
+    EXPECT_EQ(out[i].height_m, 0.0);
   }
 }
 
@@ -404,10 +405,10 @@ TEST(DetectionLifter, LiftingAFrameDoesNotAllocate) {
   vp::test::AllocationCounter counter;
   std::size_t lifted = 0;
   for (int frame = 0; frame < 5; ++frame) {
-    sample.timestampNs = frame * 100'000'000LL;
+    sample.timestamp_ns = frame * 100'000'000LL;
     buffer.push(sample);
     const FrameLiftSummary s = scene.detectionLifter.liftFrame(
-        scene.lifter, sample.timestampNs, buffer.poseAt(sample.timestampNs), detections, out);
+        scene.lifter, sample.timestamp_ns, buffer.poseAt(sample.timestamp_ns), detections, out);
     lifted += s.lifted;
   }
   counter.stop();

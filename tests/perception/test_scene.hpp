@@ -23,13 +23,14 @@
 namespace vp::perception::testworld {
 
 inline const geodesy::GeodeticPoint kOrigin{43.0731, -89.4012, 260.0};
-constexpr double kGroundM = 260.0;    // ellipsoidal height of the ground at the origin
-constexpr double kAltitudeM = 100.0;  // drone above it
+constexpr double kGround_m = 260.0;    // ellipsoidal height of the ground at the origin
+constexpr double kAltitude_m = 100.0;  // drone above it
 
 // UTM grid of 2 m cells, +-halfExtent around the origin:
 // height = 260 + slopeEast * dE + slopeNorth * dN (m).
-inline terrain::TerrainGrid plane(double slopeEast, double slopeNorth, double halfExtentM = 300.0) {
-  return test::planeDtm(kOrigin, kGroundM, slopeEast, slopeNorth, halfExtentM);
+inline terrain::TerrainGrid plane(double slopeEast, double slopeNorth,
+                                  double halfExtent_m = 300.0) {
+  return test::planeDtm(kOrigin, kGround_m, slopeEast, slopeNorth, halfExtent_m);
 }
 
 inline terrain::TerrainGrid fixtureDtm() {
@@ -58,11 +59,11 @@ inline camera::CameraModel makeCamera(camera::LensModel model) {
   return cam;
 }
 
-inline lifting::DronePose hoveringPose(double yawDeg, double gimbalPitchDeg) {
+inline lifting::DronePose hoveringPose(double yaw_deg, double gimbalPitch_deg) {
   lifting::DronePose pose;
-  pose.position = {kOrigin.latitudeDeg, kOrigin.longitudeDeg, kGroundM + kAltitudeM};
-  pose.bodyToNed = Eigen::Quaterniond(geodesy::rotationFromEuler({1.5, -2.0, yawDeg}));
-  pose.gimbal.angles = {0.0, gimbalPitchDeg, 0.0};
+  pose.position = {kOrigin.latitude_deg, kOrigin.longitude_deg, kGround_m + kAltitude_m};
+  pose.bodyToNed = Eigen::Quaterniond(geodesy::rotationFromEuler({1.5, -2.0, yaw_deg}));
+  pose.gimbal.angles = {0.0, gimbalPitch_deg, 0.0};
   return pose;
 }
 
@@ -80,7 +81,7 @@ struct Scene {
     std::string why;
     EXPECT_TRUE(terrain.init(std::move(grid), frame, &why)) << why;
     camera = makeCamera(lens);
-    mount.leverArmM = {0.10, 0.0, 0.20};
+    mount.leverArm_m = {0.10, 0.0, 0.20};
     EXPECT_TRUE(lifter.init(camera, mount, terrain, frame, &why)) << why;
     EXPECT_TRUE(asmModel.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", &why))
         << why;
@@ -118,21 +119,21 @@ inline bool perfectDetection(const Scene& scene, const lifting::CameraPoseWorld&
 }
 
 // Vehicles on a grid of positions with varied headings and sizes, their centres on the DTM.
-inline std::vector<TruthVehicle> truthVehicles(const terrain::TerrainModel& terrain, double spanM,
-                                               double stepM) {
+inline std::vector<TruthVehicle> truthVehicles(const terrain::TerrainModel& terrain, double span_m,
+                                               double step_m) {
   std::vector<TruthVehicle> out;
   int i = 0;
-  for (double x = -spanM; x <= spanM; x += stepM) {
-    for (double y = -spanM; y <= spanM; y += stepM, ++i) {
+  for (double x = -span_m; x <= span_m; x += step_m) {
+    for (double y = -span_m; y <= span_m; y += step_m, ++i) {
       const auto ground = terrain.groundPointEnu(x, y);
       if (!ground) {
         continue;
       }
       TruthVehicle v;
       v.footprint.centreEnu = *ground;
-      v.footprint.headingEnuRad = std::fmod(0.37 * i, 2.0 * 3.141592653589793);
-      v.footprint.lengthM = 4.2 + 0.05 * (i % 13);
-      v.footprint.widthM = 1.75 + 0.02 * (i % 7);
+      v.footprint.headingEnu_rad = std::fmod(0.37 * i, 2.0 * 3.141592653589793);
+      v.footprint.length_m = 4.2 + 0.05 * (i % 13);
+      v.footprint.width_m = 1.75 + 0.02 * (i % 7);
       v.type = static_cast<shape::VehicleType>(i % shape::kCarTypeCount);
       out.push_back(v);
     }

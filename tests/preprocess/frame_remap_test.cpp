@@ -14,14 +14,14 @@
 namespace vp::preprocess {
 namespace {
 
-camera::Intrinsics intrinsics(double focalPx) {
+camera::Intrinsics intrinsics(double focal_px) {
   camera::Intrinsics k;
-  k.widthPx = 640;
-  k.heightPx = 512;
-  k.fxPx = focalPx;
-  k.fyPx = focalPx * 1.003;
-  k.cxPx = 318.4;
-  k.cyPx = 259.1;
+  k.width_px = 640;
+  k.height_px = 512;
+  k.fx_px = focal_px;
+  k.fy_px = focal_px * 1.003;
+  k.cx_px = 318.4;
+  k.cy_px = 259.1;
   return k;
 }
 
@@ -58,9 +58,9 @@ double texture(double x, double y, int channel) {
 // What the distorted camera records: each pixel shows the texture at its ideal ray.
 cv::Mat renderDistorted(const camera::CameraModel& camera) {
   const camera::Intrinsics& k = camera.intrinsics();
-  cv::Mat image(k.heightPx, k.widthPx, CV_8UC3, cv::Scalar::all(0));
-  for (int v = 0; v < k.heightPx; ++v) {
-    for (int u = 0; u < k.widthPx; ++u) {
+  cv::Mat image(k.height_px, k.width_px, CV_8UC3, cv::Scalar::all(0));
+  for (int v = 0; v < k.height_px; ++v) {
+    for (int u = 0; u < k.width_px; ++u) {
       const auto ideal = camera.undistortToNormalized(Eigen::Vector2d(u, v));
       if (!ideal) {
         continue;
@@ -80,15 +80,15 @@ void expectMatchesIdealPinhole(const camera::CameraModel& camera) {
   std::string why;
   ASSERT_TRUE(remap.init(camera, k, &why)) << why;
   const cv::Mat distorted = renderDistorted(camera);
-  cv::Mat undistorted(k.heightPx, k.widthPx, CV_8UC3, cv::Scalar::all(0));
+  cv::Mat undistorted(k.height_px, k.width_px, CV_8UC3, cv::Scalar::all(0));
   ASSERT_TRUE(remap.apply(distorted, undistorted));
   // Compare with the ideal pinhole view where the source lies well inside the frame.
   double sumError = 0.0;
   double maxError = 0.0;
   int count = 0;
-  for (int v = 0; v < k.heightPx; v += 3) {
-    for (int u = 0; u < k.widthPx; u += 3) {
-      const Eigen::Vector2d ideal((u - k.cxPx) / k.fxPx, (v - k.cyPx) / k.fyPx);
+  for (int v = 0; v < k.height_px; v += 3) {
+    for (int u = 0; u < k.width_px; u += 3) {
+      const Eigen::Vector2d ideal((u - k.cx_px) / k.fx_px, (v - k.cy_px) / k.fy_px);
       const Eigen::Vector2d source = camera.distortPixel(Eigen::Vector2d(u, v));
       if (!camera.inImage(source, -3.0)) {
         continue;
@@ -182,7 +182,7 @@ TEST(FrameRemap, RefusesMismatchedBuffers) {
   EXPECT_FALSE(empty.apply(frame, out));
   std::string why;
   camera::Intrinsics bad = camera.intrinsics();
-  bad.fxPx = -1.0;
+  bad.fx_px = -1.0;
   EXPECT_FALSE(remap.init(camera, bad, &why));
   EXPECT_NE(why.find("fx_px"), std::string::npos) << why;
 }

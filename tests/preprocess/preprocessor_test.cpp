@@ -19,17 +19,17 @@ PreprocessOptions undistorting() {
   return options;
 }
 
-constexpr int kFrameWidthPx = 2592;  // the camera of seed 000
-constexpr int kFrameHeightPx = 2048;
+constexpr int kFrameWidth_px = 2592;  // the camera of seed 000
+constexpr int kFrameHeight_px = 2048;
 
 camera::CameraModel camera2592(camera::LensModel lens) {
   camera::Intrinsics k;
-  k.widthPx = kFrameWidthPx;
-  k.heightPx = kFrameHeightPx;
-  k.fxPx = 2300.0;
-  k.fyPx = 2300.0;
-  k.cxPx = 1297.5;
-  k.cyPx = 1021.0;
+  k.width_px = kFrameWidth_px;
+  k.height_px = kFrameHeight_px;
+  k.fx_px = 2300.0;
+  k.fy_px = 2300.0;
+  k.cx_px = 1297.5;
+  k.cy_px = 1021.0;
   camera::Distortion d;
   d.model = lens;
   if (lens == camera::LensModel::BrownConrady) {
@@ -44,7 +44,7 @@ camera::CameraModel camera2592(camera::LensModel lens) {
 }
 
 cv::Mat texturedFrame(std::uint64_t seed) {
-  cv::Mat frame(kFrameHeightPx, kFrameWidthPx, CV_8UC3);
+  cv::Mat frame(kFrameHeight_px, kFrameWidth_px, CV_8UC3);
   cv::RNG rng(seed);
   rng.fill(frame, cv::RNG::UNIFORM, 30, 220);
   return frame;
@@ -54,20 +54,20 @@ TEST(Preprocessor, DefaultScaleGivesOnePaddedTile) {
   const camera::CameraModel camera = camera2592(camera::LensModel::BrownConrady);
   Preprocessor pre;
   std::string why;
-  ASSERT_TRUE(pre.init(undistorting(), camera, {kFrameWidthPx, kFrameHeightPx}, &why)) << why;
+  ASSERT_TRUE(pre.init(undistorting(), camera, {kFrameWidth_px, kFrameHeight_px}, &why)) << why;
   EXPECT_TRUE(pre.undistorts());
   const cv::Mat frame = texturedFrame(1);
   ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok) << pre.lastError();
   const PreprocessedFrame& out = pre.output();
-  EXPECT_EQ(out.geometry.workingWidthPx, 648);
-  EXPECT_EQ(out.geometry.workingHeightPx, 512);
+  EXPECT_EQ(out.geometry.workingWidth_px, 648);
+  EXPECT_EQ(out.geometry.workingHeight_px, 512);
   EXPECT_DOUBLE_EQ(out.geometry.scaleX, 0.25);
   EXPECT_DOUBLE_EQ(out.geometry.workingToFrameU(0.0), 1.5);  // pixel centres: 4 px block
   ASSERT_EQ(out.tiles.size(), 1U);
   const TileView& tile = out.tiles[0];
-  EXPECT_EQ(tile.rect.x0Px, 0);
-  EXPECT_EQ(tile.rect.widthPx, 672);
-  EXPECT_EQ(tile.rect.heightPx, 512);
+  EXPECT_EQ(tile.rect.x0_px, 0);
+  EXPECT_EQ(tile.rect.width_px, 672);
+  EXPECT_EQ(tile.rect.height_px, 512);
   EXPECT_FALSE(tile.rect.innerLeft || tile.rect.innerRight || tile.rect.innerTop ||
                tile.rect.innerBottom);
 
@@ -85,7 +85,7 @@ TEST(Preprocessor, DefaultScaleGivesOnePaddedTile) {
 
   // Lifting uses the pinhole of the undistorted frame.
   EXPECT_EQ(pre.frameCamera().distortion().model, camera::LensModel::Pinhole);
-  EXPECT_DOUBLE_EQ(pre.frameCamera().intrinsics().fxPx, 2300.0);
+  EXPECT_DOUBLE_EQ(pre.frameCamera().intrinsics().fx_px, 2300.0);
 }
 
 TEST(Preprocessor, WithoutCorrectionsTheFrameIsTheCallersFrame) {
@@ -93,7 +93,7 @@ TEST(Preprocessor, WithoutCorrectionsTheFrameIsTheCallersFrame) {
   PreprocessOptions options = undistorting();
   options.undistort = true;  // a pinhole needs none: no remap, no copy
   Preprocessor pre;
-  ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}));
+  ASSERT_TRUE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}));
   EXPECT_FALSE(pre.undistorts());
   const cv::Mat frame = texturedFrame(2);
   ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
@@ -106,7 +106,7 @@ TEST(Preprocessor, WhiteBalanceNeverWritesTheCallersFrame) {
   PreprocessOptions options = undistorting();
   options.whiteBalance = true;
   Preprocessor pre;
-  ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}));
+  ASSERT_TRUE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}));
   cv::Mat frame = texturedFrame(3);
   frame.forEach<cv::Vec3b>(
       [](cv::Vec3b& p, const int*) { p[2] = cv::saturate_cast<std::uint8_t>(p[2] * 1.2); });
@@ -125,23 +125,23 @@ TEST(Preprocessor, FinerWorkingScaleIsTiled) {
   const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
   PreprocessOptions options = undistorting();
   options.workingScale = 0.5;
-  options.tileOverlapPx = 96;
+  options.tileOverlap_px = 96;
   Preprocessor pre;
   std::string why;
-  ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why)) << why;
+  ASSERT_TRUE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}, &why)) << why;
   ASSERT_EQ(pre.tileCount(), 9U);
   const cv::Mat frame = texturedFrame(4);
   ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
   const PreprocessedFrame& out = pre.output();
-  EXPECT_EQ(out.geometry.workingWidthPx, 1296);
+  EXPECT_EQ(out.geometry.workingWidth_px, 1296);
   cv::Mat small;
   cv::resize(frame, small, {1296, 1024}, 0, 0, cv::INTER_AREA);
   for (const TileView& tile : out.tiles) {
     // Each tile shows the working image at its offset.
-    const cv::Mat view(tile.rect.heightPx, tile.rect.widthPx, CV_8UC3,
+    const cv::Mat view(tile.rect.height_px, tile.rect.width_px, CV_8UC3,
                        const_cast<std::uint8_t*>(tile.data), tile.strideBytes);
     EXPECT_EQ(
-        cv::norm(view, small(cv::Rect(tile.rect.x0Px, tile.rect.y0Px, 672, 512)), cv::NORM_INF),
+        cv::norm(view, small(cv::Rect(tile.rect.x0_px, tile.rect.y0_px, 672, 512)), cv::NORM_INF),
         0.0)
         << "tile " << tile.index;
   }
@@ -154,13 +154,13 @@ TEST(Preprocessor, BadFramesAreStatusesNamingTheProblem) {
   Preprocessor pre;
   const cv::Mat frame = texturedFrame(5);
   EXPECT_EQ(pre.process(frame), PreprocessStatus::NotInitialised);
-  ASSERT_TRUE(pre.init(undistorting(), camera, {kFrameWidthPx, kFrameHeightPx}));
+  ASSERT_TRUE(pre.init(undistorting(), camera, {kFrameWidth_px, kFrameHeight_px}));
   EXPECT_EQ(pre.process(cv::Mat()), PreprocessStatus::EmptyFrame);
   EXPECT_NE(std::strstr(pre.lastError(), "empty frame"), nullptr) << pre.lastError();
-  const cv::Mat grey(kFrameHeightPx, kFrameWidthPx, CV_8UC1, cv::Scalar::all(0));
+  const cv::Mat grey(kFrameHeight_px, kFrameWidth_px, CV_8UC1, cv::Scalar::all(0));
   EXPECT_EQ(pre.process(grey), PreprocessStatus::WrongFrameType);
   EXPECT_NE(std::strstr(pre.lastError(), "1 channel"), nullptr) << pre.lastError();
-  const cv::Mat deep(kFrameHeightPx, kFrameWidthPx, CV_16UC3, cv::Scalar::all(0));
+  const cv::Mat deep(kFrameHeight_px, kFrameWidth_px, CV_16UC3, cv::Scalar::all(0));
   EXPECT_EQ(pre.process(deep), PreprocessStatus::WrongFrameType);
   const cv::Mat small(1024, 1296, CV_8UC3, cv::Scalar::all(0));
   EXPECT_EQ(pre.process(small), PreprocessStatus::WrongFrameSize);
@@ -180,18 +180,18 @@ TEST(Preprocessor, InitNamesBadOptions) {
   EXPECT_NE(why.find("differs from the camera model's 2592x2048"), std::string::npos) << why;
   PreprocessOptions options = undistorting();
   options.workingScale = 1.5;
-  EXPECT_FALSE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why));
+  EXPECT_FALSE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}, &why));
   EXPECT_NE(why.find("working_scale"), std::string::npos) << why;
   options = undistorting();
-  options.tileOverlapPx = 400;
-  EXPECT_FALSE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why));
+  options.tileOverlap_px = 400;
+  EXPECT_FALSE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}, &why));
   EXPECT_NE(why.find("tile_overlap_px"), std::string::npos) << why;
   options = undistorting();
   options.workingScale = 1.0;
-  options.networkWidthPx = 64;
-  options.networkHeightPx = 64;
-  options.tileOverlapPx = 16;
-  EXPECT_FALSE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}, &why));
+  options.networkWidth_px = 64;
+  options.networkHeight_px = 64;
+  options.tileOverlap_px = 16;
+  EXPECT_FALSE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}, &why));
   EXPECT_NE(why.find("tiles, more than 64"), std::string::npos) << why;
   EXPECT_FALSE(pre.initialised());
 }
@@ -206,7 +206,7 @@ TEST(Preprocessor, NoHeapAllocationPerFrame) {
       options.threads = threads;
       options.workingScale = scale;
       Preprocessor pre;
-      ASSERT_TRUE(pre.init(options, camera, {kFrameWidthPx, kFrameHeightPx}));
+      ASSERT_TRUE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}));
       ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);  // first frame: warm-up
       test::AllocationCounter counter;
       for (int i = 0; i < 2; ++i) {

@@ -33,20 +33,20 @@ void expectCoverage(int contentW, int contentH, int tileW, int tileH, int overla
   std::vector<int> covered(static_cast<std::size_t>(contentW) * contentH, 0);
   for (std::size_t k = 0; k < n; ++k) {
     const TileRect& t = tiles[k];
-    EXPECT_EQ(t.widthPx, tileW);
-    EXPECT_EQ(t.heightPx, tileH);
-    EXPECT_GE(t.x0Px, 0);
-    EXPECT_GE(t.y0Px, 0);
+    EXPECT_EQ(t.width_px, tileW);
+    EXPECT_EQ(t.height_px, tileH);
+    EXPECT_GE(t.x0_px, 0);
+    EXPECT_GE(t.y0_px, 0);
     // Inside the content wherever the content is at least a tile long.
     if (contentW >= tileW) {
-      EXPECT_LE(t.x0Px + tileW, contentW);
+      EXPECT_LE(t.x0_px + tileW, contentW);
     } else {
-      EXPECT_EQ(t.x0Px, 0);
+      EXPECT_EQ(t.x0_px, 0);
     }
     if (contentH >= tileH) {
-      EXPECT_LE(t.y0Px + tileH, contentH);
+      EXPECT_LE(t.y0_px + tileH, contentH);
     } else {
-      EXPECT_EQ(t.y0Px, 0);
+      EXPECT_EQ(t.y0_px, 0);
     }
     const int i = static_cast<int>(k) % nx;
     const int j = static_cast<int>(k) / nx;
@@ -56,13 +56,13 @@ void expectCoverage(int contentW, int contentH, int tileW, int tileH, int overla
     EXPECT_EQ(t.innerBottom, j + 1 < ny);
     // Overlap with the right and lower neighbours.
     if (i + 1 < nx) {
-      EXPECT_GE(t.x0Px + tileW - tiles[k + 1].x0Px, overlap);
+      EXPECT_GE(t.x0_px + tileW - tiles[k + 1].x0_px, overlap);
     }
     if (j + 1 < ny) {
-      EXPECT_GE(t.y0Px + tileH - tiles[k + static_cast<std::size_t>(nx)].y0Px, overlap);
+      EXPECT_GE(t.y0_px + tileH - tiles[k + static_cast<std::size_t>(nx)].y0_px, overlap);
     }
-    for (int y = t.y0Px; y < std::min(t.y0Px + tileH, contentH); ++y) {
-      for (int x = t.x0Px; x < std::min(t.x0Px + tileW, contentW); ++x) {
+    for (int y = t.y0_px; y < std::min(t.y0_px + tileH, contentH); ++y) {
+      for (int x = t.x0_px; x < std::min(t.x0_px + tileW, contentW); ++x) {
         ++covered[static_cast<std::size_t>(y) * contentW + x];
       }
     }
@@ -82,7 +82,7 @@ TEST(Tiling, CoversTheFrameWithTheRequestedOverlap) {
 TEST(Tiling, RefusesWhatDoesNotFit) {
   std::array<TileRect, 4> four{};
   EXPECT_EQ(layoutTiles(1296, 1024, 672, 512, 96, four), 0U);   // needs 9
-  EXPECT_EQ(four[0].widthPx, 0);                                // nothing written
+  EXPECT_EQ(four[0].width_px, 0);                               // nothing written
   EXPECT_EQ(layoutTiles(1296, 1024, 672, 512, 672, four), 0U);  // overlap >= tile
 }
 

@@ -158,7 +158,7 @@ TEST(WhiteBalance, ValidatesOptions) {
   EXPECT_FALSE(validate(options, &why));
   EXPECT_NE(why.find("max_gain"), std::string::npos) << why;
   options = WhiteBalanceOptions{};
-  options.sampleStridePx = 0;
+  options.sampleStride_px = 0;
   WhiteBalancer balancer;
   EXPECT_FALSE(balancer.init(options, {10, 10}, &why));
   EXPECT_NE(why.find("sample_stride_px"), std::string::npos) << why;

@@ -139,7 +139,7 @@ struct Sample {
 Sample makeSample() {
   Sample sample;
   sample.info.name = "round trip";
-  sample.info.frameRateHz = 29.97;
+  sample.info.frameRate_hz = 29.97;
   sample.info.source = "unit test, \"quoted\" text: with a colon";
   sample.info.notes = "line one\nline two\twith a tab";
 
@@ -147,7 +147,7 @@ Sample makeSample() {
   for (int i = 0; i < 3; ++i) {
     FrameRecord frame;
     frame.frameId = 10 + 2 * i;  // gaps are allowed
-    frame.timestampNs = 1'700'000'000'000'000'000 + i * 33'366'667;
+    frame.timestamp_ns = 1'700'000'000'000'000'000 + i * 33'366'667;
     sample.frames.push_back(frame);
     cv::Mat image(24, 32, CV_8UC3);
     rng.fill(image, cv::RNG::UNIFORM, 0, 256);
@@ -156,7 +156,7 @@ Sample makeSample() {
 
   for (int i = 0; i < 5; ++i) {
     TelemetryRecord record;
-    record.timestampNs = 1'700'000'000'000'000'000 + i * 20'000'000 - 5'000'000;
+    record.timestamp_ns = 1'700'000'000'000'000'000 + i * 20'000'000 - 5'000'000;
     record.position = {43.0731 + (0.1 + 0.2) * 1e-5 * i, -89.4012 - i / 3.0 * 1e-5,
                        360.0 + std::numbers::pi * i};
     record.bodyToNed = Eigen::Quaterniond(
@@ -174,10 +174,10 @@ Sample makeSample() {
     car.type = shape::VehicleType::Suv;
     car.shape.count = 3;
     car.shape.gamma = {0.1F, -1.0F / 3.0F, 2.5e-7F};
-    car.dimensionsM = {4.71, 1.93, 1.71};
+    car.dimensions_m = {4.71, 1.93, 1.71};
     car.positionEnu = {12.5 + f * (0.1 + 0.2), -30.0 / 7.0, 261.125};
-    car.headingEnuRad = std::numbers::pi / 3.0;
-    car.speedMps = 8.333333333333334;
+    car.headingEnu_rad = std::numbers::pi / 3.0;
+    car.speed_mps = 8.333333333333334;
     car.yawRateRadps = -0.0123;
     car.imageBox = {16.1, 12.9, 3.7, 1.4, 2.0 * std::numbers::pi - 1e-9};
     car.truncation = 0.0;
@@ -189,7 +189,7 @@ Sample makeSample() {
   bus.frameId = sample.frames[1].frameId;
   bus.trackId = 9;
   bus.type = shape::VehicleType::Large;
-  bus.dimensionsM = {11.9, 2.55, 3.2};
+  bus.dimensions_m = {11.9, 2.55, 3.2};
   bus.positionEnu = {-40.0, 8.0, 259.0};
   bus.imageBox = {1.0, 2.0, 9.0, 2.0, 0.0};
   bus.truncation = 0.75;
@@ -258,10 +258,10 @@ void expectSameObject(const ObjectTruth& got, const ObjectTruth& want) {
     EXPECT_EQ(got.shape.gamma[static_cast<std::size_t>(i)],
               want.shape.gamma[static_cast<std::size_t>(i)]);
   }
-  EXPECT_EQ(got.dimensionsM, want.dimensionsM);
+  EXPECT_EQ(got.dimensions_m, want.dimensions_m);
   EXPECT_EQ(got.positionEnu, want.positionEnu);
-  EXPECT_EQ(got.headingEnuRad, want.headingEnuRad);
-  EXPECT_EQ(got.speedMps, want.speedMps);
+  EXPECT_EQ(got.headingEnu_rad, want.headingEnu_rad);
+  EXPECT_EQ(got.speed_mps, want.speed_mps);
   EXPECT_EQ(got.yawRateRadps, want.yawRateRadps);
   EXPECT_EQ(got.imageBox.cx, want.imageBox.cx);
   EXPECT_EQ(got.imageBox.cy, want.imageBox.cy);
@@ -294,11 +294,11 @@ TEST(RecordedSequence, WriterReaderRoundTripIsExact) {
   EXPECT_EQ(reader.directory(), directory.string());
   EXPECT_EQ(reader.info().formatVersion, kFormatVersion);
   EXPECT_EQ(reader.info().name, sample.info.name);
-  EXPECT_EQ(reader.info().frameRateHz, sample.info.frameRateHz);
+  EXPECT_EQ(reader.info().frameRate_hz, sample.info.frameRate_hz);
   EXPECT_EQ(reader.info().source, sample.info.source);
   EXPECT_EQ(reader.info().notes, sample.info.notes);
   EXPECT_TRUE(reader.rig().warnings.empty());
-  EXPECT_EQ(reader.rig().intrinsics.widthPx, 32);
+  EXPECT_EQ(reader.rig().intrinsics.width_px, 32);
   EXPECT_EQ(fs::path(reader.rig().dtmPath).filename(), "dtm.tif");
   EXPECT_EQ(readText(reader.rig().dtmPath), readText(kSampleDtm));
   EXPECT_EQ(readText(directory / "rig.yaml"), kRigYaml);
@@ -306,7 +306,7 @@ TEST(RecordedSequence, WriterReaderRoundTripIsExact) {
   ASSERT_EQ(reader.frames().size(), sample.frames.size());
   for (std::size_t i = 0; i < sample.frames.size(); ++i) {
     EXPECT_EQ(reader.frames()[i].frameId, sample.frames[i].frameId);
-    EXPECT_EQ(reader.frames()[i].timestampNs, sample.frames[i].timestampNs);
+    EXPECT_EQ(reader.frames()[i].timestamp_ns, sample.frames[i].timestamp_ns);
     EXPECT_EQ(reader.frames()[i].file, "frames/0000" + std::to_string(10 + 2 * i) + ".png");
     cv::Mat image;
     ASSERT_TRUE(reader.loadFrame(i, image, &why)) << why;
@@ -318,14 +318,14 @@ TEST(RecordedSequence, WriterReaderRoundTripIsExact) {
   for (std::size_t i = 0; i < sample.telemetry.size(); ++i) {
     const TelemetryRecord& got = reader.telemetry()[i];
     const TelemetryRecord& want = sample.telemetry[i];
-    EXPECT_EQ(got.timestampNs, want.timestampNs);
-    EXPECT_EQ(got.position.latitudeDeg, want.position.latitudeDeg);
-    EXPECT_EQ(got.position.longitudeDeg, want.position.longitudeDeg);
-    EXPECT_EQ(got.position.heightM, want.position.heightM);
+    EXPECT_EQ(got.timestamp_ns, want.timestamp_ns);
+    EXPECT_EQ(got.position.latitude_deg, want.position.latitude_deg);
+    EXPECT_EQ(got.position.longitude_deg, want.position.longitude_deg);
+    EXPECT_EQ(got.position.height_m, want.position.height_m);
     EXPECT_EQ(got.bodyToNed.coeffs(), want.bodyToNed.coeffs());
-    EXPECT_EQ(got.gimbal.angles.rollDeg, want.gimbal.angles.rollDeg);
-    EXPECT_EQ(got.gimbal.angles.pitchDeg, want.gimbal.angles.pitchDeg);
-    EXPECT_EQ(got.gimbal.angles.yawDeg, want.gimbal.angles.yawDeg);
+    EXPECT_EQ(got.gimbal.angles.roll_deg, want.gimbal.angles.roll_deg);
+    EXPECT_EQ(got.gimbal.angles.pitch_deg, want.gimbal.angles.pitch_deg);
+    EXPECT_EQ(got.gimbal.angles.yaw_deg, want.gimbal.angles.yaw_deg);
     EXPECT_EQ(got.gimbal.reference, want.gimbal.reference);
   }
 
@@ -407,16 +407,16 @@ TEST(RecordedSequence, OpensTheShippedFixture) {
   std::string why;
   ASSERT_TRUE(reader.open(kFixture.string(), &why)) << why;
   EXPECT_EQ(reader.info().name, "sequence_min");
-  EXPECT_EQ(reader.info().frameRateHz, 10.0);
+  EXPECT_EQ(reader.info().frameRate_hz, 10.0);
   EXPECT_TRUE(reader.info().notes.empty());
   EXPECT_TRUE(reader.rig().warnings.empty());
   EXPECT_EQ(fs::path(reader.rig().dtmPath).filename(), "sloped_utm16n.tif");
   ASSERT_EQ(reader.frames().size(), 2U);
-  EXPECT_EQ(reader.frames()[1].timestampNs, 1'700'000'000'100'000'000);
+  EXPECT_EQ(reader.frames()[1].timestamp_ns, 1'700'000'000'100'000'000);
   ASSERT_EQ(reader.telemetry().size(), 4U);
   EXPECT_EQ(reader.telemetry()[1].bodyToNed.z(), 0.7071067811865476);
   EXPECT_EQ(reader.telemetry()[2].gimbal.reference, geodesy::GimbalReference::Earth);
-  EXPECT_EQ(reader.telemetry()[3].position.latitudeDeg, 43.07310135);
+  EXPECT_EQ(reader.telemetry()[3].position.latitude_deg, 43.07310135);
 
   ASSERT_TRUE(reader.hasGroundTruth());
   ASSERT_EQ(reader.objects(0).size(), 1U);
@@ -711,7 +711,7 @@ TEST(RecordedSequence, WriterRejectsInvalidInput) {
   EXPECT_FALSE(writer.writeTelemetry(telemetry, &why));
   EXPECT_TRUE(contains(why, "telemetry.csv:2: qw,qx,qy,qz: quaternion norm 0.5 is not 1"));
   telemetry.bodyToNed = Eigen::Quaterniond::Identity();
-  telemetry.position.heightM = std::nan("");
+  telemetry.position.height_m = std::nan("");
   EXPECT_FALSE(writer.writeTelemetry(telemetry, &why));
   EXPECT_TRUE(contains(why, "telemetry.csv:2: height_m: not finite 'nan'"));
 

@@ -34,14 +34,14 @@ TEST(VehicleGeometry, MeanShapeSizeAtGammaZero) {
   ASSERT_TRUE(g.hasKeypoints);
   const Eigen::Vector3d meanSize = boundingBoxSize(model.mean());
   std::printf("mean shape L W H = %.3f %.3f %.3f m\n", meanSize.x(), meanSize.y(), meanSize.z());
-  EXPECT_NEAR(g.sizeM.x(), meanSize.x(), 1e-12);
-  EXPECT_NEAR(g.sizeM.y(), meanSize.y(), 1e-12);
-  EXPECT_NEAR(g.sizeM.z(), meanSize.z(), 1e-12);
-  EXPECT_EQ(g.keypointsM, model.mean());
+  EXPECT_NEAR(g.size_m.x(), meanSize.x(), 1e-12);
+  EXPECT_NEAR(g.size_m.y(), meanSize.y(), 1e-12);
+  EXPECT_NEAR(g.size_m.z(), meanSize.z(), 1e-12);
+  EXPECT_EQ(g.keypoints_m, model.mean());
   // A plausible car, footprint centred on the vehicle-frame origin (docs/asm.md).
-  EXPECT_GT(g.sizeM.x(), 4.0);
-  EXPECT_LT(g.sizeM.x(), 5.2);
-  EXPECT_NEAR(g.footprintCentreM.norm(), 0.0, 1e-9);
+  EXPECT_GT(g.size_m.x(), 4.0);
+  EXPECT_LT(g.size_m.x(), 5.2);
+  EXPECT_NEAR(g.footprintCentre_m.norm(), 0.0, 1e-9);
 }
 
 TEST(VehicleGeometry, RearAxleLiesBetweenTheRearWheelsOnTheRoad) {
@@ -50,16 +50,16 @@ TEST(VehicleGeometry, RearAxleLiesBetweenTheRearWheelsOnTheRoad) {
     const VehicleGeometry g = vehicleGeometry(model, VehicleType::Compact, p);
     ASSERT_TRUE(g.hasKeypoints);
     const auto& wheels = wheelCentreKeypoints();
-    const Eigen::Vector3d left = g.keypointsM.col(wheels[2]);
-    const Eigen::Vector3d right = g.keypointsM.col(wheels[3]);
-    EXPECT_NEAR(g.rearAxleM.x(), 0.5 * (left.x() + right.x()), 1e-12);
-    EXPECT_NEAR(g.rearAxleM.y(), 0.5 * (left.y() + right.y()), 1e-12);
-    EXPECT_EQ(g.rearAxleM.z(), 0.0);  // seed 002: the point at street level
-    EXPECT_LT(g.rearAxleM.y(), left.y());
-    EXPECT_GT(g.rearAxleM.y(), right.y());
+    const Eigen::Vector3d left = g.keypoints_m.col(wheels[2]);
+    const Eigen::Vector3d right = g.keypoints_m.col(wheels[3]);
+    EXPECT_NEAR(g.rearAxle_m.x(), 0.5 * (left.x() + right.x()), 1e-12);
+    EXPECT_NEAR(g.rearAxle_m.y(), 0.5 * (left.y() + right.y()), 1e-12);
+    EXPECT_EQ(g.rearAxle_m.z(), 0.0);  // seed 002: the point at street level
+    EXPECT_LT(g.rearAxle_m.y(), left.y());
+    EXPECT_GT(g.rearAxle_m.y(), right.y());
     // Behind the centre, ahead of the rear bumper.
-    EXPECT_LT(g.rearAxleM.x(), -0.5);
-    EXPECT_GT(g.rearAxleM.x(), -0.5 * g.sizeM.x());
+    EXPECT_LT(g.rearAxle_m.x(), -0.5);
+    EXPECT_GT(g.rearAxle_m.x(), -0.5 * g.size_m.x());
   }
 }
 
@@ -73,14 +73,14 @@ TEST(VehicleGeometry, MissingGammaUsesTheTypePriorAndLargeVehiclesHaveNoKeypoint
                       gammaOf(static_cast<float>(prior.mean[0]), static_cast<float>(prior.mean[1]),
                               static_cast<float>(prior.mean[2])));
   ASSERT_TRUE(none.hasKeypoints);
-  EXPECT_TRUE(none.keypointsM.isApprox(mean.keypointsM, 1e-12));
+  EXPECT_TRUE(none.keypoints_m.isApprox(mean.keypoints_m, 1e-12));
   // Vans are taller than sports cars under their priors.
   const VehicleGeometry sports = vehicleGeometry(model, VehicleType::Sports, ShapeParams{});
-  EXPECT_GT(none.sizeM.z(), sports.sizeM.z() + 0.2);
+  EXPECT_GT(none.size_m.z(), sports.size_m.z() + 0.2);
 
   const VehicleGeometry large = vehicleGeometry(model, VehicleType::Large, gammaOf(1, 1, 1));
   EXPECT_FALSE(large.hasKeypoints);
-  EXPECT_EQ(large.sizeM, Eigen::Vector3d::Zero());
+  EXPECT_EQ(large.size_m, Eigen::Vector3d::Zero());
 }
 
 // Placement: the footprint of the placed keypoints is the detected one (centre, heading,
@@ -91,9 +91,9 @@ TEST(VehicleGeometry, PlacementMatchesTheFootprintAndStandsOnTheGround) {
   ASSERT_TRUE(g.hasKeypoints);
   GroundFootprint footprint;
   footprint.centreEnu = {12.0, -7.0, 3.0};
-  footprint.headingEnuRad = 2.3;
-  footprint.lengthM = g.sizeM.x() * 1.05;  // the detector saw it 5 % longer
-  footprint.widthM = g.sizeM.y() * 0.97;
+  footprint.headingEnu_rad = 2.3;
+  footprint.length_m = g.size_m.x() * 1.05;  // the detector saw it 5 % longer
+  footprint.width_m = g.size_m.y() * 0.97;
   // Ground: a 10 % slope towards north-east.
   const auto groundZ = [](const Eigen::Vector2d& xy) -> std::optional<double> {
     return 3.0 + 0.1 * ((xy.x() - 12.0) + (xy.y() + 7.0));
@@ -104,7 +104,7 @@ TEST(VehicleGeometry, PlacementMatchesTheFootprintAndStandsOnTheGround) {
   EXPECT_NEAR(placed.lengthScale, 1.05, 1e-12);
   EXPECT_NEAR(placed.widthScale, 0.97, 1e-12);
   // Back into the footprint's frame.
-  const Eigen::Vector2d f(std::cos(footprint.headingEnuRad), std::sin(footprint.headingEnuRad));
+  const Eigen::Vector2d f(std::cos(footprint.headingEnu_rad), std::sin(footprint.headingEnu_rad));
   const Eigen::Vector2d n(-f.y(), f.x());
   double minA = 1e9, maxA = -1e9, minC = 1e9, maxC = -1e9;
   for (int k = 0; k < kKeypointCount; ++k) {
@@ -114,10 +114,10 @@ TEST(VehicleGeometry, PlacementMatchesTheFootprintAndStandsOnTheGround) {
     maxA = std::max(maxA, r.dot(f));
     minC = std::min(minC, r.dot(n));
     maxC = std::max(maxC, r.dot(n));
-    EXPECT_NEAR(p.z() - *groundZ(p.head<2>()), g.keypointsM(2, k), 1e-12) << k;
+    EXPECT_NEAR(p.z() - *groundZ(p.head<2>()), g.keypoints_m(2, k), 1e-12) << k;
   }
-  EXPECT_NEAR(maxA - minA, footprint.lengthM, 1e-9);
-  EXPECT_NEAR(maxC - minC, footprint.widthM, 1e-9);
+  EXPECT_NEAR(maxA - minA, footprint.length_m, 1e-9);
+  EXPECT_NEAR(maxC - minC, footprint.width_m, 1e-9);
   EXPECT_NEAR(maxA + minA, 0.0, 1e-9);
   EXPECT_NEAR(maxC + minC, 0.0, 1e-9);
   // Front bumper corners are ahead (driving direction kept).
@@ -126,12 +126,12 @@ TEST(VehicleGeometry, PlacementMatchesTheFootprintAndStandsOnTheGround) {
   // Rear axle on the ground, behind the centre by the scaled ASM offset.
   EXPECT_NEAR(placed.rearAxleEnu.z(), *groundZ(placed.rearAxleEnu.head<2>()), 1e-12);
   EXPECT_NEAR((placed.rearAxleEnu.head<2>() - footprint.centreEnu.head<2>()).dot(f),
-              g.rearAxleM.x() * 1.05, 1e-9);
+              g.rearAxle_m.x() * 1.05, 1e-9);
 
   // A vehicle without keypoints gets the rear axle from the length rule.
   const VehicleGeometry large = vehicleGeometry(model, VehicleType::Large, ShapeParams{});
-  footprint.lengthM = 12.0;
-  footprint.widthM = 2.5;
+  footprint.length_m = 12.0;
+  footprint.width_m = 2.5;
   PlacedVehicle bus;
   ASSERT_TRUE(placeOnGround(large, footprint, groundZ, &bus));
   EXPECT_FALSE(bus.hasKeypoints);
@@ -145,11 +145,11 @@ TEST(VehicleGeometry, PlacementMatchesTheFootprintAndStandsOnTheGround) {
     }
     return 0.0;
   };
-  footprint.lengthM = 4.6;
-  footprint.widthM = 1.9;
+  footprint.length_m = 4.6;
+  footprint.width_m = 1.9;
   EXPECT_FALSE(placeOnGround(g, footprint, noGround, &placed));
   EXPECT_FALSE(placed.hasKeypoints);
-  footprint.lengthM = 0.0;
+  footprint.length_m = 0.0;
   EXPECT_FALSE(placeOnGround(g, footprint, groundZ, &placed));
 }
 

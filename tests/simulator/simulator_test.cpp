@@ -70,14 +70,14 @@ struct Recorded {
 };
 
 Recorded simulate(vp::sim::SceneKind scene, std::uint64_t seed, const std::string& name,
-                  std::optional<double> tiltDeg = std::nullopt) {
+                  std::optional<double> tilt_deg = std::nullopt) {
   Recorded r;
   r.dir = freshDir(name);
   vp::sim::SimOptions o = smallOptions(scene, seed, r.dir);
   // Larger frames here so vehicles cover enough pixels for the silhouette checks.
   o.width = 480;
   o.height = 380;
-  o.tiltDeg = tiltDeg;
+  o.tilt_deg = tilt_deg;
   vp::sim::Simulator sim;
   std::string why;
   EXPECT_TRUE(sim.init(o, &why)) << why;
@@ -110,7 +110,7 @@ void checkKeypoints(const Recorded& rec) {
   ASSERT_EQ(reader.frames().size(), rec.frames.size());
   int checked = 0;
   int visibleChecked = 0;
-  double maxReprojectionPx = 0.0;
+  double maxReprojection_px = 0.0;
   for (std::size_t i = 0; i < reader.frames().size(); ++i) {
     const auto& t = reader.telemetry()[i];
     vp::lifting::DronePose pose;
@@ -125,7 +125,7 @@ void checkKeypoints(const Recorded& rec) {
       ASSERT_TRUE(p.hasValue());
       EXPECT_LT((*p - kp.pixel).norm(), 0.5)
           << "frame " << i << " track " << kp.trackId << " kp " << kp.keypoint;
-      maxReprojectionPx = std::max(maxReprojectionPx, (*p - kp.pixel).norm());
+      maxReprojection_px = std::max(maxReprojection_px, (*p - kp.pixel).norm());
       ++checked;
       if (!kp.visible) {
         continue;
@@ -153,12 +153,12 @@ void checkKeypoints(const Recorded& rec) {
   EXPECT_GT(checked, 50);
   EXPECT_GT(visibleChecked, 20);
   std::printf("[ measure ] %d keypoints re-projected, max error %.3g px; %d visible on their car\n",
-              checked, maxReprojectionPx, visibleChecked);
+              checked, maxReprojection_px, visibleChecked);
 }
 
 void checkBoxes(const Recorded& rec) {
   int pixels = 0;
-  double maxOutsidePx = 0.0;  // how far the farthest silhouette pixel lies outside its box
+  double maxOutside_px = 0.0;  // how far the farthest silhouette pixel lies outside its box
   for (const auto& f : rec.frames) {
     std::map<int, vp::geometry::RotatedBox> boxes;
     for (const auto& o : f.objects) {
@@ -180,15 +180,15 @@ void checkBoxes(const Recorded& rec) {
             << "track " << id << " at " << u << "," << v;
         EXPECT_LE(std::fabs(across), 0.5 * b.width + 1.0)
             << "track " << id << " at " << u << "," << v;
-        maxOutsidePx = std::max(
-            {maxOutsidePx, std::fabs(along) - 0.5 * b.length, std::fabs(across) - 0.5 * b.width});
+        maxOutside_px = std::max(
+            {maxOutside_px, std::fabs(along) - 0.5 * b.length, std::fabs(across) - 0.5 * b.width});
         ++pixels;
       }
     }
   }
   EXPECT_GT(pixels, 500);
   std::printf("[ measure ] %d silhouette pixels, farthest %.3g px outside its box (<= 0: inside)\n",
-              pixels, maxOutsidePx);
+              pixels, maxOutside_px);
 }
 
 }  // namespace

@@ -11,13 +11,13 @@
 
 namespace vp::test {
 
-inline cv::Mat syntheticCarFrame(int widthPx, int heightPx, std::uint64_t seed, int cars) {
-  cv::Mat frame(heightPx, widthPx, CV_8UC3);
+inline cv::Mat syntheticCarFrame(int width_px, int height_px, std::uint64_t seed, int cars) {
+  cv::Mat frame(height_px, width_px, CV_8UC3);
   cv::RNG rng(seed);
   rng.fill(frame, cv::RNG::NORMAL, 110, 12);
   for (int i = 0; i < cars; ++i) {
-    const cv::RotatedRect car({static_cast<float>(rng.uniform(100, widthPx - 92)),
-                               static_cast<float>(rng.uniform(100, heightPx - 98))},
+    const cv::RotatedRect car({static_cast<float>(rng.uniform(100, width_px - 92)),
+                               static_cast<float>(rng.uniform(100, height_px - 98))},
                               {150.0F, 60.0F}, static_cast<float>(rng.uniform(0, 360)));
     cv::Point2f corners[4];
     car.points(corners);

@@ -13,11 +13,11 @@ namespace {
 
 constexpr std::int64_t kMs = 1'000'000;  // ns per ms
 
-PoseSample sampleAt(std::int64_t t, double lat, double lon, double h, double yawDeg) {
+PoseSample sampleAt(std::int64_t t, double lat, double lon, double h, double yaw_deg) {
   PoseSample s;
-  s.timestampNs = t;
+  s.timestamp_ns = t;
   s.position = {lat, lon, h};
-  s.bodyToNed = Eigen::Quaterniond(geodesy::rotationFromEuler({0.0, 0.0, yawDeg}));
+  s.bodyToNed = Eigen::Quaterniond(geodesy::rotationFromEuler({0.0, 0.0, yaw_deg}));
   s.gimbal.angles = {0.0, -80.0, 0.0};
   return s;
 }
@@ -39,9 +39,9 @@ TEST(PoseBuffer, InitRejectsBadConfigurationNamingTheField) {
   EXPECT_FALSE(buffer.init(config, &why));
   EXPECT_NE(why.find("capacity"), std::string::npos) << why;
   config = {};
-  config.maxAgeNs = 0;
+  config.maxAge_ns = 0;
   EXPECT_FALSE(buffer.init(config, &why));
-  EXPECT_NE(why.find("maxAgeNs"), std::string::npos) << why;
+  EXPECT_NE(why.find("maxAge_ns"), std::string::npos) << why;
   EXPECT_EQ(buffer.push(sampleAt(0, 43.0, -89.0, 300.0, 0.0)), PushResult::NotInitialised);
 }
 
@@ -49,7 +49,7 @@ TEST(PoseBuffer, EmptyBufferHasNoPose) {
   const PoseBuffer buffer = makeBuffer();
   const PoseEstimate e = buffer.poseAt(123);
   EXPECT_EQ(e.status, PoseStatus::NoPose);
-  EXPECT_EQ(e.ageNs, -1);
+  EXPECT_EQ(e.age_ns, -1);
 }
 
 // Linear motion in latitude, longitude and height is reproduced exactly between samples
@@ -65,21 +65,23 @@ TEST(PoseBuffer, InterpolationIsExactOnLinearMotion) {
     s.position = truth(t);
     ASSERT_EQ(buffer.push(s), PushResult::Accepted);
   }
-  double maxErrorDeg = 0.0;
-  double maxErrorM = 0.0;
+  double maxError_deg = 0.0;
+  double maxError_m = 0.0;
   for (std::int64_t t = 0; t <= 1150 * kMs; t += 7 * kMs) {
     const PoseEstimate e = buffer.poseAt(t);
     ASSERT_EQ(e.status, PoseStatus::Ok) << t;
     const geodesy::GeodeticPoint want = truth(t);
-    maxErrorDeg = std::max({maxErrorDeg, std::abs(e.pose.position.latitudeDeg - want.latitudeDeg),
-                            std::abs(e.pose.position.longitudeDeg - want.longitudeDeg)});
-    maxErrorM = std::max(maxErrorM, std::abs(e.pose.position.heightM - want.heightM));
-    EXPECT_EQ(e.pose.timestampNs, t);
-    EXPECT_LE(e.ageNs, 50 * kMs + 150 * kMs);
+    maxError_deg =
+        std::max({maxError_deg, std::abs(e.pose.position.latitude_deg - want.latitude_deg),
+                  std::abs(e.pose.position.longitude_deg - want.longitude_deg)});
+    maxError_m = std::max(maxError_m, std::abs(e.pose.position.height_m - want.height_m));
+    EXPECT_EQ(e.pose.timestamp_ns, t);
+    EXPECT_LE(e.age_ns, 50 * kMs + 150 * kMs);
   }
-  std::printf("linear motion: max lat/lon error %.3g deg, height %.3g m\n", maxErrorDeg, maxErrorM);
-  EXPECT_LT(maxErrorDeg, 1e-11);
-  EXPECT_LT(maxErrorM, 1e-9);
+  std::printf("linear motion: max lat/lon error %.3g deg, height %.3g m\n", maxError_deg,
+              maxError_m);
+  EXPECT_LT(maxError_deg, 1e-11);
+  EXPECT_LT(maxError_m, 1e-9);
 }
 
 // The attitude between two samples is the slerp: a constant-rate yaw gives the linear angle.
@@ -87,9 +89,9 @@ TEST(PoseBuffer, AttitudeIsSlerpedAndGimbalYawWrapsAround) {
   PoseBuffer buffer = makeBuffer();
   PoseSample a = sampleAt(0, 43.0, -89.0, 300.0, 170.0);
   PoseSample b = sampleAt(100 * kMs, 43.0, -89.0, 300.0, -170.0);  // +20 deg across 180
-  a.gimbal.angles.yawDeg = 175.0;
-  b.gimbal.angles.yawDeg = -165.0;  // +20 deg across the wrap
-  b.bodyToNed.coeffs() *= -1.0;     // the same rotation with the other sign: still short way
+  a.gimbal.angles.yaw_deg = 175.0;
+  b.gimbal.angles.yaw_deg = -165.0;  // +20 deg across the wrap
+  b.bodyToNed.coeffs() *= -1.0;      // the same rotation with the other sign: still short way
   ASSERT_EQ(buffer.push(a), PushResult::Accepted);
   ASSERT_EQ(buffer.push(b), PushResult::Accepted);
   for (int i = 0; i <= 10; ++i) {
@@ -99,14 +101,14 @@ TEST(PoseBuffer, AttitudeIsSlerpedAndGimbalYawWrapsAround) {
     const double wantYaw = 170.0 + 2.0 * i;  // through 180
     const geodesy::EulerAnglesDeg got =
         geodesy::eulerFromRotation(e.pose.bodyToNed.toRotationMatrix());
-    EXPECT_NEAR(std::remainder(got.yawDeg - wantYaw, 360.0), 0.0, 1e-9) << i;
-    EXPECT_NEAR(got.rollDeg, 0.0, 1e-9);
-    EXPECT_NEAR(got.pitchDeg, 0.0, 1e-9);
+    EXPECT_NEAR(std::remainder(got.yaw_deg - wantYaw, 360.0), 0.0, 1e-9) << i;
+    EXPECT_NEAR(got.roll_deg, 0.0, 1e-9);
+    EXPECT_NEAR(got.pitch_deg, 0.0, 1e-9);
     const double wantGimbalYaw = std::remainder(175.0 + 2.0 * i, 360.0);
-    EXPECT_NEAR(e.pose.gimbal.angles.yawDeg, wantGimbalYaw, 1e-9) << i;
-    EXPECT_GT(e.pose.gimbal.angles.yawDeg, -180.0);
-    EXPECT_LE(e.pose.gimbal.angles.yawDeg, 180.0);
-    EXPECT_NEAR(e.pose.gimbal.angles.pitchDeg, -80.0, 1e-12);
+    EXPECT_NEAR(e.pose.gimbal.angles.yaw_deg, wantGimbalYaw, 1e-9) << i;
+    EXPECT_GT(e.pose.gimbal.angles.yaw_deg, -180.0);
+    EXPECT_LE(e.pose.gimbal.angles.yaw_deg, 180.0);
+    EXPECT_NEAR(e.pose.gimbal.angles.pitch_deg, -80.0, 1e-12);
   }
   // A general rotation pair: the midpoint is the geodesic midpoint (equal angles to both ends).
   PoseBuffer general = makeBuffer();
@@ -140,12 +142,12 @@ TEST(PoseBuffer, StaleAndMissingPoses) {
   EXPECT_EQ(buffer.poseAt(1950 * kMs).status, PoseStatus::Ok);
   const PoseEstimate gap = buffer.poseAt(1600 * kMs);
   EXPECT_EQ(gap.status, PoseStatus::Stale);
-  EXPECT_EQ(gap.ageNs, 500 * kMs);
+  EXPECT_EQ(gap.age_ns, 500 * kMs);
   // After the newest: extrapolated up to the max age, Stale beyond.
   EXPECT_EQ(buffer.poseAt(2300 * kMs).status, PoseStatus::Ok);
   const PoseEstimate late = buffer.poseAt(2301 * kMs);
   EXPECT_EQ(late.status, PoseStatus::Stale);
-  EXPECT_EQ(late.ageNs, 201 * kMs);
+  EXPECT_EQ(late.age_ns, 201 * kMs);
 }
 
 TEST(PoseBuffer, InvalidSamplesAreRejectedCountedAndNeverUsed) {
@@ -158,7 +160,7 @@ TEST(PoseBuffer, InvalidSamplesAreRejectedCountedAndNeverUsed) {
   EXPECT_EQ(buffer.push(sampleAt(150 * kMs, nan, -89.0, 300.0, 0.0)), PushResult::NotFinite);
   EXPECT_EQ(buffer.push(sampleAt(160 * kMs, 43.0, -89.0, inf, 0.0)), PushResult::NotFinite);
   PoseSample badGimbal = sampleAt(165 * kMs, 43.0, -89.0, 300.0, 0.0);
-  badGimbal.gimbal.angles.pitchDeg = nan;
+  badGimbal.gimbal.angles.pitch_deg = nan;
   EXPECT_EQ(buffer.push(badGimbal), PushResult::NotFinite);
   PoseSample zero = sampleAt(170 * kMs, 43.0, -89.0, 300.0, 0.0);
   zero.bodyToNed.coeffs().setZero();
@@ -179,15 +181,15 @@ TEST(PoseBuffer, InvalidSamplesAreRejectedCountedAndNeverUsed) {
   // Between the good samples nothing changed; after the newest, the link is broken: Invalid.
   const PoseEstimate between = buffer.poseAt(50 * kMs);
   EXPECT_EQ(between.status, PoseStatus::Ok);
-  EXPECT_NEAR(between.pose.position.heightM, 305.0, 1e-9);
+  EXPECT_NEAR(between.pose.position.height_m, 305.0, 1e-9);
   const PoseEstimate after = buffer.poseAt(150 * kMs);
   EXPECT_EQ(after.status, PoseStatus::Invalid);
-  EXPECT_TRUE(after.pose.position.latitudeDeg == 43.0);  // the last good sample, never the NaN
+  EXPECT_TRUE(after.pose.position.latitude_deg == 43.0);  // the last good sample, never the NaN
   // A good sample heals it.
   ASSERT_EQ(buffer.push(sampleAt(200 * kMs, 43.0, -89.0, 320.0, 0.0)), PushResult::Accepted);
   const PoseEstimate healed = buffer.poseAt(150 * kMs);
   EXPECT_EQ(healed.status, PoseStatus::Ok);
-  EXPECT_NEAR(healed.pose.position.heightM, 315.0, 1e-9);
+  EXPECT_NEAR(healed.pose.position.height_m, 315.0, 1e-9);
 }
 
 TEST(PoseBuffer, RingKeepsTheNewestSamplesAndCountsOverwrites) {
@@ -201,14 +203,14 @@ TEST(PoseBuffer, RingKeepsTheNewestSamplesAndCountsOverwrites) {
   EXPECT_EQ(buffer.poseAt(500 * kMs).status, PoseStatus::NoPose);  // forgotten
   const PoseEstimate e = buffer.poseAt(750 * kMs);
   ASSERT_EQ(e.status, PoseStatus::Ok);
-  EXPECT_NEAR(e.pose.position.heightM, 307.5, 1e-9);
+  EXPECT_NEAR(e.pose.position.height_m, 307.5, 1e-9);
 }
 
 TEST(PoseBuffer, LongitudeInterpolatesAcrossTheAntimeridian) {
   const geodesy::GeodeticPoint a{-17.0, 179.9, 100.0};
   const geodesy::GeodeticPoint b{-17.0, -179.9, 100.0};
   const geodesy::GeodeticPoint mid = interpolatePosition(a, b, 0.75);
-  EXPECT_NEAR(mid.longitudeDeg, -179.95, 1e-9);
+  EXPECT_NEAR(mid.longitude_deg, -179.95, 1e-9);
 }
 
 TEST(PoseBuffer, PushAndQueryDoNotAllocate) {
@@ -217,7 +219,7 @@ TEST(PoseBuffer, PushAndQueryDoNotAllocate) {
   double sum = 0.0;
   for (int i = 0; i < 500; ++i) {
     buffer.push(sampleAt(i * 20 * kMs, 43.0, -89.0, 300.0, i * 0.5));
-    sum += buffer.poseAt(i * 20 * kMs - 7 * kMs).pose.position.heightM;
+    sum += buffer.poseAt(i * 20 * kMs - 7 * kMs).pose.position.height_m;
   }
   counter.stop();
   EXPECT_GT(sum, 0.0);

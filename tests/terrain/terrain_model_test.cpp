@@ -48,7 +48,7 @@ double gMaxAbs = 0.0;
 struct UtmGridSpec {
   int cols = 201;
   int rows = 201;
-  double cellM = 5.0;
+  double cell_m = 5.0;
   std::function<double(double, double)> height;
 };
 
@@ -62,18 +62,18 @@ TerrainGrid makeUtmGrid(const UtmGridSpec& spec) {
   grid.cols = spec.cols;
   grid.rows = spec.rows;
   grid.crs = CrsSpec{HorizontalCrs::Utm, 16, true};
-  grid.transform.x0 = o.eastingM - 0.5 * (spec.cols - 1) * spec.cellM;
-  grid.transform.dxCol = spec.cellM;
+  grid.transform.x0 = o.easting_m - 0.5 * (spec.cols - 1) * spec.cell_m;
+  grid.transform.dxCol = spec.cell_m;
   grid.transform.dxRow = 0.0;
-  grid.transform.y0 = o.northingM + 0.5 * (spec.rows - 1) * spec.cellM;
+  grid.transform.y0 = o.northing_m + 0.5 * (spec.rows - 1) * spec.cell_m;
   grid.transform.dyCol = 0.0;
-  grid.transform.dyRow = -spec.cellM;
-  grid.heightsM.resize(static_cast<std::size_t>(spec.cols) * spec.rows);
+  grid.transform.dyRow = -spec.cell_m;
+  grid.heights_m.resize(static_cast<std::size_t>(spec.cols) * spec.rows);
   for (int r = 0; r < spec.rows; ++r) {
     for (int c = 0; c < spec.cols; ++c) {
-      const double e = grid.transform.x0 + c * spec.cellM - o.eastingM;
-      const double n = grid.transform.y0 - r * spec.cellM - o.northingM;
-      grid.heightsM[static_cast<std::size_t>(r) * spec.cols + c] =
+      const double e = grid.transform.x0 + c * spec.cell_m - o.easting_m;
+      const double n = grid.transform.y0 - r * spec.cell_m - o.northing_m;
+      grid.heights_m[static_cast<std::size_t>(r) * spec.cols + c] =
           static_cast<float>(spec.height(e, n));
     }
   }
@@ -92,15 +92,15 @@ double analyticAtEnu(const geodesy::LocalFrame& frame, const Eigen::Vector3d& en
                      const std::function<double(double, double)>& height) {
   const geodesy::UtmPoint o = originUtm();
   const geodesy::UtmPoint u = geodesy::toUtm(frame.toGeodetic(enu), 16);
-  return height(u.eastingM - o.eastingM, u.northingM - o.northingM);
+  return height(u.easting_m - o.easting_m, u.northing_m - o.northing_m);
 }
 
 // g at an ENU point: geodetic height minus the DTM's height there.
 double gAt(const TerrainModel& model, const geodesy::LocalFrame& frame, const Eigen::Vector3d& p) {
   const geodesy::GeodeticPoint geo = frame.toGeodetic(p);
-  const auto h = model.heightAt(geo.latitudeDeg, geo.longitudeDeg);
+  const auto h = model.heightAt(geo.latitude_deg, geo.longitude_deg);
   EXPECT_TRUE(h.hasValue());
-  return h ? geo.heightM - *h : 1e9;
+  return h ? geo.height_m - *h : 1e9;
 }
 
 void expectOnSurface(const TerrainModel& model, const Eigen::Vector3d& hit) {
@@ -116,7 +116,7 @@ double analyticRayT(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t
   const geodesy::LocalFrame frame(kOrigin);
   const auto f = [&](double t) {
     const Eigen::Vector3d p = o + t * d;
-    return frame.toGeodetic(p).heightM - analyticAtEnu(frame, p, height);
+    return frame.toGeodetic(p).height_m - analyticAtEnu(frame, p, height);
   };
   double t = tGuess;
   for (int i = 0; i < 50; ++i) {
@@ -185,7 +185,7 @@ TEST(TerrainModel, InitRejectsBadGrids) {
   {
     TerrainModel model;
     TerrainGrid g = good;
-    g.heightsM.pop_back();
+    g.heights_m.pop_back();
     EXPECT_FALSE(model.init(g, frame, &why));
     EXPECT_NE(why.find("heights"), std::string::npos) << why;
   }
@@ -228,14 +228,14 @@ TEST(TerrainModel, InitRejectsBadGrids) {
   {
     TerrainModel model;
     EXPECT_TRUE(model.init(good, frame, &why)) << why;
-    EXPECT_FLOAT_EQ(model.minHeightM(), 260.0F);
-    EXPECT_FLOAT_EQ(model.maxHeightM(), 260.0F);
+    EXPECT_FLOAT_EQ(model.minHeight_m(), 260.0F);
+    EXPECT_FLOAT_EQ(model.maxHeight_m(), 260.0F);
   }
 }
 
 TEST(TerrainModel, DefaultModelAnswersOutside) {
   const TerrainModel model;
-  EXPECT_FALSE(model.heightAt(kOrigin.latitudeDeg, kOrigin.longitudeDeg).hasValue());
+  EXPECT_FALSE(model.heightAt(kOrigin.latitude_deg, kOrigin.longitude_deg).hasValue());
   EXPECT_FALSE(
       model.intersectRay(Eigen::Vector3d(0, 0, 100), Eigen::Vector3d(0, 0, -1)).hasValue());
 }
@@ -244,8 +244,8 @@ TEST(TerrainModel, HeightAtIsExactOnAPlane) {
   const double slope = std::tan(15.0 * kPi / 180.0);
   const auto plane = [slope](double e, double n) { return 260.0 + slope * e - 0.05 * n; };
   const TerrainModel model = makeModel(makeUtmGrid({101, 81, 5.0, plane}));
-  EXPECT_NEAR(model.minHeightM(), 260.0 - slope * 250.0 - 0.05 * 200.0, 1e-3);
-  EXPECT_NEAR(model.maxHeightM(), 260.0 + slope * 250.0 + 0.05 * 200.0, 1e-3);
+  EXPECT_NEAR(model.minHeight_m(), 260.0 - slope * 250.0 - 0.05 * 200.0, 1e-3);
+  EXPECT_NEAR(model.maxHeight_m(), 260.0 + slope * 250.0 + 0.05 * 200.0, 1e-3);
   const geodesy::LocalFrame frame(kOrigin);
   const geodesy::UtmPoint o = originUtm();
   double maxErr = 0.0;
@@ -256,10 +256,10 @@ TEST(TerrainModel, HeightAtIsExactOnAPlane) {
     geodesy::UtmPoint u = o;
     const double e = ue(rng);
     const double n = un(rng);
-    u.eastingM += e;
-    u.northingM += n;
+    u.easting_m += e;
+    u.northing_m += n;
     const geodesy::GeodeticPoint p = geodesy::fromUtm(u);
-    const auto h = model.heightAt(p.latitudeDeg, p.longitudeDeg);
+    const auto h = model.heightAt(p.latitude_deg, p.longitude_deg);
     ASSERT_TRUE(h.hasValue());
     maxErr = std::max(maxErr, std::abs(*h - plane(e, n)));
   }
@@ -280,16 +280,16 @@ TEST(TerrainModel, HeightAtStatusesAtEdgesOutsideAndNoData) {
   UtmGridSpec spec{21, 21, 10.0, [](double e, double) { return 260.0 + 0.1 * e; }};
   TerrainGrid grid = makeUtmGrid(spec);
   grid.noData = -9999.0F;
-  grid.heightsM[10 * 21 + 10] = -9999.0F;                                // centre sample
-  grid.heightsM[3 * 21 + 15] = std::numeric_limits<float>::quiet_NaN();  // NaN counts too
+  grid.heights_m[10 * 21 + 10] = -9999.0F;                                // centre sample
+  grid.heights_m[3 * 21 + 15] = std::numeric_limits<float>::quiet_NaN();  // NaN counts too
   const TerrainModel model = makeModel(grid);
   const geodesy::UtmPoint o = originUtm();
   const auto at = [&](double e, double n) {
     geodesy::UtmPoint u = o;
-    u.eastingM += e;
-    u.northingM += n;
+    u.easting_m += e;
+    u.northing_m += n;
     const geodesy::GeodeticPoint p = geodesy::fromUtm(u);
-    return model.heightAt(p.latitudeDeg, p.longitudeDeg);
+    return model.heightAt(p.latitude_deg, p.longitude_deg);
   };
   // Corners and edges (exactly on the border) are inside.
   for (const auto& [e, n] : std::vector<std::pair<double, double>>{
@@ -353,7 +353,7 @@ TEST(TerrainModel, ObliqueRayOnFlatGridAccountsForCurvature) {
   const auto hit = model.intersectRay(origin, dir);
   ASSERT_TRUE(hit.hasValue());
   expectOnSurface(model, *hit);
-  EXPECT_NEAR(frame.toGeodetic(*hit).heightM, 250.0, 1e-4);
+  EXPECT_NEAR(frame.toGeodetic(*hit).height_m, 250.0, 1e-4);
   EXPECT_LT(hit->z(), -10.01);
   const double tAnalytic = analyticRayT(origin, dir, 500.0, [](double, double) { return 250.0; });
   EXPECT_NEAR((*hit - (origin + tAnalytic * dir)).norm(), 0.0, 1e-4);
@@ -530,7 +530,7 @@ TEST(TerrainModel, RaysAndNoDataHoles) {
   // A hole of 5 x 5 samples centred 50 m east of the origin (col 50, row 40).
   for (int r = 38; r <= 42; ++r) {
     for (int c = 48; c <= 52; ++c) {
-      grid.heightsM[static_cast<std::size_t>(r) * 81 + c] = -9999.0F;
+      grid.heights_m[static_cast<std::size_t>(r) * 81 + c] = -9999.0F;
     }
   }
   const TerrainModel model = makeModel(grid);
@@ -557,15 +557,15 @@ TEST(TerrainModel, GeographicGrid) {
   grid.cols = 121;
   grid.rows = 101;
   grid.crs = CrsSpec{HorizontalCrs::Wgs84Geographic, 0, true};
-  grid.transform = GeoTransform{kOrigin.longitudeDeg - 0.006, 1e-4, 0.0,
-                                kOrigin.latitudeDeg + 0.005,  0.0,  -1e-4};
+  grid.transform = GeoTransform{kOrigin.longitude_deg - 0.006, 1e-4, 0.0,
+                                kOrigin.latitude_deg + 0.005,  0.0,  -1e-4};
   const auto plane = [](double lat, double lon) {
     return 260.0 + 2000.0 * (lat - 43.07) - 1000.0 * (lon + 89.40);
   };
-  grid.heightsM.resize(121 * 101);
+  grid.heights_m.resize(121 * 101);
   for (int r = 0; r < grid.rows; ++r) {
     for (int c = 0; c < grid.cols; ++c) {
-      grid.heightsM[static_cast<std::size_t>(r) * grid.cols + c] =
+      grid.heights_m[static_cast<std::size_t>(r) * grid.cols + c] =
           static_cast<float>(plane(grid.transform.y0 - r * 1e-4, grid.transform.x0 + c * 1e-4));
     }
   }
@@ -584,7 +584,7 @@ TEST(TerrainModel, GeographicGrid) {
     ASSERT_TRUE(hit.hasValue()) << dir.transpose();
     expectOnSurface(model, *hit);
     const geodesy::GeodeticPoint g = frame.toGeodetic(*hit);
-    EXPECT_NEAR(g.heightM, plane(g.latitudeDeg, g.longitudeDeg), 1e-4);
+    EXPECT_NEAR(g.height_m, plane(g.latitude_deg, g.longitude_deg), 1e-4);
   }
 }
 
@@ -597,12 +597,12 @@ TEST(TerrainModel, SouthernZoneGridAcrossTheEquator) {
   grid.cols = 41;
   grid.rows = 41;
   grid.crs = CrsSpec{HorizontalCrs::Utm, 33, false};
-  const double northingSouth = o.northp ? o.northingM + 10000000.0 : o.northingM;
-  grid.transform = GeoTransform{o.eastingM - 100.0, 5.0, 0.0, northingSouth + 100.0, 0.0, -5.0};
-  grid.heightsM.resize(41 * 41);
+  const double northingSouth = o.northp ? o.northing_m + 10000000.0 : o.northing_m;
+  grid.transform = GeoTransform{o.easting_m - 100.0, 5.0, 0.0, northingSouth + 100.0, 0.0, -5.0};
+  grid.heights_m.resize(41 * 41);
   for (int r = 0; r < 41; ++r) {
     for (int c = 0; c < 41; ++c) {
-      grid.heightsM[static_cast<std::size_t>(r) * 41 + c] = static_cast<float>(100.0 + r);
+      grid.heights_m[static_cast<std::size_t>(r) * 41 + c] = static_cast<float>(100.0 + r);
     }
   }
   TerrainModel model;
@@ -619,12 +619,12 @@ TEST(TerrainModel, SouthernZoneGridAcrossTheEquator) {
 TEST(TerrainModel, QueriesDoNotAllocate) {
   TerrainGrid grid = makeUtmGrid({81, 81, 5.0, ridge});
   grid.noData = -9999.0F;
-  grid.heightsM[40 * 81 + 60] = -9999.0F;
+  grid.heights_m[40 * 81 + 60] = -9999.0F;
   const TerrainModel model = makeModel(grid);
   const long before = allocationCount.load();
   double sink = 0.0;
   for (int i = 0; i < 20; ++i) {
-    const auto h = model.heightAt(kOrigin.latitudeDeg + 1e-5 * i, kOrigin.longitudeDeg);
+    const auto h = model.heightAt(kOrigin.latitude_deg + 1e-5 * i, kOrigin.longitude_deg);
     sink += h ? *h : 0.0;
     sink += model.heightAtEnu(Eigen::Vector3d(i, -i, 3.0)).hasValue() ? 1.0 : 0.0;
     const auto g = model.groundPointEnu(5.0 * i, 2.0 * i);

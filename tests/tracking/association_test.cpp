@@ -89,9 +89,9 @@ TEST(Hungarian, RejectsOversizeAndNonFinite) {
 WorldDetection detectionAt(double x, double y, double heading, float score = 0.9f) {
   WorldDetection d;
   d.centreEnu = {x, y};
-  d.headingEnuRad = heading;
-  d.lengthM = 4.5;
-  d.widthM = 1.8;
+  d.headingEnu_rad = heading;
+  d.length_m = 4.5;
+  d.width_m = 1.8;
   d.score = score;
   return d;
 }
@@ -99,7 +99,7 @@ WorldDetection detectionAt(double x, double y, double heading, float score = 0.9
 TrackView trackAt(double x, double y, double heading, double sigma = 0.5) {
   TrackView t;
   t.centre = {x, y};
-  t.headingRad = heading;
+  t.heading_rad = heading;
   t.centreInnovationCov = Eigen::Matrix2d::Identity() * sigma * sigma;
   return t;
 }

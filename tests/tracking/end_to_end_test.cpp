@@ -52,7 +52,7 @@ RunFigures runScenario(unsigned seed, const shape::ActiveShapeModel* asmModel) {
   std::map<int, int> lastFusedType;  // truth id -> fused type of the track last matched to it
   std::map<int, int> truthType;
   for (const test::SceneFrame& frame : frames) {
-    auto report = tracker.step(frame.timestampNs, frame.detections);
+    auto report = tracker.step(frame.timestamp_ns, frame.detections);
     EXPECT_TRUE(report.hasValue());
     std::vector<MotObject> truth, hyps;
     std::set<int> visibleIds;
@@ -60,8 +60,8 @@ RunFigures runScenario(unsigned seed, const shape::ActiveShapeModel* asmModel) {
       MotObject o;
       o.id = t.id;
       o.position = t.centre;
-      o.speedMps = t.speedMps;
-      o.headingRad = t.headingRad;
+      o.speed_mps = t.speed_mps;
+      o.heading_rad = t.heading_rad;
       o.type = static_cast<int>(t.type);
       truth.push_back(o);
       truthType[t.id] = o.type;
@@ -72,7 +72,7 @@ RunFigures runScenario(unsigned seed, const shape::ActiveShapeModel* asmModel) {
     for (const TrackState& s : tracker.tracks()) {
       // Published: confirmed tracks, and lost ones coasting for at most kCoast_s (they bridge
       // misses and occlusions); the evaluation ignores hypotheses outside the area.
-      const double since = static_cast<double>(s.timestampNs - s.lastUpdateNs) * 1e-9;
+      const double since = static_cast<double>(s.timestamp_ns - s.lastUpdate_ns) * 1e-9;
       const bool coasting = s.status == TrackStatus::Lost && since <= kCoast_s;
       if ((s.status != TrackStatus::Confirmed && !coasting) ||
           s.centreEnu.cwiseAbs().maxCoeff() > params.halfSize_m) {
@@ -81,8 +81,8 @@ RunFigures runScenario(unsigned seed, const shape::ActiveShapeModel* asmModel) {
       MotObject o;
       o.id = static_cast<int>(s.id);
       o.position = s.centreEnu;
-      o.speedMps = s.speedMps;
-      o.headingRad = s.headingEnuRad;
+      o.speed_mps = s.speed_mps;
+      o.heading_rad = s.headingEnu_rad;
       o.type = static_cast<int>(s.type);
       hyps.push_back(o);
     }
@@ -104,7 +104,7 @@ RunFigures runScenario(unsigned seed, const shape::ActiveShapeModel* asmModel) {
       if (best != nullptr) {
         ++fig.rawHeadingSamples;
         fig.rawHeadingOver90 +=
-            geometry::absAngleDifference(best->headingEnuRad, t.headingRad) > 0.5 * geometry::kPi
+            geometry::absAngleDifference(best->headingEnu_rad, t.heading_rad) > 0.5 * geometry::kPi
                 ? 1
                 : 0;
         const auto argmax =

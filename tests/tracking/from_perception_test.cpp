@@ -9,12 +9,12 @@ namespace {
 
 perception::VehicleObservation lifted(double x, bool directionKnown) {
   perception::VehicleObservation o;
-  o.timestampNs = 42;
+  o.timestamp_ns = 42;
   o.liftStatus = perception::LiftStatus::Ok;
   o.ground.centreEnu = {x, -3.0, 261.5};
-  o.ground.headingEnuRad = 4.0;
-  o.ground.lengthM = 4.6;
-  o.ground.widthM = 1.85;
+  o.ground.headingEnu_rad = 4.0;
+  o.ground.length_m = 4.6;
+  o.ground.width_m = 1.85;
   o.detection.score = 0.7F;
   o.detection.directionKnown = directionKnown;
   o.detection.typeProbabilities = {0.1F, 0.1F, 0.1F, 0.5F, 0.1F, 0.05F, 0.05F};
@@ -27,12 +27,12 @@ TEST(FromPerception, KeepsEveryFieldTheTrackerNeeds) {
   const perception::VehicleObservation o = lifted(12.5, false);
   WorldDetection d;
   ASSERT_TRUE(toWorldDetection(o, &d));
-  EXPECT_EQ(d.timestampNs, 42);
+  EXPECT_EQ(d.timestamp_ns, 42);
   EXPECT_EQ(d.centreEnu, Eigen::Vector2d(12.5, -3.0));
-  EXPECT_EQ(d.headingEnuRad, 4.0);
+  EXPECT_EQ(d.headingEnu_rad, 4.0);
   EXPECT_FALSE(d.headingKnown);
-  EXPECT_EQ(d.lengthM, 4.6);
-  EXPECT_EQ(d.widthM, 1.85);
+  EXPECT_EQ(d.length_m, 4.6);
+  EXPECT_EQ(d.width_m, 1.85);
   EXPECT_EQ(d.score, 0.7F);
   EXPECT_EQ(d.typeProbabilities, o.detection.typeProbabilities);
   EXPECT_EQ(d.shape.count, 3);
@@ -47,9 +47,9 @@ TEST(FromPerception, OnlyLiftedObservationsBecomeWorldDetections) {
   observations[1].liftStatus = perception::LiftStatus::StalePose;
   observations[2].liftStatus = perception::LiftStatus::OutsideDtm;
   WorldDetection untouched;
-  untouched.lengthM = -1.0;
+  untouched.length_m = -1.0;
   EXPECT_FALSE(toWorldDetection(observations[1], &untouched));
-  EXPECT_EQ(untouched.lengthM, -1.0);
+  EXPECT_EQ(untouched.length_m, -1.0);
 
   std::vector<WorldDetection> out(4);
   ASSERT_EQ(toWorldDetections(observations, out), 2U);

@@ -43,8 +43,8 @@ void setBody(Vehicle& v, std::mt19937& rng, const shape::ActiveShapeModel* asmMo
                          : static_cast<shape::VehicleType>(static_cast<int>(u(rng) * 6.0) % 6);
   if (t.type == shape::VehicleType::Large || asmModel == nullptr) {
     const bool large = t.type == shape::VehicleType::Large;
-    t.lengthM = large ? 10.0 : 4.5;
-    t.widthM = large ? 2.5 : 1.8;
+    t.length_m = large ? 10.0 : 4.5;
+    t.width_m = large ? 2.5 : 1.8;
     v.wheelbase = large ? 6.0 : 2.7;
     v.rearToCentre = large ? 2.5 : 1.3;
     t.shape = {};
@@ -58,8 +58,8 @@ void setBody(Vehicle& v, std::mt19937& rng, const shape::ActiveShapeModel* asmMo
   }
   const shape::KeypointModel model = asmModel->shape(t.shape);
   const Eigen::Vector3d size = shape::boundingBoxSize(model);
-  t.lengthM = size.x();
-  t.widthM = size.y();
+  t.length_m = size.x();
+  t.width_m = size.y();
   const auto& w = shape::wheelCentreKeypoints();
   const double front = 0.5 * (model(0, w[0]) + model(0, w[1]));
   const double rear = 0.5 * (model(0, w[2]) + model(0, w[3]));
@@ -69,8 +69,8 @@ void setBody(Vehicle& v, std::mt19937& rng, const shape::ActiveShapeModel* asmMo
 
 void updateCentre(Vehicle& v) {
   v.truth.centre =
-      v.truth.rearAxle +
-      v.rearToCentre * Eigen::Vector2d(std::cos(v.truth.headingRad), std::sin(v.truth.headingRad));
+      v.truth.rearAxle + v.rearToCentre * Eigen::Vector2d(std::cos(v.truth.heading_rad),
+                                                          std::sin(v.truth.heading_rad));
 }
 
 // One bicycle step of a moving vehicle: steering from its manoeuvre, speed towards the
@@ -88,26 +88,27 @@ void advance(Vehicle& v, double dt) {
   const double target =
       (v.manoeuvre != Manoeuvre::Straight && !v.turnDone && s > v.turnStart - 25.0) ? 6.0
                                                                                     : v.laneSpeed;
-  const double accel = t.speedMps > target + 0.05 ? -2.0 : (t.speedMps < target - 0.05 ? 1.5 : 0.0);
-  t.speedMps = std::max(0.0, t.speedMps + accel * dt);
-  const double yawRate = t.speedMps * std::tan(delta) / v.wheelbase;
+  const double accel =
+      t.speed_mps > target + 0.05 ? -2.0 : (t.speed_mps < target - 0.05 ? 1.5 : 0.0);
+  t.speed_mps = std::max(0.0, t.speed_mps + accel * dt);
+  const double yawRate = t.speed_mps * std::tan(delta) / v.wheelbase;
   const double dPsi = yawRate * dt;
-  const double mid = t.headingRad + 0.5 * dPsi;
-  t.rearAxle += t.speedMps * dt * Eigen::Vector2d(std::cos(mid), std::sin(mid));
-  t.headingRad += dPsi;
+  const double mid = t.heading_rad + 0.5 * dPsi;
+  t.rearAxle += t.speed_mps * dt * Eigen::Vector2d(std::cos(mid), std::sin(mid));
+  t.heading_rad += dPsi;
   t.yawRateRadps = yawRate;
   if (v.turning) {
     v.turned += std::abs(dPsi);
     if (v.turned >= 0.5 * geometry::kPi) {
       v.turning = false;
       v.turnDone = true;
-      t.headingRad =
+      t.heading_rad =
           v.approachHeading + (v.manoeuvre == Manoeuvre::Left ? 0.5 : -0.5) * geometry::kPi;
-      v.approachHeading = t.headingRad;
+      v.approachHeading = t.heading_rad;
       t.yawRateRadps = 0.0;
     }
   }
-  t.headingRad = geometry::wrapTwoPi(t.headingRad);
+  t.heading_rad = geometry::wrapTwoPi(t.heading_rad);
   updateCentre(v);
 }
 
@@ -118,7 +119,7 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
   std::mt19937 rng(p.seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::normal_distribution<double> n(0.0, 1.0);
-  const double dt = 1.0 / p.frameRateHz;
+  const double dt = 1.0 / p.frameRate_hz;
   constexpr int kSubsteps = 10;
   int nextId = 1;
   std::vector<Vehicle> vehicles;
@@ -140,11 +141,11 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
       setBody(v, rng, asmModel);
       v.truth.id = nextId++;
       v.truth.parked = true;
-      v.truth.speedMps = 0.0;
-      v.truth.headingRad = geometry::wrapTwoPi(psi + (u(rng) < 0.5 ? 0.0 : geometry::kPi));
+      v.truth.speed_mps = 0.0;
+      v.truth.heading_rad = geometry::wrapTwoPi(psi + (u(rng) < 0.5 ? 0.0 : geometry::kPi));
       const Eigen::Vector2d centre = (-60.0 + 8.0 * k) * f - kKerbOffset_m * left;
-      v.truth.rearAxle = centre - v.rearToCentre * Eigen::Vector2d(std::cos(v.truth.headingRad),
-                                                                   std::sin(v.truth.headingRad));
+      v.truth.rearAxle = centre - v.rearToCentre * Eigen::Vector2d(std::cos(v.truth.heading_rad),
+                                                                   std::sin(v.truth.heading_rad));
       updateCentre(v);
       assignOcclusion(v, 0, p.frames);
       vehicles.push_back(v);
@@ -160,7 +161,7 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
   std::exponential_distribution<double> gap(1.0 / p.meanArrivalGap_s);
   std::poisson_distribution<int> falsePositives(p.falsePositivesPerFrame);
 
-  const int warmupFrames = static_cast<int>(15.0 * p.frameRateHz);
+  const int warmupFrames = static_cast<int>(15.0 * p.frameRate_hz);
   std::vector<SceneFrame> frames;
   frames.reserve(static_cast<std::size_t>(p.frames));
   for (int k = -warmupFrames; k < p.frames; ++k) {
@@ -177,10 +178,10 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
       v.approachHeading = a * 0.5 * geometry::kPi;
       const Eigen::Vector2d f(std::cos(v.approachHeading), std::sin(v.approachHeading));
       const Eigen::Vector2d left(-f.y(), f.x());
-      v.truth.headingRad = v.approachHeading;
+      v.truth.heading_rad = v.approachHeading;
       v.truth.rearAxle = -(p.halfSize_m + 8.0) * f - kLaneOffset_m * left;
       v.laneSpeed = laneSpeed[static_cast<std::size_t>(a)];
-      v.truth.speedMps = v.laneSpeed;
+      v.truth.speed_mps = v.laneSpeed;
       const double r = u(rng);
       if (r < 0.5 * p.turnShare) {
         v.manoeuvre = Manoeuvre::Left;
@@ -192,8 +193,8 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
         v.turnStart = -kLaneOffset_m - v.turnRadius;
       }
       updateCentre(v);
-      assignOcclusion(v, k + static_cast<int>(p.frameRateHz),
-                      static_cast<int>(8.0 * p.frameRateHz));
+      assignOcclusion(v, k + static_cast<int>(p.frameRate_hz),
+                      static_cast<int>(8.0 * p.frameRate_hz));
       vehicles.push_back(v);
     }
     for (Vehicle& v : vehicles) {
@@ -211,7 +212,7 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
     }
 
     SceneFrame frame;
-    frame.timestampNs = static_cast<std::int64_t>(std::llround(time * 1e9));
+    frame.timestamp_ns = static_cast<std::int64_t>(std::llround(time * 1e9));
     for (Vehicle& v : vehicles) {
       if (v.truth.centre.cwiseAbs().maxCoeff() > p.halfSize_m) {
         continue;
@@ -223,16 +224,16 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
         continue;
       }
       WorldDetection d;
-      d.timestampNs = frame.timestampNs;
+      d.timestamp_ns = frame.timestamp_ns;
       d.centreEnu = t.centre + p.positionNoise_m * Eigen::Vector2d(n(rng), n(rng));
-      double heading = t.headingRad + p.headingNoise_rad * n(rng);
+      double heading = t.heading_rad + p.headingNoise_rad * n(rng);
       if (u(rng) < p.flipRate) {
         heading += geometry::kPi;
       }
-      d.headingEnuRad = geometry::wrapTwoPi(heading);
+      d.headingEnu_rad = geometry::wrapTwoPi(heading);
       d.headingKnown = true;
-      d.lengthM = t.lengthM + p.sizeNoise_m * n(rng);
-      d.widthM = t.widthM + p.sizeNoise_m * n(rng);
+      d.length_m = t.length_m + p.sizeNoise_m * n(rng);
+      d.width_m = t.width_m + p.sizeNoise_m * n(rng);
       d.score =
           static_cast<float>(u(rng) < p.lowScoreRate ? 0.15 + 0.3 * u(rng) : 0.55 + 0.4 * u(rng));
       std::array<double, shape::kVehicleTypeCount> logits{};
@@ -254,12 +255,12 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
     const int nFalse = falsePositives(rng);
     for (int i = 0; i < nFalse; ++i) {
       WorldDetection d;
-      d.timestampNs = frame.timestampNs;
+      d.timestamp_ns = frame.timestamp_ns;
       d.centreEnu =
           Eigen::Vector2d((2.0 * u(rng) - 1.0) * p.halfSize_m, (2.0 * u(rng) - 1.0) * p.halfSize_m);
-      d.headingEnuRad = geometry::kTwoPi * u(rng);
-      d.lengthM = 4.5 + 0.3 * n(rng);
-      d.widthM = 1.8 + 0.1 * n(rng);
+      d.headingEnu_rad = geometry::kTwoPi * u(rng);
+      d.length_m = 4.5 + 0.3 * n(rng);
+      d.width_m = 1.8 + 0.1 * n(rng);
       d.score = static_cast<float>(0.1 + 0.6 * u(rng));
       double total = 0.0;
       std::array<double, shape::kVehicleTypeCount> logits{};
@@ -278,19 +279,19 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& p,
   return frames;
 }
 
-std::vector<WorldDetection> makeConvoyFrame(int count, int frame, double frameRateHz) {
+std::vector<WorldDetection> makeConvoyFrame(int count, int frame, double frameRate_hz) {
   std::vector<WorldDetection> out(static_cast<std::size_t>(count));
-  const double t = frame / frameRateHz;
+  const double t = frame / frameRate_hz;
   for (int i = 0; i < count; ++i) {
     WorldDetection& d = out[static_cast<std::size_t>(i)];
-    d.timestampNs = static_cast<std::int64_t>(std::llround(t * 1e9));
+    d.timestamp_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
     // 20 lanes, 10 cars per lane 12 m apart.
     const int lane = i % 20;
     const int slot = i / 20;
     d.centreEnu = Eigen::Vector2d(-100.0 + 12.0 * slot + 10.0 * t, -50.0 + 5.0 * lane);
-    d.headingEnuRad = 0.0;
-    d.lengthM = 4.5;
-    d.widthM = 1.8;
+    d.headingEnu_rad = 0.0;
+    d.length_m = 4.5;
+    d.width_m = 1.8;
     d.score = 0.9f;
     d.typeProbabilities.fill(0.05f);
     d.typeProbabilities[3] = 0.7f;

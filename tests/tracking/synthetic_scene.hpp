@@ -24,7 +24,7 @@ namespace vp::tracking::test {
 struct SceneParams {
   unsigned seed = 1;
   int frames = 300;
-  double frameRateHz = 10.0;
+  double frameRate_hz = 10.0;
   double halfSize_m = 70.0;         // area: |x|, |y| <= halfSize
   double meanArrivalGap_s = 4.0;    // per inbound lane
   double turnShare = 0.4;           // of the cars, half left, half right
@@ -47,17 +47,17 @@ struct TruthObject {
   shape::ShapeParams shape{};
   Eigen::Vector2d centre{0.0, 0.0};
   Eigen::Vector2d rearAxle{0.0, 0.0};
-  double headingRad = 0.0;
-  double speedMps = 0.0;
+  double heading_rad = 0.0;
+  double speed_mps = 0.0;
   double yawRateRadps = 0.0;
-  double lengthM = 4.5;
-  double widthM = 1.8;
+  double length_m = 4.5;
+  double width_m = 1.8;
   bool parked = false;
   bool visible = true;
 };
 
 struct SceneFrame {
-  std::int64_t timestampNs = 0;
+  std::int64_t timestamp_ns = 0;
   std::vector<TruthObject> truth;
   std::vector<WorldDetection> detections;
 };
@@ -69,6 +69,6 @@ std::vector<SceneFrame> makeIntersection(const SceneParams& params,
 
 // n vehicles in parallel lanes 5 m apart driving east at 10 m/s, exact detections with
 // score 0.9: the load for the allocation test and the benchmark.
-std::vector<WorldDetection> makeConvoyFrame(int n, int frame, double frameRateHz);
+std::vector<WorldDetection> makeConvoyFrame(int n, int frame, double frameRate_hz);
 
 }  // namespace vp::tracking::test

@@ -22,15 +22,15 @@
 namespace vp::tracking {
 namespace {
 
-constexpr std::int64_t kFrameNs = 100'000'000;  // 10 Hz
+constexpr std::int64_t kFrame_ns = 100'000'000;  // 10 Hz
 
 WorldDetection car(double x, double y, double heading, std::int64_t t, float score = 0.9f) {
   WorldDetection d;
-  d.timestampNs = t;
+  d.timestamp_ns = t;
   d.centreEnu = {x, y};
-  d.headingEnuRad = heading;
-  d.lengthM = 4.5;
-  d.widthM = 1.8;
+  d.headingEnu_rad = heading;
+  d.length_m = 4.5;
+  d.width_m = 1.8;
   d.score = score;
   d.typeProbabilities.fill(1.0f / 7.0f);
   return d;
@@ -74,7 +74,7 @@ TEST(TrackManager, LifecycleTentativeConfirmedLostReacquiredDeleted) {
     }
     auto r = m.step(t, d);
     EXPECT_TRUE(r.hasValue());
-    t += kFrameNs;
+    t += kFrame_ns;
     return r;
   };
   double x = 0.0;
@@ -89,7 +89,7 @@ TEST(TrackManager, LifecycleTentativeConfirmedLostReacquiredDeleted) {
   for (int k = 0; k < 20; ++k) {
     stepAt(x += 1.0, true);
   }
-  EXPECT_NEAR(m.tracks()[0].speedMps, 10.0, 0.3);
+  EXPECT_NEAR(m.tracks()[0].speed_mps, 10.0, 0.3);
   // Occluded for 1 s: lost but predicted on.
   for (int k = 0; k < 10; ++k) {
     stepAt(x += 1.0, false);
@@ -124,11 +124,11 @@ TEST(TrackManager, PartialDetectionsMoveTheTrackAcrossNotAlong) {
     TrackManager m;
     EXPECT_TRUE(m.init(config));
     std::int64_t t = 0;
-    for (int k = 0; k < 10; ++k, t += kFrameNs) {
+    for (int k = 0; k < 10; ++k, t += kFrame_ns) {
       EXPECT_TRUE(m.step(t, std::vector<WorldDetection>{car(0.0, 0.0, 0.0, t)}).hasValue());
     }
     WorldDetection cut = car(-0.5, 0.2, 0.0, t);  // 0.5 m behind along the axis, 0.2 m aside
-    cut.lengthM = 3.5;
+    cut.length_m = 3.5;
     cut.atFrameEdge = true;
     cut.insideShare = insideShare;
     EXPECT_TRUE(m.step(t, std::vector<WorldDetection>{cut}).hasValue());
@@ -142,8 +142,8 @@ TEST(TrackManager, PartialDetectionsMoveTheTrackAcrossNotAlong) {
   EXPECT_NEAR(partial.centreEnu.y(), nearEdge.centreEnu.y(), 0.02);
   EXPECT_GT(partial.centreEnu.y(), 0.01);
   // Both touch the border: their short length hardly changes the fused one.
-  EXPECT_LT(std::abs(partial.lengthM - 4.5), 0.1);
-  EXPECT_LT(std::abs(nearEdge.lengthM - 4.5), 0.1);
+  EXPECT_LT(std::abs(partial.length_m - 4.5), 0.1);
+  EXPECT_LT(std::abs(nearEdge.length_m - 4.5), 0.1);
 
   for (const auto& [field, value] : {std::pair<const char*, double>{"partialAlongNoiseFactor", 0.5},
                                      {"partialInsideShare", 1.5}}) {
@@ -167,7 +167,7 @@ TEST(TrackManager, VehicleDrivingIntoViewIsConfirmedWithItsSpeed) {
   ASSERT_TRUE(m.init(config));
   constexpr double kSpeed = 10.0;
   std::int64_t t = 0;
-  for (int k = 0; k < 12; ++k, t += kFrameNs) {
+  for (int k = 0; k < 12; ++k, t += kFrame_ns) {
     const double x = kSpeed * 0.1 * k;  // true centre
     WorldDetection d = car(x, 0.0, 0.0, t);
     if (k < 2) {  // entering: 40 and 70 % of the box inside, centre 1.5 and 1.0 m inside
@@ -182,7 +182,7 @@ TEST(TrackManager, VehicleDrivingIntoViewIsConfirmedWithItsSpeed) {
       EXPECT_EQ(track.status, TrackStatus::Tentative) << "frame " << k;
     } else {
       EXPECT_EQ(track.status, TrackStatus::Confirmed) << "frame " << k;
-      EXPECT_NEAR(track.speedMps, kSpeed, 2.0) << "frame " << k;
+      EXPECT_NEAR(track.speed_mps, kSpeed, 2.0) << "frame " << k;
     }
   }
 }
@@ -196,7 +196,7 @@ TEST(TrackManager, StandingVehicleIsConfirmedAfterConfirmHitsStandingWholeMatche
   TrackManager m;
   ASSERT_TRUE(m.init(config));
   std::int64_t t = 0;
-  for (int k = 0; k < 3; ++k, t += kFrameNs) {
+  for (int k = 0; k < 3; ++k, t += kFrame_ns) {
     const double jitter_m = k == 1 ? 0.05 : 0.0;
     ASSERT_TRUE(
         m.step(t, std::vector<WorldDetection>{car(5.0 + jitter_m, 3.0, 1.0, t)}).hasValue());
@@ -204,7 +204,7 @@ TEST(TrackManager, StandingVehicleIsConfirmedAfterConfirmHitsStandingWholeMatche
     EXPECT_EQ(m.tracks()[0].status, k == 0 ? TrackStatus::Tentative : TrackStatus::Confirmed)
         << "match " << k + 1;
   }
-  EXPECT_LT(std::abs(m.tracks()[0].speedMps), config.movingSpeed_mps);
+  EXPECT_LT(std::abs(m.tracks()[0].speed_mps), config.movingSpeed_mps);
   config.confirmHitsStanding = 0;
   EXPECT_NE(initProblem(config).find("confirmHitsStanding"), std::string::npos);
 }
@@ -220,7 +220,7 @@ TEST(TrackManager, TrackConfirmsOnlyWithAMeanScoreOfConfirmMinScore) {
   TrackManager m;
   ASSERT_TRUE(m.init(config));
   std::int64_t t = 0;
-  for (int k = 0; k < 20; ++k, t += kFrameNs) {
+  for (int k = 0; k < 20; ++k, t += kFrame_ns) {
     ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{car(5.0, 3.0, 1.0, t, 0.46f)}).hasValue());
     ASSERT_EQ(m.tracks().size(), 1u);
     EXPECT_EQ(m.tracks()[0].status, TrackStatus::Tentative) << "frame " << k;
@@ -228,7 +228,7 @@ TEST(TrackManager, TrackConfirmsOnlyWithAMeanScoreOfConfirmMinScore) {
   EXPECT_NEAR(m.tracks()[0].score, 0.46, 1e-6);
   TrackManager strong;
   ASSERT_TRUE(strong.init(config));
-  for (int k = 0; k < 2; ++k, t += kFrameNs) {
+  for (int k = 0; k < 2; ++k, t += kFrame_ns) {
     ASSERT_TRUE(
         strong.step(t, std::vector<WorldDetection>{car(5.0, 3.0, 1.0, t, 0.6f)}).hasValue());
   }
@@ -248,18 +248,18 @@ TEST(TrackManager, TrackLastSeenAtTheFrameBorderIsDeletedSooner) {
     ASSERT_TRUE(m.init(config));
     std::int64_t t = 0;
     double x = 0.0;
-    for (int k = 0; k < 10; ++k, t += kFrameNs, x += 1.0) {
+    for (int k = 0; k < 10; ++k, t += kFrame_ns, x += 1.0) {
       WorldDetection d = car(x, 0.0, 0.0, t);
       d.atFrameEdge = atEdge && k == 9;  // the last box touches the border
       ASSERT_TRUE(m.step(t, std::vector<WorldDetection>{d}).hasValue());
     }
     ASSERT_EQ(m.tracks().size(), 1u);
     ASSERT_EQ(m.tracks()[0].status, TrackStatus::Confirmed);
-    const std::int64_t lastSeen = t - kFrameNs;
+    const std::int64_t lastSeen = t - kFrame_ns;
     auto aliveAfter = [&](double seconds) {
       while (t <= lastSeen + static_cast<std::int64_t>(seconds * 1e9)) {
         EXPECT_TRUE(m.step(t, {}).hasValue());
-        t += kFrameNs;
+        t += kFrame_ns;
       }
       return !m.tracks().empty();
     };
@@ -279,7 +279,7 @@ TEST(TrackManager, VehicleSeenOnlyInPartIsConfirmedAfterMoreMatches) {
   TrackManager m;
   ASSERT_TRUE(m.init(config));
   std::int64_t t = 0;
-  for (int k = 0; k < config.confirmHitsAnyway; ++k, t += kFrameNs) {
+  for (int k = 0; k < config.confirmHitsAnyway; ++k, t += kFrame_ns) {
     WorldDetection d = car(5.0, 3.0, 1.0, t);
     d.insideShare = 0.5;
     d.atFrameEdge = true;
@@ -289,7 +289,7 @@ TEST(TrackManager, VehicleSeenOnlyInPartIsConfirmedAfterMoreMatches) {
               k + 1 < config.confirmHitsAnyway ? TrackStatus::Tentative : TrackStatus::Confirmed)
         << "match " << k + 1;
   }
-  EXPECT_LT(std::abs(m.tracks()[0].speedMps), 0.5);
+  EXPECT_LT(std::abs(m.tracks()[0].speed_mps), 0.5);
 }
 
 TEST(TrackManager, ConfirmedTrackCoastsThroughShortMissesThenTurnsLost) {
@@ -306,7 +306,7 @@ TEST(TrackManager, ConfirmedTrackCoastsThroughShortMissesThenTurnsLost) {
     }
     auto r = m.step(t, d);
     EXPECT_TRUE(r.hasValue());
-    t += kFrameNs;
+    t += kFrame_ns;
     x += 1.0;
     return r;
   };
@@ -338,16 +338,16 @@ TEST(TrackManager, TrackKeepsItsBirthTimeFusedScoreAndPoseCovariance) {
   config.scoreMemory = 4;
   TrackManager m;
   ASSERT_TRUE(m.init(config));
-  const std::int64_t t0 = 3 * kFrameNs;
+  const std::int64_t t0 = 3 * kFrame_ns;
   const float scores[] = {0.9f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f};
   std::int64_t t = t0;
   for (float score : scores) {
     ASSERT_TRUE(m.step(t, std::vector{car(0.0, 0.0, 0.0, t, score)}).hasValue());
-    t += kFrameNs;
+    t += kFrame_ns;
   }
   ASSERT_EQ(m.tracks().size(), 1u);
   const TrackState& s = m.tracks()[0];
-  EXPECT_EQ(s.birthNs, t0);
+  EXPECT_EQ(s.birth_ns, t0);
   // A running mean over the first 4 frames (0.6), then forgetting at the rate of a 4-frame
   // mean over the next 4: 0.5 + 0.1 * (3/4)^4.
   EXPECT_NEAR(s.score, 0.5 + 0.1 * std::pow(0.75, 4), 1e-6);
@@ -355,7 +355,7 @@ TEST(TrackManager, TrackKeepsItsBirthTimeFusedScoreAndPoseCovariance) {
   EXPECT_TRUE(s.poseCovariance.isApprox(s.poseCovariance.transpose()));
   EXPECT_GT(s.poseCovariance.determinant(), 0.0);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s.poseCovariance.topLeftCorner<2, 2>());
-  EXPECT_NEAR(std::sqrt(eig.eigenvalues().maxCoeff()), s.positionSigmaM, 1e-9);
+  EXPECT_NEAR(std::sqrt(eig.eigenvalues().maxCoeff()), s.positionSigma_m, 1e-9);
   EXPECT_GT(s.poseCovariance(2, 2), 0.0);
   EXPECT_LT(std::sqrt(s.poseCovariance(2, 2)), config.noise.measurementHeading_rad);
   EXPECT_GE(s.yawRateSigmaRadps, 0.0);
@@ -371,17 +371,17 @@ TEST(TrackManager, ParkedCarReacquiredAfterLongOcclusionKeepsId) {
   TrackManager m;
   ASSERT_TRUE(m.init(smallConfig()));
   std::int64_t t = 0;
-  for (int k = 0; k < 20; ++k, t += kFrameNs) {
+  for (int k = 0; k < 20; ++k, t += kFrame_ns) {
     m.step(t, std::vector{car(3.0, 4.0, 1.0, t)});
   }
   const std::uint32_t id = m.tracks()[0].id;
-  for (int k = 0; k < 25; ++k, t += kFrameNs) {
+  for (int k = 0; k < 25; ++k, t += kFrame_ns) {
     m.step(t, {});
   }
   m.step(t, std::vector{car(3.05, 4.0, 1.0, t)});
   ASSERT_EQ(m.tracks().size(), 1u);
   EXPECT_EQ(m.tracks()[0].id, id);
-  EXPECT_LT(std::abs(m.tracks()[0].speedMps), 0.3);
+  EXPECT_LT(std::abs(m.tracks()[0].speed_mps), 0.3);
 }
 
 TEST(TrackManager, FlippedDetectionsAreCorrectedByMotion) {
@@ -390,7 +390,7 @@ TEST(TrackManager, FlippedDetectionsAreCorrectedByMotion) {
   std::int64_t t = 0;
   int corrections = 0;
   // Driving north at 8 m/s; the first detection and every 4th are flipped.
-  for (int k = 0; k < 40; ++k, t += kFrameNs) {
+  for (int k = 0; k < 40; ++k, t += kFrame_ns) {
     const bool flip = k % 4 == 0;
     const double heading = 0.5 * geometry::kPi + (flip ? geometry::kPi : 0.0);
     auto r = m.step(t, std::vector{car(0.0, 0.8 * k, heading, t)});
@@ -399,8 +399,8 @@ TEST(TrackManager, FlippedDetectionsAreCorrectedByMotion) {
     ASSERT_EQ(m.tracks().size(), 1u);
   }
   const TrackState& s = m.tracks()[0];
-  EXPECT_LT(geometry::absAngleDifference(s.headingEnuRad, 0.5 * geometry::kPi), 0.05);
-  EXPECT_NEAR(s.speedMps, 8.0, 0.3);
+  EXPECT_LT(geometry::absAngleDifference(s.headingEnu_rad, 0.5 * geometry::kPi), 0.05);
+  EXPECT_NEAR(s.speed_mps, 8.0, 0.3);
   EXPECT_GE(corrections, 9);
   // Rear axle behind the centre (south of it) when driving north.
   EXPECT_LT(s.rearAxleEnu.y(), s.centreEnu.y());
@@ -412,10 +412,10 @@ TEST(TrackManager, StandingCarBornFlippedTurnsOnAgreeingDetections) {
   std::int64_t t = 0;
   m.step(t, std::vector{car(0.0, 0.0, geometry::kPi, t)});  // flipped first detection
   for (int k = 1; k < 10; ++k) {
-    t += kFrameNs;
+    t += kFrame_ns;
     m.step(t, std::vector{car(0.0, 0.0, 0.0, t)});
   }
-  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnuRad, 0.0), 0.1);
+  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnu_rad, 0.0), 0.1);
 }
 
 // A vehicle cut by the frame's border (partial detections) whose boxes point the other way
@@ -426,17 +426,17 @@ TEST(TrackManager, PartialDetectionsDoNotVoteOnTheDirection) {
   std::int64_t t = 0;
   m.step(t, std::vector{car(0.0, 0.0, 0.0, t)});
   for (int k = 1; k < 10; ++k) {
-    t += kFrameNs;
+    t += kFrame_ns;
     WorldDetection d = car(0.0, 0.0, geometry::kPi, t);
     d.insideShare = 0.8;  // below partialInsideShare
     m.step(t, std::vector{d});
   }
-  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnuRad, 0.0), 0.1);
+  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnu_rad, 0.0), 0.1);
   for (int k = 0; k < 3; ++k) {
-    t += kFrameNs;
+    t += kFrame_ns;
     m.step(t, std::vector{car(0.0, 0.0, geometry::kPi, t)});
   }
-  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnuRad, geometry::kPi), 0.1);
+  EXPECT_LT(geometry::absAngleDifference(m.tracks()[0].headingEnu_rad, geometry::kPi), 0.1);
 }
 
 // A large vehicle standing in place is not confirmed on its second box: the first stage may box
@@ -453,9 +453,9 @@ TEST(TrackManager, LargeVehicleWaitsForConfirmHitsLarge) {
   TrackManager m;
   ASSERT_TRUE(m.init(config));
   std::int64_t t = 0;
-  for (int k = 0; k < 7; ++k, t += kFrameNs) {
+  for (int k = 0; k < 7; ++k, t += kFrame_ns) {
     WorldDetection large = car(5.0, 3.0, 1.0, t);
-    large.lengthM = 9.0;
+    large.length_m = 9.0;
     large.typeProbabilities.fill(0.02f);
     large.typeProbabilities[static_cast<std::size_t>(shape::VehicleType::Large)] = 0.88f;
     WorldDetection small = car(5.0, 13.0, 1.0, t);
@@ -478,7 +478,7 @@ TEST(TrackManager, TypeIsFusedFromProbabilities) {
   std::int64_t t = 0;
   // Per frame the argmax alternates between sedan (3) and SUV (4), but the SUV probability is
   // consistently high while sedan's swings: the product favours SUV although votes tie.
-  for (int k = 0; k < 10; ++k, t += kFrameNs) {
+  for (int k = 0; k < 10; ++k, t += kFrame_ns) {
     WorldDetection d = car(k * 1.0, 0.0, 0.0, t);
     d.typeProbabilities.fill(0.02f);
     if (k % 2 == 0) {
@@ -506,7 +506,7 @@ TEST(TrackManager, BadInputIsCountedNotUsed) {
   std::vector<WorldDetection> d = {car(0, 0, 0, 0), car(5, 0, 0, 0), car(10, 0, 0, 0),
                                    car(15, 0, 0, 0)};
   d[1].centreEnu.x() = std::nan("");
-  d[2].lengthM = 0.0;
+  d[2].length_m = 0.0;
   d[3].insideShare = std::nan("");
   auto r = m.step(0, d);
   ASSERT_TRUE(r.hasValue());
@@ -516,9 +516,9 @@ TEST(TrackManager, BadInputIsCountedNotUsed) {
   // Over capacity: counted.
   std::vector<WorldDetection> many;
   for (int i = 0; i < 12; ++i) {
-    many.push_back(car(20.0 * i, 50.0, 0.0, kFrameNs));
+    many.push_back(car(20.0 * i, 50.0, 0.0, kFrame_ns));
   }
-  r = m.step(kFrameNs, many);
+  r = m.step(kFrame_ns, many);
   ASSERT_TRUE(r.hasValue());
   EXPECT_EQ(r->droppedDetections, 4);
   EXPECT_GT(r->droppedBirths, 0);
@@ -536,7 +536,7 @@ TEST(TrajectoryCsv, HeaderAndRowCarrySeedColumnsFirst) {
   TrackState s;
   s.id = 42;
   s.type = shape::VehicleType::Suv;
-  s.speedMps = 8.5;
+  s.speed_mps = 8.5;
   s.rearAxleEnu = {1.0, 2.0};
   s.centreEnu = {2.25, 2.0};
   s.status = TrackStatus::Confirmed;
@@ -567,7 +567,7 @@ TEST(TrackManager, NoHeapAllocationPerStepWith200Tracks) {
     frames.push_back(test::makeConvoyFrame(200, k, 10.0));
   }
   for (int k = 0; k < 10; ++k) {
-    ASSERT_TRUE(m.step(frames[static_cast<std::size_t>(k)][0].timestampNs,
+    ASSERT_TRUE(m.step(frames[static_cast<std::size_t>(k)][0].timestamp_ns,
                        frames[static_cast<std::size_t>(k)])
                     .hasValue());
   }
@@ -577,14 +577,14 @@ TEST(TrackManager, NoHeapAllocationPerStepWith200Tracks) {
     // Every fifth frame drops a tenth of the cars (lost tracks, re-acquisitions).
     auto& f = frames[static_cast<std::size_t>(k)];
     const std::size_t n = k % 5 == 0 ? 180 : f.size();
-    auto r = m.step(f[0].timestampNs, std::span(f).first(n));
+    auto r = m.step(f[0].timestamp_ns, std::span(f).first(n));
     ASSERT_TRUE(r.hasValue());
   }
   counter.stop();
   EXPECT_EQ(counter.count(), 0u);
   EXPECT_EQ(m.tracks().size(), 200u);
   for (const TrackState& s : m.tracks()) {
-    EXPECT_NEAR(s.speedMps, 10.0, 0.5);
+    EXPECT_NEAR(s.speed_mps, 10.0, 0.5);
   }
 }
 

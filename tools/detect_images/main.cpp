@@ -257,8 +257,8 @@ vp::preprocess::PreprocessOptions preprocessOptions(const vp::detection::Detecti
   // default; stated because the tool's boxes must be in the images' own pixels).
   pre.undistort = false;
   pre.workingScale = workingScale;
-  pre.networkWidthPx = stage.detectorInputWidth();
-  pre.networkHeightPx = stage.detectorInputHeight();
+  pre.networkWidth_px = stage.detectorInputWidth();
+  pre.networkHeight_px = stage.detectorInputHeight();
   return pre;
 }
 
@@ -302,9 +302,9 @@ int runSequence(const Options& options) {
     return fail(why);
   // A recording's frames are the app's: the training resolution unless told otherwise.
   const vp::preprocess::PreprocessOptions pre = preprocessOptions(
-      stage, options.workingScaleGiven ? options.workingScale : 648.0 / rig.intrinsics.widthPx);
+      stage, options.workingScaleGiven ? options.workingScale : 648.0 / rig.intrinsics.width_px);
   vp::preprocess::Preprocessor preprocessor;
-  const cv::Size size(rig.intrinsics.widthPx, rig.intrinsics.heightPx);
+  const cv::Size size(rig.intrinsics.width_px, rig.intrinsics.height_px);
   if (!preprocessor.init(pre, camera, size, &why))
     return fail(why);
 

@@ -22,7 +22,7 @@ namespace {
 constexpr long kIters = 20'000'000;
 
 template <typename Body>
-double instrPerNs(Body body, int instrPerIter) {
+double instrPer_ns(Body body, int instrPerIter) {
   body(kIters / 10);  // warm-up (AVX-512 license / frequency transition)
   const auto t0 = std::chrono::steady_clock::now();
   body(kIters);
@@ -169,7 +169,7 @@ void imulChain(long n) {
 }  // namespace
 
 int main() {
-  std::printf("clock_ghz 0 %.3f 0\n", 3.0 * instrPerNs(imulChain, 12));
+  std::printf("clock_ghz 0 %.3f 0\n", 3.0 * instrPer_ns(imulChain, 12));
   struct Test {
     const char* name;
     void (*body)(long);
@@ -182,7 +182,7 @@ int main() {
       {"vpmaddwd_ymm", maddwdYmm, 12, 16},
   };
   for (const Test& t : tests) {
-    const double ipn = instrPerNs(t.body, t.instrPerIter);
+    const double ipn = instrPer_ns(t.body, t.instrPerIter);
     std::printf("%s %d %.3f %.1f\n", t.name, t.macsPerInstr, ipn, ipn * t.macsPerInstr);
   }
   return 0;

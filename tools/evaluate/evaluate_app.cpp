@@ -77,8 +77,8 @@ evaluation::PredictedObject toPrediction(const output_files::DetectionRecord& r)
   p.shape = r.gamma;
   p.lifted = r.liftStatus == output_files::LiftStatus::Ok;
   p.positionEnu = r.positionEnu;
-  p.headingEnuRad = r.headingEnuRad;
-  p.dimensionsM = r.dimensionsM;
+  p.headingEnu_rad = r.headingEnu_rad;
+  p.dimensions_m = r.dimensions_m;
   return p;
 }
 
@@ -307,8 +307,8 @@ bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& optio
       ref.shape = object.shape;
       ref.hasWorld = true;
       ref.positionEnu = object.positionEnu;
-      ref.headingEnuRad = object.headingEnuRad;
-      ref.dimensionsM = object.dimensionsM;
+      ref.headingEnu_rad = object.headingEnu_rad;
+      ref.dimensions_m = object.dimensions_m;
       // GSD from the wheel centres when their keypoints are given, else length / box length.
       std::array<Eigen::Vector2d, shape::kWheelCount> pixels;
       std::array<Eigen::Vector3d, shape::kWheelCount> world;
@@ -327,7 +327,7 @@ bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& optio
       }
       ref.gsd_m = evaluation::gsdFromWheelKeypoints(pixels, world);
       if (!std::isfinite(ref.gsd_m) && object.imageBox.length > 0.0) {
-        ref.gsd_m = object.dimensionsM.x() / object.imageBox.length;
+        ref.gsd_m = object.dimensions_m.x() / object.imageBox.length;
       }
       image.references.push_back(ref);
     }
@@ -383,8 +383,8 @@ bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& opt
       evaluation::TruthVehicle truth;
       truth.id = object.trackId;
       truth.positionEnu = object.positionEnu.head<2>();
-      truth.headingEnuRad = object.headingEnuRad;
-      truth.speedMps = object.speedMps;
+      truth.headingEnu_rad = object.headingEnu_rad;
+      truth.speed_mps = object.speed_mps;
       truth.type = static_cast<int>(object.type);
       // Hardly visible vehicles are 'ignore' here as in the detection measures.
       truth.ignore =
@@ -420,8 +420,8 @@ bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& opt
       evaluation::TrackObservation track;
       track.id = row.trackId;
       track.centreEnu = row.centreEnu;
-      track.headingEnuRad = row.headingEnuRad();
-      track.speedMps = row.speedMps;
+      track.headingEnu_rad = row.headingEnu_rad();
+      track.speed_mps = row.speed_mps;
       track.type = static_cast<int>(row.type);
       frame->tracks.push_back(track);
     }
@@ -448,7 +448,7 @@ bool loadSequenceTracking(const SequenceInput& input, const EvaluateOptions& opt
         }
         evaluation::DetectionObservation detection;
         detection.positionEnu = row.positionEnu.head<2>();
-        detection.headingEnuRad = row.headingEnuRad;
+        detection.headingEnu_rad = row.headingEnu_rad;
         detection.headingKnown = row.directionKnown;
         detection.type = static_cast<int>(row.topType());
         frame->detections.push_back(detection);

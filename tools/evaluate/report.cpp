@@ -115,37 +115,37 @@ std::vector<Row> measureRows(const ReportContext& context) {
       {"Detection", "F1", "f1", s.f1, Unit::Percent},
       {"Detection", "mean IoU of the matches", "mean_matched_iou", s.meanMatchedIou, Unit::Ratio,
        s.truePositives},
-      {"Pose", "position error, median", "position_median_px", s.positionPx.median, Unit::Pixel,
-       s.positionPx.count},
-      {"Pose", "position error, MAD", "position_mad_px", s.positionPx.mad, Unit::Pixel,
-       s.positionPx.count},
+      {"Pose", "position error, median", "position_median_px", s.position_px.median, Unit::Pixel,
+       s.position_px.count},
+      {"Pose", "position error, MAD", "position_mad_px", s.position_px.mad, Unit::Pixel,
+       s.position_px.count},
   };
   if (yolo) {
     return rows;
   }
   const std::vector<Row> more{
       {"Pose", "position error (px x GSD), median eps_mae^t", "position_median_m",
-       s.positionM.median, Unit::Metre, s.positionM.count},
-      {"Pose", "position error (px x GSD), MAD sigma_MAD^t", "position_mad_m", s.positionM.mad,
-       Unit::Metre, s.positionM.count},
+       s.position_m.median, Unit::Metre, s.position_m.count},
+      {"Pose", "position error (px x GSD), MAD sigma_MAD^t", "position_mad_m", s.position_m.mad,
+       Unit::Metre, s.position_m.count},
       {"Pose", "lifted world position error, median", "position_world_median_m",
-       s.positionWorldM.median, Unit::Metre, s.positionWorldM.count},
-      {"Pose", "lifted world position error, MAD", "position_world_mad_m", s.positionWorldM.mad,
-       Unit::Metre, s.positionWorldM.count},
+       s.positionWorld_m.median, Unit::Metre, s.positionWorld_m.count},
+      {"Pose", "lifted world position error, MAD", "position_world_mad_m", s.positionWorld_m.mad,
+       Unit::Metre, s.positionWorld_m.count},
       {"Pose", "orientation error Δθ over 360°, median eps_mae^theta", "orientation_median_deg",
-       s.orientationDeg.median, Unit::Degree, s.orientationDeg.count},
+       s.orientation_deg.median, Unit::Degree, s.orientation_deg.count},
       {"Pose", "orientation error, MAD sigma_MAD^theta", "orientation_mad_deg",
-       s.orientationDeg.mad, Unit::Degree, s.orientationDeg.count},
-      {"Pose", "share of Δθ ≤ 10°", "orientation_share_below_10deg", s.shareBelow10Deg,
-       Unit::Percent, s.orientationDeg.count},
+       s.orientation_deg.mad, Unit::Degree, s.orientation_deg.count},
+      {"Pose", "share of Δθ ≤ 10°", "orientation_share_below_10deg", s.shareBelow10_deg,
+       Unit::Percent, s.orientation_deg.count},
       {"Pose", "share of Δθ > 90° (front/back swapped)", "orientation_flip_share", s.flipShare,
-       Unit::Percent, s.orientationDeg.count},
+       Unit::Percent, s.orientation_deg.count},
       {"Pose", "axis error ignoring front/back, median", "axis_orientation_median_deg",
-       s.axisOrientationDeg.median, Unit::Degree, s.axisOrientationDeg.count},
+       s.axisOrientation_deg.median, Unit::Degree, s.axisOrientation_deg.count},
       {"Pose", "lifted world heading error, median", "heading_world_median_deg",
-       s.headingWorldDeg.median, Unit::Degree, s.headingWorldDeg.count},
-      {"Pose", "lifted world heading error, MAD", "heading_world_mad_deg", s.headingWorldDeg.mad,
-       Unit::Degree, s.headingWorldDeg.count},
+       s.headingWorld_deg.median, Unit::Degree, s.headingWorld_deg.count},
+      {"Pose", "lifted world heading error, MAD", "heading_world_mad_deg", s.headingWorld_deg.mad,
+       Unit::Degree, s.headingWorld_deg.count},
       {"Pose", "matches whose prediction has no known direction", "direction_unknown_count",
        static_cast<double>(s.directionUnknownPredictions), Unit::Count},
       {"Type", "matches with a known reference type", "type_count",
@@ -617,10 +617,10 @@ bool writeOrientationPlot(const evaluation::EvaluationSummary& summary, const st
   cv::putText(image, "share [%]", cv::Point(5, kTop - 12), font, 0.5, black, 1, cv::LINE_AA);
   cv::putText(image,
               "Cumulative histogram of orientation errors (n = " +
-                  std::to_string(summary.orientationDeg.count) + ")",
+                  std::to_string(summary.orientation_deg.count) + ")",
               cv::Point(kLeft + 40, kTop - 14), font, 0.5, black, 1, cv::LINE_AA);
   // Our curve: share of errors <= x, a step function through the sorted errors.
-  const std::vector<double>& errors = summary.orientationErrorsDeg;
+  const std::vector<double>& errors = summary.orientationErrors_deg;
   if (!errors.empty()) {
     std::vector<cv::Point> curve{toPixel(0, 0)};
     const double n = static_cast<double>(errors.size());

@@ -25,13 +25,13 @@ constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 struct Options {
   std::string configPath = "config/default.yaml";
-  double altitudeAboveOriginM = 100.0;  // drone height above the origin's height, m
-  double northM = 0.0;                  // drone offset from the origin, m
-  double eastM = 0.0;
-  double rollDeg = 0.0;
-  double pitchDeg = 0.0;
-  double yawDeg = 0.0;
-  double gimbalPitchDeg = -90.0;
+  double altitudeAboveOrigin_m = 100.0;  // drone height above the origin's height, m
+  double north_m = 0.0;                  // drone offset from the origin, m
+  double east_m = 0.0;
+  double roll_deg = 0.0;
+  double pitch_deg = 0.0;
+  double yaw_deg = 0.0;
+  double gimbalPitch_deg = -90.0;
   std::vector<Eigen::Vector2d> pixels;
   std::vector<vp::geometry::RotatedBox> boxes;
 };
@@ -94,13 +94,13 @@ bool parseArgs(int argc, char** argv, Options& opt, bool& help) {
       ok = parseNumbers(value, 5, v) && v[2] > 0.0 && v[3] > 0.0;
       opt.boxes.push_back({v[0], v[1], v[2], v[3], vp::geometry::wrapTwoPi(v[4] * kDegToRad)});
     } else {
-      const std::pair<const char*, double*> numeric[] = {{"--altitude", &opt.altitudeAboveOriginM},
-                                                         {"--east", &opt.eastM},
-                                                         {"--north", &opt.northM},
-                                                         {"--roll", &opt.rollDeg},
-                                                         {"--pitch", &opt.pitchDeg},
-                                                         {"--yaw", &opt.yawDeg},
-                                                         {"--gimbal-pitch", &opt.gimbalPitchDeg}};
+      const std::pair<const char*, double*> numeric[] = {{"--altitude", &opt.altitudeAboveOrigin_m},
+                                                         {"--east", &opt.east_m},
+                                                         {"--north", &opt.north_m},
+                                                         {"--roll", &opt.roll_deg},
+                                                         {"--pitch", &opt.pitch_deg},
+                                                         {"--yaw", &opt.yaw_deg},
+                                                         {"--gimbal-pitch", &opt.gimbalPitch_deg}};
       double* target = nullptr;
       for (const auto& [name, field] : numeric) {
         target = arg == name ? field : target;
@@ -126,8 +126,8 @@ void printPoint(const char* label, const vp::geodesy::LocalFrame& frame,
   const vp::geodesy::UtmPoint u = vp::geodesy::toUtm(g);
   std::printf(
       "%s ENU (%9.3f, %9.3f, %7.3f) m | WGS84 %.8f, %.8f, h %.3f m | UTM %d%c %.3f E %.3f N\n",
-      label, enu.x(), enu.y(), enu.z(), g.latitudeDeg, g.longitudeDeg, g.heightM, u.zone,
-      u.northp ? 'N' : 'S', u.eastingM, u.northingM);
+      label, enu.x(), enu.y(), enu.z(), g.latitude_deg, g.longitude_deg, g.height_m, u.zone,
+      u.northp ? 'N' : 'S', u.easting_m, u.northing_m);
 }
 
 }  // namespace
@@ -178,11 +178,11 @@ int main(int argc, char** argv) {
   }
 
   vp::lifting::DronePose pose;
-  pose.position = frame.toGeodetic({opt.eastM, opt.northM, opt.altitudeAboveOriginM});
-  pose.bodyToNed =
-      Eigen::Quaterniond(vp::geodesy::rotationFromEuler({opt.rollDeg, opt.pitchDeg, opt.yawDeg}));
+  pose.position = frame.toGeodetic({opt.east_m, opt.north_m, opt.altitudeAboveOrigin_m});
+  pose.bodyToNed = Eigen::Quaterniond(
+      vp::geodesy::rotationFromEuler({opt.roll_deg, opt.pitch_deg, opt.yaw_deg}));
   pose.gimbal = config.mount.gimbal;
-  pose.gimbal.angles.pitchDeg = opt.gimbalPitchDeg;
+  pose.gimbal.angles.pitch_deg = opt.gimbalPitch_deg;
   const auto camPose = lifter.cameraPose(pose);
   if (!camPose) {
     std::fprintf(stderr, "vp_lift_demo: pose: %s\n", vp::lifting::toString(camPose.error()));
@@ -190,17 +190,17 @@ int main(int argc, char** argv) {
   }
 
   const auto& in = config.camera.intrinsics;
-  std::printf("DTM %s: %d x %d samples, %s, heights %.2f .. %.2f m\n",
-              config.terrain.dtmPath.c_str(), terrain.grid().cols, terrain.grid().rows,
-              vp::terrain::toString(terrain.grid().crs).c_str(),
-              static_cast<double>(terrain.minHeightM()), static_cast<double>(terrain.maxHeightM()));
+  std::printf(
+      "DTM %s: %d x %d samples, %s, heights %.2f .. %.2f m\n", config.terrain.dtmPath.c_str(),
+      terrain.grid().cols, terrain.grid().rows, vp::terrain::toString(terrain.grid().crs).c_str(),
+      static_cast<double>(terrain.minHeight_m()), static_cast<double>(terrain.maxHeight_m()));
   printPoint("camera centre         ", frame, camPose->centreEnu);
 
   if (opt.pixels.empty() && opt.boxes.empty()) {
-    const double w = in.widthPx - 1.0;
-    const double h = in.heightPx - 1.0;
-    opt.pixels = {{in.cxPx, in.cyPx}, {0.0, 0.0}, {w, 0.0}, {w, h}, {0.0, h}};
-    opt.boxes.push_back({in.cxPx, in.cyPx, 130.0, 52.0, 30.0 * kDegToRad});
+    const double w = in.width_px - 1.0;
+    const double h = in.height_px - 1.0;
+    opt.pixels = {{in.cx_px, in.cy_px}, {0.0, 0.0}, {w, 0.0}, {w, h}, {0.0, h}};
+    opt.boxes.push_back({in.cx_px, in.cy_px, 130.0, 52.0, 30.0 * kDegToRad});
   }
   int failures = 0;
   for (const Eigen::Vector2d& p : opt.pixels) {
@@ -213,9 +213,9 @@ int main(int argc, char** argv) {
     }
     printPoint(label, frame, *world);
     const auto back = lifter.worldToPixel(*camPose, *world);
-    const double errPx = back ? (*back - p).norm() : std::numeric_limits<double>::infinity();
-    std::printf("    back to the image: error %.2e px\n", errPx);
-    failures += errPx > 1e-3 ? 1 : 0;
+    const double err_px = back ? (*back - p).norm() : std::numeric_limits<double>::infinity();
+    std::printf("    back to the image: error %.2e px\n", err_px);
+    failures += err_px > 1e-3 ? 1 : 0;
   }
   for (const vp::geometry::RotatedBox& b : opt.boxes) {
     const auto g = lifter.boxToGround(*camPose, b);
@@ -225,8 +225,8 @@ int main(int argc, char** argv) {
       std::printf("no world position: %s\n", vp::lifting::toString(g.error()));
       continue;
     }
-    std::printf("length %.3f m, width %.3f m, heading %.2f deg from true north\n", g->lengthM,
-                g->widthM, g->headingTrueNorthDeg);
+    std::printf("length %.3f m, width %.3f m, heading %.2f deg from true north\n", g->length_m,
+                g->width_m, g->headingTrueNorth_deg);
     printPoint("    centre            ", frame, g->centreEnu);
   }
   return failures == 0 ? 0 : 1;

@@ -163,7 +163,7 @@ int fail(const dds::DdsResult& result, const char* what) {
   return 1;
 }
 
-double latencyMs(const dds_sample_info_t& info) {
+double latency_ms(const dds_sample_info_t& info) {
   return static_cast<double>(dds_time() - info.source_timestamp) * 1e-6;
 }
 
@@ -302,7 +302,7 @@ int main(int argc, char** argv) {
     }
     for (int k = 0; k < n; ++k) {
       const auto& sample = *static_cast<const vp_msg_VehicleState*>(samples[k]);
-      const double ms = latencyMs(infos[k]);
+      const double ms = latency_ms(infos[k]);
       msg::VehicleState state = dds::fromSample(sample);  // key fields are valid for disposals
       const auto key = std::make_pair(state.droneId, state.trackId);
       if (infos[k].valid_data) {

@@ -41,12 +41,12 @@ void forEachField(EventKind kind, const messages::VehicleState& s, double latenc
   str("event", kind == EventKind::State ? "state" : "disposed");
   i("drone_id", s.droneId);
   i("track_id", s.trackId);
-  i("measurement_time_ns", s.measurementTimeNs);
+  i("measurement_time_ns", s.measurementTime_ns);
   d("latency_ms", latency_ms);
   str("status", tracking::toString(s.status));
-  d("latitude_deg", s.position.latitudeDeg);
-  d("longitude_deg", s.position.longitudeDeg);
-  d("height_m", s.position.heightM);
+  d("latitude_deg", s.position.latitude_deg);
+  d("longitude_deg", s.position.longitude_deg);
+  d("height_m", s.position.height_m);
   d("east_m", s.enu_m[0]);
   d("north_m", s.enu_m[1]);
   d("up_m", s.enu_m[2]);

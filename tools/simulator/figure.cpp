@@ -77,7 +77,7 @@ void drawTruth(cv::Mat& img, const vp::sequence::SequenceReader& reader, std::in
 int main(int argc, char** argv) {
   std::string sequenceDir, realImage, labels, out;
   int frameIndex = 0;
-  int cropPx = 1400;
+  int crop_px = 1400;
   int quality = 88;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
     } else if (a == "--frame") {
       frameIndex = std::stoi(v);
     } else if (a == "--crop-px") {
-      cropPx = std::stoi(v);
+      crop_px = std::stoi(v);
     } else if (a == "--real") {
       realImage = v;
     } else if (a == "--labels") {
@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
   }
   drawTruth(sim, reader, reader.frames()[static_cast<std::size_t>(frameIndex)].frameId);
   const int side = 640;
-  const int crop = std::min({cropPx, sim.cols, sim.rows});
+  const int crop = std::min({crop_px, sim.cols, sim.rows});
   cv::Mat simCrop;
   cv::resize(sim(cv::Rect((sim.cols - crop) / 2, (sim.rows - crop) / 2, crop, crop)), simCrop,
              cv::Size(side, side), 0, 0, cv::INTER_AREA);

@@ -18,8 +18,8 @@ std::uint16_t encode(float v) {
 }  // namespace
 
 double HeightGrid::at(double x, double y) const {
-  const double u = std::clamp((x - origin.x()) / cellM, 0.0, nx - 1.0);
-  const double v = std::clamp((y - origin.y()) / cellM, 0.0, ny - 1.0);
+  const double u = std::clamp((x - origin.x()) / cell_m, 0.0, nx - 1.0);
+  const double v = std::clamp((y - origin.y()) / cell_m, 0.0, ny - 1.0);
   const int i = std::min(static_cast<int>(u), nx - 2);
   const int j = std::min(static_cast<int>(v), ny - 2);
   const double fx = u - i;
@@ -40,10 +40,10 @@ double HeightGrid::at(double x, double y) const {
 std::pair<double, double> HeightGrid::range(double x0, double y0, double x1, double y1) const {
   // Heights are linear within cells: the extremes are at the nodes of the covering cells.
   const auto clampI = [](double v, int n) { return std::clamp(static_cast<int>(v), 0, n - 1); };
-  const int i0 = clampI(std::floor((x0 - origin.x()) / cellM), nx);
-  const int i1 = clampI(std::ceil((x1 - origin.x()) / cellM), nx);
-  const int j0 = clampI(std::floor((y0 - origin.y()) / cellM), ny);
-  const int j1 = clampI(std::ceil((y1 - origin.y()) / cellM), ny);
+  const int i0 = clampI(std::floor((x0 - origin.x()) / cell_m), nx);
+  const int i1 = clampI(std::ceil((x1 - origin.x()) / cell_m), nx);
+  const int j0 = clampI(std::floor((y0 - origin.y()) / cell_m), ny);
+  const int j1 = clampI(std::ceil((y1 - origin.y()) / cell_m), ny);
   double lo = 1e18;
   double hi = -1e18;
   for (int j = j0; j <= j1; ++j) {
@@ -59,23 +59,23 @@ std::pair<double, double> HeightGrid::range(double x0, double y0, double x1, dou
 
 void GroundCache::init(const GroundTexture& texture, const ShadowMap& staticShadow,
                        float softnessTexels, const HeightGrid& heights, const Eigen::Vector2d& lo,
-                       const Eigen::Vector2d& hi, double texelM) {
+                       const Eigen::Vector2d& hi, double texel_m) {
   texture_ = &texture;
   shadow_ = &staticShadow;
   heights_ = &heights;
   softness_ = softnessTexels;
   lo_ = lo;
-  invTexel0Sq_ = 1.0 / (texelM * texelM);
+  invTexel0Sq_ = 1.0 / (texel_m * texel_m);
   storage_.clear();
   levels_.clear();
   levels_.resize(kLevels);
   for (int l = 0; l < kLevels; ++l) {
     Level& level = levels_[static_cast<std::size_t>(l)];
-    level.texelM = texelM * std::ldexp(1.0, l);
-    level.invTexelM = 1.0 / level.texelM;
-    const double tileM = level.texelM * kTile;
-    level.tilesX = static_cast<int>(std::ceil((hi.x() - lo.x()) / tileM)) + 1;
-    level.tilesY = static_cast<int>(std::ceil((hi.y() - lo.y()) / tileM)) + 1;
+    level.texel_m = texel_m * std::ldexp(1.0, l);
+    level.invTexel_m = 1.0 / level.texel_m;
+    const double tile_m = level.texel_m * kTile;
+    level.tilesX = static_cast<int>(std::ceil((hi.x() - lo.x()) / tile_m)) + 1;
+    level.tilesY = static_cast<int>(std::ceil((hi.y() - lo.y()) / tile_m)) + 1;
     level.texelsX = level.tilesX * kTile;
     level.texelsY = level.tilesY * kTile;
     const std::size_t n =
@@ -98,19 +98,19 @@ int GroundCache::level(double footprintM2) const {
 
 void GroundCache::fill(int level, int tx, int ty, std::uint16_t* out) const {
   const Level& l = levels_[static_cast<std::size_t>(level)];
-  const double x0 = lo_.x() + static_cast<double>(tx) * kTile * l.texelM;
-  const double y0 = lo_.y() + static_cast<double>(ty) * kTile * l.texelM;
+  const double x0 = lo_.x() + static_cast<double>(tx) * kTile * l.texel_m;
+  const double y0 = lo_.y() + static_cast<double>(ty) * kTile * l.texel_m;
   std::vector<Eigen::Vector3f> albedo(static_cast<std::size_t>(kTile) * kTile);
-  texture_->fillTile(x0, y0, l.texelM, kTile, albedo.data());
+  texture_->fillTile(x0, y0, l.texel_m, kTile, albedo.data());
   // Most tiles lie in open sun: one test of the tile's box spares the per-texel filtering.
-  const double x1 = x0 + (kTile - 1) * l.texelM;
-  const double y1 = y0 + (kTile - 1) * l.texelM;
+  const double x1 = x0 + (kTile - 1) * l.texel_m;
+  const double y1 = y0 + (kTile - 1) * l.texel_m;
   const auto [zLo, zHi] = heights_->range(x0, y0, x1, y1);
   const bool lit = shadow_->boxLit({x0, y0, zLo + 0.03}, {x1, y1, zHi + 0.03});
   for (int j = 0; j < kTile; ++j) {
     for (int i = 0; i < kTile; ++i) {
-      const double x = x0 + i * l.texelM;
-      const double y = y0 + j * l.texelM;
+      const double x = x0 + i * l.texel_m;
+      const double y = y0 + j * l.texel_m;
       float visibility = 1.0F;
       if (!lit) {
         // Lifted off the surface like a shaded sample (normal offset; the ground is flat).

@@ -3,7 +3,7 @@
 // frame only interpolates them instead of evaluating the texture and filtering the static
 // shadow map per sample.
 //
-// Contract: texels lie on square grids in the ENU plane, texel size texelM * 2^level (levels
+// Contract: texels lie on square grids in the ENU plane, texel size texel_m * 2^level (levels
 // chosen per sample from its ground footprint, so distant ground is not over-sampled); a
 // texel holds the albedo (GroundTexture::fillTile) and the filtered visibility of the sun in
 // the static shadow map at the ground mesh under it. Tiles of kTile x kTile texels are filled
@@ -57,7 +57,7 @@ inline std::size_t zIndex(unsigned i, unsigned j) {
 // (i, j)-(i + 1, j + 1) diagonal, so z() is exactly the rasterized surface.
 struct HeightGrid {
   Eigen::Vector2d origin{0, 0};
-  double cellM = 1.0;
+  double cell_m = 1.0;
   int nx = 0;
   int ny = 0;
   std::vector<double> z;
@@ -77,19 +77,19 @@ class GroundCache {
   GroundCache(const GroundCache&) = delete;
   GroundCache& operator=(const GroundCache&) = delete;
 
-  // Covers [lo, hi]; texelM: the finest texel (about the finest sample footprint). The
+  // Covers [lo, hi]; texel_m: the finest texel (about the finest sample footprint). The
   // referenced objects must outlive the cache.
   void init(const GroundTexture& texture, const ShadowMap& staticShadow, float softnessTexels,
             const HeightGrid& heights, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
-            double texelM);
+            double texel_m);
   // Level whose texels are no larger than a sample covering footprintM2 of ground.
   int level(double footprintM2) const;
   GroundSample sample(double x, double y, int level) const {
     // Nearest texel: texels are no larger than a sample, and the samples of a pixel are
     // averaged, so interpolating would only blur (and cost four times the reads).
     const Level& l = levels_[static_cast<std::size_t>(level)];
-    const double u = std::clamp((x - lo_.x()) * l.invTexelM + 0.5, 0.0, l.texelsX - 1.0);
-    const double v = std::clamp((y - lo_.y()) * l.invTexelM + 0.5, 0.0, l.texelsY - 1.0);
+    const double u = std::clamp((x - lo_.x()) * l.invTexel_m + 0.5, 0.0, l.texelsX - 1.0);
+    const double v = std::clamp((y - lo_.y()) * l.invTexel_m + 0.5, 0.0, l.texelsY - 1.0);
     const auto i = static_cast<unsigned>(u);
     const auto j = static_cast<unsigned>(v);
     const std::uint16_t* t = tile(level, static_cast<int>(i / kTile), static_cast<int>(j / kTile));
@@ -103,8 +103,8 @@ class GroundCache {
   // Starts loading the texel of (x, y) into the cache, if its tile exists (a hint only).
   void prefetch(double x, double y, int level) const {
     const Level& l = levels_[static_cast<std::size_t>(level)];
-    const double u = (x - lo_.x()) * l.invTexelM + 0.5;
-    const double v = (y - lo_.y()) * l.invTexelM + 0.5;
+    const double u = (x - lo_.x()) * l.invTexel_m + 0.5;
+    const double v = (y - lo_.y()) * l.invTexel_m + 0.5;
     if (!(u >= 0.0 && v >= 0.0 && u < l.texelsX && v < l.texelsY)) {
       return;
     }
@@ -127,8 +127,8 @@ class GroundCache {
   static constexpr int kLocks = 64;
 
   struct Level {
-    double texelM = 0.0;
-    double invTexelM = 0.0;
+    double texel_m = 0.0;
+    double invTexel_m = 0.0;
     int texelsX = 0;  // valid texel indices 0 .. texelsX - 1
     int texelsY = 0;
     int tilesX = 0;

@@ -50,8 +50,8 @@ class DirectFields {
 // field's finest wavelength, which reproduces it closely while sparing most noise calls.
 class TileFields {
  public:
-  TileFields(const GroundTexture& texture, double x0, double y0, double texelM, int texels)
-      : texture_(texture), x0_(x0), y0_(y0), texelM_(texelM), texels_(texels) {}
+  TileFields(const GroundTexture& texture, double x0, double y0, double texel_m, int texels)
+      : texture_(texture), x0_(x0), y0_(y0), texelM_(texel_m), texels_(texels) {}
 
   void moveTo(int i, int j) {
     i_ = i;
@@ -82,7 +82,7 @@ class TileFields {
     std::vector<float> values;
   };
 
-  static double spacingM(GroundField f) {
+  static double spacing_m(GroundField f) {
     switch (f) {
       case GroundField::Fine:  // 0.35 m lattice
         return 0.06;
@@ -106,15 +106,15 @@ class TileFields {
   }
 
   void build(GroundField f, Grid& g) const {
-    g.step = std::max(1, static_cast<int>(std::lround(spacingM(f) / texelM_)));
+    g.step = std::max(1, static_cast<int>(std::lround(spacing_m(f) / texelM_)));
     g.invStep = 1.0F / static_cast<float>(g.step);
     g.nodes = (texels_ - 1 + g.step - 1) / g.step + 2;
-    const double nodeM = texelM_ * g.step;
+    const double node_m = texelM_ * g.step;
     g.values.resize(static_cast<std::size_t>(g.nodes) * static_cast<std::size_t>(g.nodes));
     for (int j = 0; j < g.nodes; ++j) {
       for (int i = 0; i < g.nodes; ++i) {
         g.values[static_cast<std::size_t>(j * g.nodes + i)] = texture_.field(
-            f, static_cast<float>(x0_ + i * nodeM), static_cast<float>(y0_ + j * nodeM));
+            f, static_cast<float>(x0_ + i * node_m), static_cast<float>(y0_ + j * node_m));
       }
     }
   }
@@ -152,7 +152,7 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
       const bool forward = dirSign == 0;
       const int lanes = forward ? road->lanesForward : road->lanesBackward;
       for (int k = 0; k < lanes; ++k) {
-        const double dl = lateral - road->laneOffsetM(forward, k);
+        const double dl = lateral - road->laneOffset_m(forward, k);
         if (std::fabs(dl) > 1.6) {
           continue;
         }
@@ -164,13 +164,13 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
       }
     }
     if (s.concreteRoad) {
-      const double slab = s.slabLengthM;
+      const double slab = s.slabLength_m;
       const int slabIndex = static_cast<int>(std::floor(along / slab));
-      const int laneIndex = static_cast<int>(std::floor(lateral / road->laneWidthM));
+      const int laneIndex = static_cast<int>(std::floor(lateral / road->laneWidth_m));
       tone *= 0.94F + 0.12F * latticeValue(slabIndex, laneIndex, s.seed + 4U);
       const double joint =
           std::min(periodicDistance(along, slab),
-                   periodicDistance(lateral - road->medianHalfM, road->laneWidthM));
+                   periodicDistance(lateral - road->medianHalf_m, road->laneWidth_m));
       if (joint < 0.015) {
         tone *= 0.6F;
       }
@@ -194,8 +194,8 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
   for (const Patch* pp : nearby.patches) {
     const Patch& patch = *pp;
     const Eigen::Vector2d d = p - patch.centre;
-    const double u = std::fabs(d.dot(patch.dir)) - patch.halfLengthM;
-    const double v = std::fabs(d.x() * -patch.dir.y() + d.y() * patch.dir.x()) - patch.halfWidthM;
+    const double u = std::fabs(d.dot(patch.dir)) - patch.halfLength_m;
+    const double v = std::fabs(d.x() * -patch.dir.y() + d.y() * patch.dir.x()) - patch.halfWidth_m;
     const double edge = std::max(u, v);
     if (edge < 0.0) {
       tone *= patch.tone;
@@ -207,8 +207,8 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
   for (const Manhole* mp : nearby.manholes) {
     const Manhole& m = *mp;
     const double r = (p - m.position).norm();
-    if (r < m.radiusM + 0.06) {
-      if (r > m.radiusM) {
+    if (r < m.radius_m + 0.06) {
+      if (r > m.radius_m) {
         tone *= 0.75F;
       } else {
         const float grid =
@@ -224,36 +224,37 @@ float GroundTexture::roadTone(const Eigen::Vector2d& p, const Road* road, double
 float GroundTexture::roadMarkings(const Road& road, double along, double lateral,
                                   bool* yellow) const {
   const bool intersection = scene_->kind == SceneKind::Intersection;
-  const double m = road.medianHalfM;
-  const double fwdEdge = -(m + road.lanesForward * road.laneWidthM);
-  const double bwdEdge = m + road.lanesBackward * road.laneWidthM;
+  const double m = road.medianHalf_m;
+  const double fwdEdge = -(m + road.lanesForward * road.laneWidth_m);
+  const double bwdEdge = m + road.lanesBackward * road.laneWidth_m;
   const double lineHalf = 0.06;
   float cover = 0.0F;
   // Stop lines and crosswalks (intersection: on both approaches).
   if (intersection) {
     const double a = std::fabs(along);
-    if (along < 0 && std::fabs(a - road.stopDistanceM) < 0.2 && lateral > fwdEdge && lateral < -m) {
+    if (along < 0 && std::fabs(a - road.stopDistance_m) < 0.2 && lateral > fwdEdge &&
+        lateral < -m) {
       return 1.0F;
     }
-    if (along > 0 && std::fabs(a - road.stopDistanceM) < 0.2 && lateral < bwdEdge && lateral > m) {
+    if (along > 0 && std::fabs(a - road.stopDistance_m) < 0.2 && lateral < bwdEdge && lateral > m) {
       return 1.0F;
     }
   }
-  if (road.crosswalkCentreM < 1e8) {
+  if (road.crosswalkCentre_m < 1e8) {
     const double a = intersection ? std::fabs(along) : along;
-    const double dc = std::fabs(a - road.crosswalkCentreM);
-    if (dc < 0.5 * road.crosswalkWidthM && lateral > -road.rightHalfM() &&
-        lateral < road.leftHalfM()) {
+    const double dc = std::fabs(a - road.crosswalkCentre_m);
+    if (dc < 0.5 * road.crosswalkWidth_m && lateral > -road.rightHalf_m() &&
+        lateral < road.leftHalf_m()) {
       if (road.zebra) {
         return periodicDistance(lateral + 0.25, 1.1) < 0.28 ? 1.0F : 0.0F;
       }
-      if (dc > 0.5 * road.crosswalkWidthM - 0.3) {
+      if (dc > 0.5 * road.crosswalkWidth_m - 0.3) {
         return 1.0F;
       }
       return 0.0F;
     }
   }
-  if (intersection && std::fabs(along) < road.stopDistanceM) {
+  if (intersection && std::fabs(along) < road.stopDistance_m) {
     return 0.0F;  // no lane lines inside the junction
   }
   // Centre line.
@@ -268,7 +269,7 @@ float GroundTexture::roadMarkings(const Road& road, double along, double lateral
     }
     case CentreLine::YellowDashed:
     case CentreLine::WhiteDashed:
-      if (std::fabs(lateral) < lineHalf && dashOn(along, road.dashLengthM, road.dashGapM)) {
+      if (std::fabs(lateral) < lineHalf && dashOn(along, road.dashLength_m, road.dashGap_m)) {
         *yellow = road.centreLine == CentreLine::YellowDashed;
         return 1.0F;
       }
@@ -278,36 +279,36 @@ float GroundTexture::roadMarkings(const Road& road, double along, double lateral
   }
   // Lane lines between lanes of one direction.
   for (int k = 1; k < road.lanesForward; ++k) {
-    if (band(lateral, -(m + k * road.laneWidthM), lineHalf) > 0 &&
-        dashOn(along, road.dashLengthM, road.dashGapM)) {
+    if (band(lateral, -(m + k * road.laneWidth_m), lineHalf) > 0 &&
+        dashOn(along, road.dashLength_m, road.dashGap_m)) {
       cover = 1.0F;
     }
   }
   for (int k = 1; k < road.lanesBackward; ++k) {
-    if (band(lateral, m + k * road.laneWidthM, lineHalf) > 0 &&
-        dashOn(-along, road.dashLengthM, road.dashGapM)) {
+    if (band(lateral, m + k * road.laneWidth_m, lineHalf) > 0 &&
+        dashOn(-along, road.dashLength_m, road.dashGap_m)) {
       cover = 1.0F;
     }
   }
   // Edge lines: at the parking lane, or just inside the kerb.
-  if (road.edgeLines || road.parkingRightM > 0) {
-    const double e = road.parkingRightM > 0 ? fwdEdge : -(road.rightHalfM() - 0.35);
+  if (road.edgeLines || road.parkingRight_m > 0) {
+    const double e = road.parkingRight_m > 0 ? fwdEdge : -(road.rightHalf_m() - 0.35);
     if (band(lateral, e, lineHalf) > 0) {
       cover = 1.0F;
     }
   }
-  if (road.edgeLines || road.parkingLeftM > 0) {
-    const double e = road.parkingLeftM > 0 ? bwdEdge : road.leftHalfM() - 0.35;
+  if (road.edgeLines || road.parkingLeft_m > 0) {
+    const double e = road.parkingLeft_m > 0 ? bwdEdge : road.leftHalf_m() - 0.35;
     if (band(lateral, e, lineHalf) > 0) {
       cover = 1.0F;
     }
   }
   // Parking lane: short ticks marking the stalls.
-  if (road.parkingRightM > 0 && lateral < fwdEdge && periodicDistance(along, 6.5) < 0.05 &&
+  if (road.parkingRight_m > 0 && lateral < fwdEdge && periodicDistance(along, 6.5) < 0.05 &&
       lateral > fwdEdge - 0.6) {
     cover = 1.0F;
   }
-  if (road.parkingLeftM > 0 && lateral > bwdEdge && periodicDistance(along, 6.5) < 0.05 &&
+  if (road.parkingLeft_m > 0 && lateral > bwdEdge && periodicDistance(along, 6.5) < 0.05 &&
       lateral < bwdEdge + 0.6) {
     cover = 1.0F;
   }
@@ -318,22 +319,22 @@ float GroundTexture::lotMarkings(const ParkingLot& lot, const Eigen::Vector2d& p
   const Eigen::Vector2d d = p - lot.centre;
   const double u = d.dot(lot.dir);
   const double v = d.dot(lot.leftNormal());
-  const double halfRow = 0.5 * lot.baysPerRow * lot.bayWidthM;
+  const double halfRow = 0.5 * lot.baysPerRow * lot.bayWidth_m;
   if (std::fabs(u) > halfRow + 0.06) {
     return 0.0F;
   }
-  for (std::size_t r = 0; r < lot.rowOffsetsM.size(); ++r) {
-    const double dv = v - lot.rowOffsetsM[r];
-    if (std::fabs(dv) > 0.5 * lot.bayDepthM + 0.06) {
+  for (std::size_t r = 0; r < lot.rowOffsets_m.size(); ++r) {
+    const double dv = v - lot.rowOffsets_m[r];
+    if (std::fabs(dv) > 0.5 * lot.bayDepth_m + 0.06) {
       continue;
     }
-    const double back = -lot.rowFacing[r] * 0.5 * lot.bayDepthM;
+    const double back = -lot.rowFacing[r] * 0.5 * lot.bayDepth_m;
     if (std::fabs(dv - back) < 0.06) {
       return 1.0F;
     }
     // Separators between bays, slightly shorter than the bay at the aisle end.
-    if (periodicDistance(u + halfRow, lot.bayWidthM) < 0.055 &&
-        lot.rowFacing[r] * dv < 0.5 * lot.bayDepthM - 0.3) {
+    if (periodicDistance(u + halfRow, lot.bayWidth_m) < 0.055 &&
+        lot.rowFacing[r] * dv < 0.5 * lot.bayDepth_m - 0.3) {
       return 1.0F;
     }
   }
@@ -348,14 +349,14 @@ Eigen::Vector3f GroundTexture::sidewalk(const Eigen::Vector2d& p, double kerbDis
   double best = 1e9;
   for (const Road& road : scene_->roads) {
     const double l = road.lateral(p);
-    const double dd = std::max(l - road.leftHalfM(), -l - road.rightHalfM());
+    const double dd = std::max(l - road.leftHalf_m(), -l - road.rightHalf_m());
     if (dd < best) {
       best = dd;
       nearest = &road;
     }
   }
   const double a = nearest->along(p);
-  const double q = kerbDistance - scene_->kerbWidthM;
+  const double q = kerbDistance - scene_->kerbWidth_m;
   const auto x = static_cast<float>(p.x());
   const auto y = static_cast<float>(p.y());
   float tone = 1.0F + 0.12F * (2.0F * fields(GroundField::Walk) - 1.0F);
@@ -372,11 +373,11 @@ Eigen::Vector3f GroundTexture::sidewalk(const Eigen::Vector2d& p, double kerbDis
       tone *= 0.7F;
     }
   } else {
-    const int i = static_cast<int>(std::floor(a / s.sidewalkSlabM));
-    const int j = static_cast<int>(std::floor(q / s.sidewalkSlabM));
+    const int i = static_cast<int>(std::floor(a / s.sidewalkSlab_m));
+    const int j = static_cast<int>(std::floor(q / s.sidewalkSlab_m));
     tone *= 0.94F + 0.12F * latticeValue(i, j, s.seed + 23U);
-    if (periodicDistance(a, s.sidewalkSlabM) < 0.01 ||
-        (scene_->sidewalkWidthM > 2.5 && periodicDistance(q, s.sidewalkSlabM) < 0.01)) {
+    if (periodicDistance(a, s.sidewalkSlab_m) < 0.01 ||
+        (scene_->sidewalkWidth_m > 2.5 && periodicDistance(q, s.sidewalkSlab_m) < 0.01)) {
       tone *= 0.72F;
     }
   }
@@ -394,8 +395,8 @@ Eigen::Vector3f GroundTexture::verge(const Eigen::Vector2d& p, Fields& fields,
     const Building& b = scene_->buildings[i];
     const Eigen::Vector2d d = p - b.centre;
     const Eigen::Vector2d& f = buildingAxes_[i];
-    const double u = std::fabs(d.dot(f)) - 0.5 * b.lengthM;
-    const double v = std::fabs(d.x() * -f.y() + d.y() * f.x()) - 0.5 * b.widthM;
+    const double u = std::fabs(d.dot(f)) - 0.5 * b.length_m;
+    const double v = std::fabs(d.x() * -f.y() + d.y() * f.x()) - 0.5 * b.width_m;
     if (std::max(u, v) < 1.5) {
       const float t =
           0.9F + 0.2F * latticeValue(static_cast<int>(std::floor(x / 0.02F)),
@@ -427,8 +428,8 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
     const ParkingLot* lot = nullptr;
     for (const ParkingLot& l : scene_->lots) {
       const Eigen::Vector2d q = p - l.centre;
-      if (std::fabs(q.dot(l.dir)) < 0.5 * l.lengthM &&
-          std::fabs(q.dot(l.leftNormal())) < 0.5 * l.widthM) {
+      if (std::fabs(q.dot(l.dir)) < 0.5 * l.length_m &&
+          std::fabs(q.dot(l.leftNormal())) < 0.5 * l.width_m) {
         lot = &l;
       }
     }
@@ -437,7 +438,7 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
     double lateral = 0.0;
     for (const Road& r : scene_->roads) {
       const double l = r.lateral(p);
-      if (l < r.leftHalfM() && l > -r.rightHalfM()) {
+      if (l < r.leftHalf_m() && l > -r.rightHalf_m()) {
         road = &r;
         along = r.along(p);
         lateral = l;
@@ -445,7 +446,7 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
       }
     }
     const bool inJunction = scene_->kind == SceneKind::Intersection && road != nullptr &&
-                            std::fabs(along) < road->stopDistanceM - 0.5;
+                            std::fabs(along) < road->stopDistance_m - 0.5;
     const float tone =
         roadTone(p, lot != nullptr ? nullptr : road, along, lateral, inJunction, fields, nearby);
     Eigen::Vector3f c = (lot != nullptr ? s.lotAlbedo : s.roadAlbedo) * tone;
@@ -461,7 +462,7 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
     } else {
       for (const Road& r : scene_->roads) {
         const double l = r.lateral(p);
-        if (l < r.leftHalfM() && l > -r.rightHalfM()) {
+        if (l < r.leftHalf_m() && l > -r.rightHalf_m()) {
           cover = std::max(cover, roadMarkings(r, r.along(p), l, &yellow));
         }
       }
@@ -483,7 +484,7 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
     }
     return c;
   }
-  if (d < scene_->kerbWidthM) {
+  if (d < scene_->kerbWidth_m) {
     if (cls != nullptr) {
       *cls = GroundClass::Kerb;
     }
@@ -496,7 +497,7 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
     }
     return s.kerbAlbedo * t;
   }
-  if (d < scene_->kerbWidthM + scene_->sidewalkWidthM) {
+  if (d < scene_->kerbWidth_m + scene_->sidewalkWidth_m) {
     if (cls != nullptr) {
       *cls = GroundClass::Sidewalk;
     }
@@ -507,7 +508,7 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
   }
   Eigen::Vector3f c = verge(p, fields, nearby);
   // A strip of bare soil / edging right behind the pavement.
-  const double e = d - scene_->kerbWidthM - scene_->sidewalkWidthM;
+  const double e = d - scene_->kerbWidth_m - scene_->sidewalkWidth_m;
   if (e < 0.15) {
     c = c * 0.6F + s.soilAlbedo * 0.4F;
   }
@@ -516,7 +517,7 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
 
 GroundTexture::GroundTexture(const SceneSpec& scene) : scene_(&scene) {
   for (const Building& b : scene.buildings) {
-    buildingAxes_.emplace_back(std::cos(b.headingRad), std::sin(b.headingRad));
+    buildingAxes_.emplace_back(std::cos(b.heading_rad), std::sin(b.heading_rad));
   }
   all_ = nearby(Eigen::Vector2d::Constant(-1e18), Eigen::Vector2d::Constant(1e18));
 }
@@ -530,18 +531,18 @@ GroundTexture::Nearby GroundTexture::nearby(const Eigen::Vector2d& lo,
   };
   Nearby n;
   for (const Patch& patch : scene_->patches) {
-    if (meets(patch.centre, std::hypot(patch.halfLengthM, patch.halfWidthM) + 0.1)) {
+    if (meets(patch.centre, std::hypot(patch.halfLength_m, patch.halfWidth_m) + 0.1)) {
       n.patches.push_back(&patch);
     }
   }
   for (const Manhole& m : scene_->manholes) {
-    if (meets(m.position, m.radiusM + 0.1)) {
+    if (meets(m.position, m.radius_m + 0.1)) {
       n.manholes.push_back(&m);
     }
   }
   for (std::size_t i = 0; i < scene_->buildings.size(); ++i) {
     const Building& b = scene_->buildings[i];
-    if (meets(b.centre, 0.5 * std::hypot(b.lengthM, b.widthM) + 1.6)) {
+    if (meets(b.centre, 0.5 * std::hypot(b.length_m, b.width_m) + 1.6)) {
       n.buildings.push_back(i);
     }
   }
@@ -586,17 +587,17 @@ Eigen::Vector3f GroundTexture::albedo(double xEast, double yNorth, GroundClass* 
   return albedoAt(p, fields, all_, cls);
 }
 
-void GroundTexture::fillTile(double x0, double y0, double texelM, int texels,
+void GroundTexture::fillTile(double x0, double y0, double texel_m, int texels,
                              Eigen::Vector3f* out) const {
-  TileFields fields(*this, x0, y0, texelM, texels);
+  TileFields fields(*this, x0, y0, texel_m, texels);
   // Patches, manholes and building aprons are few per scene but were tested at every texel.
-  const double extent = (texels - 1) * texelM;
+  const double extent = (texels - 1) * texel_m;
   const Nearby near = nearby({x0, y0}, {x0 + extent, y0 + extent});
   for (int j = 0; j < texels; ++j) {
     for (int i = 0; i < texels; ++i) {
       fields.moveTo(i, j);
       out[static_cast<std::ptrdiff_t>(j) * texels + i] =
-          albedoAt(Eigen::Vector2d(x0 + i * texelM, y0 + j * texelM), fields, near, nullptr);
+          albedoAt(Eigen::Vector2d(x0 + i * texel_m, y0 + j * texel_m), fields, near, nullptr);
     }
   }
 }

@@ -26,11 +26,11 @@ class GroundTexture {
   explicit GroundTexture(const SceneSpec& scene);
 
   Eigen::Vector3f albedo(double x, double y, GroundClass* cls = nullptr) const;
-  // Albedo at the texels * texels points (x0 + i texelM, y0 + j texelM), row-major into out.
+  // Albedo at the texels * texels points (x0 + i texel_m, y0 + j texel_m), row-major into out.
   // The smooth fields come from coarse lattices (6 cm and more) interpolated bilinearly, so values
   // differ slightly from albedo() at the same point; each tile is a pure function of its
   // arguments, like albedo().
-  void fillTile(double x0, double y0, double texelM, int texels, Eigen::Vector3f* out) const;
+  void fillTile(double x0, double y0, double texel_m, int texels, Eigen::Vector3f* out) const;
   // One smooth field at (x, y) (metres).
   float field(GroundField f, float x, float y) const;
 

@@ -6,7 +6,7 @@
 namespace vp::sim {
 
 namespace {
-constexpr double kKeypointDepthToleranceM = 0.15;
+constexpr double kKeypointDepthTolerance_m = 0.15;
 }
 
 bool imageBox(const SimVehicle& vehicle, const GroundTruthContext& ctx, geometry::RotatedBox* box) {
@@ -68,10 +68,10 @@ void computeGroundTruth(std::int64_t frameId, const std::vector<SimVehicle>& veh
     o.trackId = v.trackId;
     o.type = v.model->type;
     o.shape = v.model->hasKeypoints ? v.model->gamma : shape::ShapeParams{};
-    o.dimensionsM = v.model->dimensionsM;
+    o.dimensions_m = v.model->dimensions_m;
     o.positionEnu = pose.originEnu;
-    o.headingEnuRad = geometry::wrapTwoPi(v.rear.psi);
-    o.speedMps = v.speedMps;
+    o.headingEnu_rad = geometry::wrapTwoPi(v.rear.psi);
+    o.speed_mps = v.speed_mps;
     o.yawRateRadps = v.yawRateRadps;
     o.truncation = 1.0 - static_cast<double>(inside) / static_cast<double>(total);
     o.occlusion = 1.0 - static_cast<double>(visible) / static_cast<double>(inside);
@@ -109,7 +109,7 @@ void computeGroundTruth(std::int64_t frameId, const std::vector<SimVehicle>& veh
                 static_cast<std::size_t>(x);
             if (renderer.objectAt(idx) == v.trackId &&
                 std::fabs(1.0 / static_cast<double>(samples.invDepth[idx]) - c.z()) <
-                    kKeypointDepthToleranceM) {
+                    kKeypointDepthTolerance_m) {
               kp.visible = true;
             }
           }

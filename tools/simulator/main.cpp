@@ -82,9 +82,9 @@ int main(int argc, char** argv) {
     } else if (arg == "--height") {
       options.height = static_cast<int>(number("--height", 16, 16384));
     } else if (arg == "--altitude-m") {
-      options.altitudeM = number("--altitude-m", 60, 150);
+      options.altitude_m = number("--altitude-m", 60, 150);
     } else if (arg == "--tilt-deg") {
-      options.tiltDeg = number("--tilt-deg", 0, 35);
+      options.tilt_deg = number("--tilt-deg", 0, 35);
     } else if (arg == "--jpeg-quality") {
       options.jpegQuality = static_cast<int>(number("--jpeg-quality", 1, 100));
       options.png = false;

@@ -164,7 +164,7 @@ void rasterize(const std::vector<RenderTriangle>& triangles,
 }
 
 void ShadowMap::init(const Eigen::Vector3d& sunDirection, const Eigen::Vector3d& boxMin,
-                     const Eigen::Vector3d& boxMax, double texelM, int maxSize) {
+                     const Eigen::Vector3d& boxMax, double texel_m, int maxSize) {
   s_ = sunDirection.normalized();
   e1_ = (std::fabs(s_.z()) < 0.99 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX())
             .cross(s_)
@@ -180,7 +180,7 @@ void ShadowMap::init(const Eigen::Vector3d& sunDirection, const Eigen::Vector3d&
     bMin = std::min(bMin, c.dot(e2_));
     bMax = std::max(bMax, c.dot(e2_));
   }
-  texel_ = std::max(texelM, std::max(aMax - aMin, bMax - bMin) / maxSize);
+  texel_ = std::max(texel_m, std::max(aMax - aMin, bMax - bMin) / maxSize);
   a0_ = aMin - 2 * texel_;
   b0_ = bMin - 2 * texel_;
   width_ = static_cast<int>(std::ceil((aMax - aMin) / texel_)) + 4;

@@ -86,9 +86,9 @@ void rasterizeSilhouette(const std::vector<RenderTriangle>& triangles, std::size
 class ShadowMap {
  public:
   // Covers the receivers' bounding box (world) as seen along sunDirection (unit, towards the
-  // sun) with square texels of about texelM (enlarged to keep within maxSize per side).
+  // sun) with square texels of about texel_m (enlarged to keep within maxSize per side).
   void init(const Eigen::Vector3d& sunDirection, const Eigen::Vector3d& boxMin,
-            const Eigen::Vector3d& boxMax, double texelM, int maxSize);
+            const Eigen::Vector3d& boxMax, double texel_m, int maxSize);
   void clear();
   // A static caster; finishStatic() after the last one.
   void add(const RenderTriangle& triangle, const RenderSurface& surface);
@@ -105,7 +105,7 @@ class ShadowMap {
   bool boxLit(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
   // True where a dynamic caster may shadow p (its filter footprint meets a touched block).
   bool dynamicNear(const Eigen::Vector3f& p) const;
-  double texelM() const { return texel_; }
+  double texel_m() const { return texel_; }
 
  private:
   static constexpr int kBlock = 8;

@@ -13,7 +13,7 @@ namespace vp::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kOcclusionCellM = 0.1;  // finest sky-occlusion cell
+constexpr double kOcclusionCell_m = 0.1;  // finest sky-occlusion cell
 
 RenderTriangle flatTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                             const Eigen::Vector3d& c, std::uint32_t surface) {
@@ -116,8 +116,8 @@ Eigen::Vector3f smoothNormal(const RenderTriangle& tri, const Eigen::Vector3f& p
 }  // namespace
 
 Eigen::Vector3d VehiclePose::toWorld(const Eigen::Vector3d& local) const {
-  const double c = std::cos(headingRad);
-  const double s = std::sin(headingRad);
+  const double c = std::cos(heading_rad);
+  const double s = std::sin(heading_rad);
   return originEnu +
          Eigen::Vector3d(c * local.x() - s * local.y(), s * local.x() + c * local.y(), local.z());
 }
@@ -126,7 +126,7 @@ VehiclePose vehiclePose(const SimVehicle& vehicle, const World& world) {
   VehiclePose pose;
   const Eigen::Vector2d c = vehicle.centre();
   pose.originEnu = world.ground(c.x(), c.y());
-  pose.headingRad = vehicle.rear.psi;
+  pose.heading_rad = vehicle.rear.psi;
   return pose;
 }
 
@@ -151,8 +151,8 @@ void Renderer::appendVehicle(const VehicleModel& model, const VehiclePose& pose,
   surface(Material::HeadLight, {0.6F, 0.6F, 0.58F}, 0.8F, 80.0F);
   surface(Material::TailLight, {0.45F, 0.03F, 0.03F}, 0.5F, 60.0F);
   surface(Material::Underbody, {0.025F, 0.025F, 0.025F}, 0.0F, 10.0F);
-  const double c = std::cos(pose.headingRad);
-  const double s = std::sin(pose.headingRad);
+  const double c = std::cos(pose.heading_rad);
+  const double s = std::sin(pose.heading_rad);
   const auto rotate = [&](const Eigen::Vector3d& v) {
     return Eigen::Vector3d(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
   };
@@ -170,7 +170,8 @@ void Renderer::appendVehicle(const VehicleModel& model, const VehiclePose& pose,
 }
 
 void Renderer::init(const SceneSpec& scene, const World& world, const Eigen::Vector2d& regionMin,
-                    const Eigen::Vector2d& regionMax, double gsdM, int supersampling, int threads) {
+                    const Eigen::Vector2d& regionMax, double gsd_m, int supersampling,
+                    int threads) {
   scene_ = &scene;
   world_ = &world;
   texture_.emplace(scene);
@@ -194,7 +195,7 @@ void Renderer::init(const SceneSpec& scene, const World& world, const Eigen::Vec
     }
   }
   staticShadow_.init(scene.light.sunDirectionEnu, {regionMin.x(), regionMin.y(), zMin},
-                     {regionMax.x(), regionMax.y(), zMax + 5.0}, std::max(0.03, 0.8 * gsdM), 6000);
+                     {regionMax.x(), regionMax.y(), zMax + 5.0}, std::max(0.03, 0.8 * gsd_m), 6000);
   for (const RenderTriangle& t : staticTriangles_) {
     const RenderSurface& s = staticSurfaces_[t.surface];
     if (s.material != Material::Ground) {
@@ -206,9 +207,9 @@ void Renderer::init(const SceneSpec& scene, const World& world, const Eigen::Vec
   // Finest ground texel: a sample's footprint at the view centre (nadir views see about that
   // footprint everywhere), so the texture keeps the samples' detail.
   groundCache_.init(*texture_, staticShadow_, scene.light.shadowSoftnessTexels, heights_, regionMin,
-                    regionMax, gsdM / std::max(1, supersampling));
+                    regionMax, gsd_m / std::max(1, supersampling));
   occlusionOrigin_ = regionMin;
-  occlusionCellM_ = std::max(kOcclusionCellM, gsdM);
+  occlusionCellM_ = std::max(kOcclusionCell_m, gsd_m);
   occlusionW_ = static_cast<int>(std::ceil((regionMax.x() - regionMin.x()) / occlusionCellM_)) + 1;
   occlusionH_ = static_cast<int>(std::ceil((regionMax.y() - regionMin.y()) / occlusionCellM_)) + 1;
   occlusion_.assign(static_cast<std::size_t>(occlusionW_) * static_cast<std::size_t>(occlusionH_),
@@ -225,7 +226,7 @@ void Renderer::buildGround(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi)
   const int ny = static_cast<int>(std::ceil((hi.y() - lo.y()) / cell)) + 1;
   std::vector<Eigen::Vector3d> v(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
   heights_.origin = lo;
-  heights_.cellM = cell;
+  heights_.cell_m = cell;
   heights_.nx = nx;
   heights_.ny = ny;
   heights_.z.resize(v.size());
@@ -268,13 +269,13 @@ void Renderer::buildGround(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi)
 void Renderer::buildBuildings() {
   for (std::size_t bi = 0; bi < scene_->buildings.size(); ++bi) {
     const Building& b = scene_->buildings[bi];
-    const Eigen::Vector2d f(std::cos(b.headingRad), std::sin(b.headingRad));
+    const Eigen::Vector2d f(std::cos(b.heading_rad), std::sin(b.heading_rad));
     const Eigen::Vector2d n(-f.y(), f.x());
     double gMin = 1e9;
     double gMax = -1e9;
     for (int i = -1; i <= 1; ++i) {
       for (int j = -1; j <= 1; ++j) {
-        const Eigen::Vector2d p = b.centre + 0.5 * i * b.lengthM * f + 0.5 * j * b.widthM * n;
+        const Eigen::Vector2d p = b.centre + 0.5 * i * b.length_m * f + 0.5 * j * b.width_m * n;
         const double z = world_->groundZ(p.x(), p.y());
         gMin = std::min(gMin, z);
         gMax = std::max(gMax, z);
@@ -301,9 +302,9 @@ void Renderer::buildBuildings() {
     unit.specular = 0.2F;
     // Walls: one surface per facade so windows follow its direction.
     const double z0 = gMin - 0.3;
-    const double z1 = gMax + b.heightM;
-    const double hl = 0.5 * b.lengthM;
-    const double hw = 0.5 * b.widthM;
+    const double z1 = gMax + b.height_m;
+    const double hl = 0.5 * b.length_m;
+    const double hw = 0.5 * b.width_m;
     std::array<Eigen::Vector2d, 4> k = {b.centre + hl * f + hw * n, b.centre - hl * f + hw * n,
                                         b.centre - hl * f - hw * n, b.centre + hl * f - hw * n};
     for (int i = 0; i < 4; ++i) {
@@ -328,20 +329,20 @@ void Renderer::buildBuildings() {
         const double ul = 0.6 + 1.6 * static_cast<double>(hashToUnit(h));
         const double uw = 0.5 + 1.2 * static_cast<double>(hashToUnit(hashU32(h + 1U)));
         const double uh = 0.6 + 1.4 * static_cast<double>(hashToUnit(hashU32(h + 2U)));
-        const double px =
-            (static_cast<double>(hashToUnit(hashU32(h + 3U))) - 0.5) * (b.lengthM - 2.0 * ul - 1.0);
+        const double px = (static_cast<double>(hashToUnit(hashU32(h + 3U))) - 0.5) *
+                          (b.length_m - 2.0 * ul - 1.0);
         const double py =
-            (static_cast<double>(hashToUnit(hashU32(h + 4U))) - 0.5) * (b.widthM - 2.0 * uw - 1.0);
+            (static_cast<double>(hashToUnit(hashU32(h + 4U))) - 0.5) * (b.width_m - 2.0 * uw - 1.0);
         addBox(staticTriangles_, b.centre + px * f + py * n, f, ul, uw, z1, z1 + uh, unitIndex,
                unitIndex);
       }
     } else {
       // Gabled: ridge along the length axis, eaves overhanging by 0.35 m.
       const double o = 0.35;
-      const double zr = z1 + b.ridgeHeightM;
+      const double zr = z1 + b.ridgeHeight_m;
       const Eigen::Vector2d r0 = b.centre + (hl + o) * f;
       const Eigen::Vector2d r1 = b.centre - (hl + o) * f;
-      const double drop = b.ridgeHeightM * o / hw;
+      const double drop = b.ridgeHeight_m * o / hw;
       for (const double side : {1.0, -1.0}) {
         const Eigen::Vector2d e0 = r0 + side * (hw + o) * n;
         const Eigen::Vector2d e1 = r1 + side * (hw + o) * n;
@@ -382,7 +383,7 @@ void Renderer::buildTrees() {
     staticSurfaces_.push_back(trunk);
     const double gz = world_->groundZ(tree.position.x(), tree.position.y());
     const Eigen::Vector3d centre(tree.position.x(), tree.position.y(),
-                                 gz + tree.canopyCentreHeightM);
+                                 gz + tree.canopyCentreHeight_m);
     std::vector<Eigen::Vector3d> pts(sphere.size());
     for (std::size_t i = 0; i < sphere.size(); ++i) {
       const Eigen::Vector3d& s = sphere[i];
@@ -395,8 +396,8 @@ void Renderer::buildTrees() {
       const double r =
           1.0 + 0.45 * (static_cast<double>(lump) - 0.5) + 0.2 * (static_cast<double>(lump2) - 0.5);
       pts[i] =
-          centre + Eigen::Vector3d(s.x() * tree.canopyRadiusM * r, s.y() * tree.canopyRadiusM * r,
-                                   s.z() * tree.canopyVerticalRadiusM * r);
+          centre + Eigen::Vector3d(s.x() * tree.canopyRadius_m * r, s.y() * tree.canopyRadius_m * r,
+                                   s.z() * tree.canopyVerticalRadius_m * r);
     }
     // Upper faces first: seen from above, they fill the z-buffer before the lower ones, whose
     // samples then fail the depth test before the (costly) foliage alpha test.
@@ -421,11 +422,11 @@ void Renderer::buildTrees() {
     for (int i = 0; i < 6; ++i) {
       const double a0 = 2.0 * kPi * i / 6.0;
       const double a1 = 2.0 * kPi * (i + 1) / 6.0;
-      const Eigen::Vector3d p0(tree.position.x() + tree.trunkRadiusM * std::cos(a0),
-                               tree.position.y() + tree.trunkRadiusM * std::sin(a0), gz - 0.2);
-      const Eigen::Vector3d p1(tree.position.x() + tree.trunkRadiusM * std::cos(a1),
-                               tree.position.y() + tree.trunkRadiusM * std::sin(a1), gz - 0.2);
-      const Eigen::Vector3d up(0, 0, tree.canopyCentreHeightM + 0.2);
+      const Eigen::Vector3d p0(tree.position.x() + tree.trunkRadius_m * std::cos(a0),
+                               tree.position.y() + tree.trunkRadius_m * std::sin(a0), gz - 0.2);
+      const Eigen::Vector3d p1(tree.position.x() + tree.trunkRadius_m * std::cos(a1),
+                               tree.position.y() + tree.trunkRadius_m * std::sin(a1), gz - 0.2);
+      const Eigen::Vector3d up(0, 0, tree.canopyCentreHeight_m + 0.2);
       addQuad(staticTriangles_, p0, p1, p1 + up, p0 + up, base + 1U);
     }
   }
@@ -441,7 +442,7 @@ void Renderer::buildOcclusion(const std::vector<SimVehicle>& vehicles) {
     const Eigen::Vector2d f(std::cos(v.rear.psi), std::sin(v.rear.psi));
     const double halfL = 0.5 * (v.model->frontXM - v.model->rearXM);
     const double mid = 0.5 * (v.model->frontXM + v.model->rearXM);
-    const double halfW = v.model->halfWidthM;
+    const double halfW = v.model->halfWidth_m;
     const Eigen::Vector2d centre = c + mid * f;
     const double reach = halfL + 1.0;
     const int i0 =

@@ -32,7 +32,7 @@ namespace vp::sim {
 // Pose of a vehicle in the world: yaw only (heading), standing on the ground at its centre.
 struct VehiclePose {
   Eigen::Vector3d originEnu{0, 0, 0};
-  double headingRad = 0.0;
+  double heading_rad = 0.0;
   Eigen::Vector3d toWorld(const Eigen::Vector3d& local) const;
 };
 VehiclePose vehiclePose(const SimVehicle& vehicle, const World& world);
@@ -55,11 +55,11 @@ struct VehicleRange {
 
 class Renderer {
  public:
-  // gsdM: ground sampling distance (of a pixel) at the view centre; sets the shadow-map,
+  // gsd_m: ground sampling distance (of a pixel) at the view centre; sets the shadow-map,
   // sky-occlusion and ground-cache resolutions (finer than a pixel, no finer than needed);
   // supersampling: samples per pixel and side.
   void init(const SceneSpec& scene, const World& world, const Eigen::Vector2d& regionMin,
-            const Eigen::Vector2d& regionMax, double gsdM, int supersampling, int threads);
+            const Eigen::Vector2d& regionMax, double gsd_m, int supersampling, int threads);
 
   // view: the ideal pinhole on the sample grid of `canvas`. linear: CV_32FC3 (RGB) canvas.
   void render(const std::vector<SimVehicle>& vehicles, const PinholeView& view,

@@ -32,25 +32,25 @@ struct Road {
   Eigen::Vector2d dir{1, 0};     // unit direction of the forward lanes
   int lanesForward = 1;          // right of the centreline
   int lanesBackward = 1;         // left of the centreline, driving against dir
-  double laneWidthM = 3.3;
-  double medianHalfM = 0.15;   // half the gap between opposing lanes
-  double parkingRightM = 0.0;  // kerb parking lane width right of the forward lanes (0: none)
-  double parkingLeftM = 0.0;   // ... left of the backward lanes
+  double laneWidth_m = 3.3;
+  double medianHalf_m = 0.15;   // half the gap between opposing lanes
+  double parkingRight_m = 0.0;  // kerb parking lane width right of the forward lanes (0: none)
+  double parkingLeft_m = 0.0;   // ... left of the backward lanes
   CentreLine centreLine = CentreLine::DoubleYellow;
   bool edgeLines = true;  // solid line between travel and parking lanes / kerb
-  double dashLengthM = 3.0;
-  double dashGapM = 6.0;
-  double stopDistanceM = 1e9;     // |along| of the stop lines (intersection only)
-  double crosswalkCentreM = 1e9;  // |along| of the crosswalk centres (1e9: none)
-  double crosswalkWidthM = 3.0;
+  double dashLength_m = 3.0;
+  double dashGap_m = 6.0;
+  double stopDistance_m = 1e9;     // |along| of the stop lines (intersection only)
+  double crosswalkCentre_m = 1e9;  // |along| of the crosswalk centres (1e9: none)
+  double crosswalkWidth_m = 3.0;
   bool zebra = true;  // zebra stripes, else two transverse lines
 
   Eigen::Vector2d leftNormal() const { return {-dir.y(), dir.x()}; }
-  double rightHalfM() const { return medianHalfM + lanesForward * laneWidthM + parkingRightM; }
-  double leftHalfM() const { return medianHalfM + lanesBackward * laneWidthM + parkingLeftM; }
+  double rightHalf_m() const { return medianHalf_m + lanesForward * laneWidth_m + parkingRight_m; }
+  double leftHalf_m() const { return medianHalf_m + lanesBackward * laneWidth_m + parkingLeft_m; }
   // Lateral offset (along leftNormal) of a travel lane's centre: forward lanes are negative.
-  double laneOffsetM(bool forward, int lane) const {
-    const double o = medianHalfM + (lane + 0.5) * laneWidthM;
+  double laneOffset_m(bool forward, int lane) const {
+    const double o = medianHalf_m + (lane + 0.5) * laneWidth_m;
     return forward ? -o : o;
   }
   double along(const Eigen::Vector2d& p) const { return (p - centre).dot(dir); }
@@ -60,15 +60,15 @@ struct Road {
 struct ParkingLot {
   Eigen::Vector2d centre{0, 0};
   Eigen::Vector2d dir{1, 0};  // along the rows of bays
-  double lengthM = 40.0;      // along dir
-  double widthM = 30.0;
-  double bayWidthM = 2.5;
-  double bayDepthM = 5.0;
-  double aisleWidthM = 6.5;
+  double length_m = 40.0;     // along dir
+  double width_m = 30.0;
+  double bayWidth_m = 2.5;
+  double bayDepth_m = 5.0;
+  double aisleWidth_m = 6.5;
   int rows = 2;  // rows of bays (pairs back to back share a line)
   bool yellowLines = false;
-  std::vector<double> rowOffsetsM;  // lateral (along leftNormal) centre of each bay row
-  std::vector<double> rowFacing;    // +1: cars in the row face +leftNormal, -1: the other way
+  std::vector<double> rowOffsets_m;  // lateral (along leftNormal) centre of each bay row
+  std::vector<double> rowFacing;     // +1: cars in the row face +leftNormal, -1: the other way
   int baysPerRow = 0;
   // Bay centres and the heading a car parked in them faces (filled by the generator).
   std::vector<Eigen::Vector3d> bays;  // x, y, heading (rad, ENU)
@@ -79,12 +79,12 @@ enum class RoofKind { Flat, Gabled };
 
 struct Building {
   Eigen::Vector2d centre{0, 0};
-  double headingRad = 0.0;  // direction of the length axis
-  double lengthM = 20.0;
-  double widthM = 12.0;
-  double heightM = 8.0;  // eaves height above the lowest ground point of the footprint
+  double heading_rad = 0.0;  // direction of the length axis
+  double length_m = 20.0;
+  double width_m = 12.0;
+  double height_m = 8.0;  // eaves height above the lowest ground point of the footprint
   RoofKind roof = RoofKind::Flat;
-  double ridgeHeightM = 0.0;  // gabled: ridge above the eaves
+  double ridgeHeight_m = 0.0;  // gabled: ridge above the eaves
   Eigen::Vector3f wallAlbedo{0.5F, 0.45F, 0.4F};
   Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};
   int rooftopUnits = 0;  // flat roofs: boxes of HVAC units
@@ -93,10 +93,10 @@ struct Building {
 
 struct Tree {
   Eigen::Vector2d position{0, 0};
-  double canopyRadiusM = 3.0;
-  double canopyVerticalRadiusM = 2.4;
-  double canopyCentreHeightM = 6.0;  // above the ground at the trunk
-  double trunkRadiusM = 0.2;
+  double canopyRadius_m = 3.0;
+  double canopyVerticalRadius_m = 2.4;
+  double canopyCentreHeight_m = 6.0;  // above the ground at the trunk
+  double trunkRadius_m = 0.2;
   Eigen::Vector3f leafAlbedo{0.08F, 0.16F, 0.05F};
   float gapFraction = 0.1F;  // share of the canopy that lets light through (bare trees: high)
   std::uint32_t seed = 0;
@@ -105,19 +105,19 @@ struct Tree {
 struct Patch {  // repaired rectangle of road surface
   Eigen::Vector2d centre{0, 0};
   Eigen::Vector2d dir{1, 0};
-  double halfLengthM = 1.0;
-  double halfWidthM = 1.0;
+  double halfLength_m = 1.0;
+  double halfWidth_m = 1.0;
   float tone = 1.0F;  // albedo multiplier
 };
 
 struct Manhole {
   Eigen::Vector2d position{0, 0};
-  double radiusM = 0.32;
+  double radius_m = 0.32;
 };
 
 struct GroundStyle {
   bool concreteRoad = false;  // slabs with joints instead of asphalt
-  double slabLengthM = 4.5;
+  double slabLength_m = 4.5;
   Eigen::Vector3f roadAlbedo{0.12F, 0.12F, 0.12F};
   Eigen::Vector3f lotAlbedo{0.10F, 0.10F, 0.10F};
   float roadMacroVariation = 0.1F;
@@ -128,7 +128,7 @@ struct GroundStyle {
   float crackWidth = 0.02F;
   Eigen::Vector3f sidewalkAlbedo{0.4F, 0.39F, 0.37F};
   bool pavers = false;  // small pavers instead of concrete slabs
-  double sidewalkSlabM = 1.5;
+  double sidewalkSlab_m = 1.5;
   Eigen::Vector3f kerbAlbedo{0.5F, 0.5F, 0.48F};
   Eigen::Vector3f grassA{0.06F, 0.12F, 0.03F};
   Eigen::Vector3f grassB{0.12F, 0.14F, 0.05F};
@@ -141,8 +141,8 @@ struct GroundStyle {
 };
 
 struct Lighting {
-  double sunElevationDeg = 45.0;
-  double sunAzimuthDeg = 180.0;              // clockwise from north
+  double sunElevation_deg = 45.0;
+  double sunAzimuth_deg = 180.0;             // clockwise from north
   Eigen::Vector3d sunDirectionEnu{0, 0, 1};  // unit vector towards the sun
   Eigen::Vector3f sunIrradiance{1.0F, 0.97F, 0.9F};
   Eigen::Vector3f skyIrradiance{0.3F, 0.33F, 0.4F};
@@ -151,11 +151,11 @@ struct Lighting {
 };
 
 struct TrafficParams {
-  double arrivalRatePerLaneHz = 0.15;  // Poisson arrivals at each entry lane
-  double kerbParkingOccupancy = 0.5;   // share of kerb parking slots taken
+  double arrivalRatePerLane_hz = 0.15;  // Poisson arrivals at each entry lane
+  double kerbParkingOccupancy = 0.5;    // share of kerb parking slots taken
   double lotOccupancy = 0.7;
   double largeVehicleShare = 0.05;
-  double speedLimitMps = 12.0;
+  double speedLimit_mps = 12.0;
   double signalCycleS = 40.0;  // intersection: full cycle of the four phases
   double signalOffsetS = 0.0;
 };
@@ -164,9 +164,9 @@ struct SceneSpec {
   SceneKind kind = SceneKind::Intersection;
   std::vector<Road> roads;         // intersection: 2; straight / parking: 1
   Eigen::Vector2d junction{0, 0};  // intersection centre (or the road's reference point)
-  double cornerRadiusM = 6.0;      // kerb radius at the intersection corners
-  double kerbWidthM = 0.2;
-  double sidewalkWidthM = 2.5;
+  double cornerRadius_m = 6.0;     // kerb radius at the intersection corners
+  double kerbWidth_m = 0.2;
+  double sidewalkWidth_m = 2.5;
   std::vector<ParkingLot> lots;
   std::vector<Patch> paved;  // extra drivable rectangles (lots, driveways); tone unused
   std::vector<Building> buildings;
@@ -177,11 +177,11 @@ struct SceneSpec {
   Lighting light{};
   TrafficParams traffic{};
   Eigen::Vector2d viewCentre{0, 0};  // where the camera looks
-  double extentM = 150.0;            // objects are generated within this radius of viewCentre
+  double extent_m = 150.0;           // objects are generated within this radius of viewCentre
   std::string season = "summer";     // summer | autumn | winter (colours, bare trees)
 
   // Signed distance (m) from the kerb line of the drivable area (roads and lots): < 0 on
-  // the road, > 0 off it. Rounded intersection corners use cornerRadiusM.
+  // the road, > 0 off it. Rounded intersection corners use cornerRadius_m.
   double roadDistance(const Eigen::Vector2d& p) const;
 };
 

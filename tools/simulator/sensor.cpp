@@ -57,7 +57,7 @@ SensorSpec drawSensor(Rng& rng) {
   s.exposureStepChance = rng.uniform(0.0, 0.03);
   s.fullWellScale = rng.uniform(1500.0, 8000.0);
   s.readNoise = rng.uniform(0.001, 0.005);
-  s.blurSigmaPx = rng.uniform(0.35, 0.9);
+  s.blurSigma_px = rng.uniform(0.35, 0.9);
   s.exposureTimeS = rng.uniform(0.0005, 0.004);
   s.contrast = rng.uniform(0.9, 1.15);
   s.saturation = rng.uniform(0.8, 1.15);
@@ -79,8 +79,8 @@ bool makeCanvas(const camera::CameraModel& camera, int supersampling, Canvas* ca
     maxV = std::max(maxV, ideal->y());
     return true;
   };
-  const double w = k.widthPx - 1;
-  const double h = k.heightPx - 1;
+  const double w = k.width_px - 1;
+  const double h = k.height_px - 1;
   for (int i = 0; i <= 64; ++i) {
     const double t = i / 64.0;
     if (!visit(t * w - 0.5, -0.5) || !visit(t * w - 0.5, h + 0.5) || !visit(-0.5, t * h - 0.5) ||
@@ -103,8 +103,8 @@ void Sensor::init(const camera::CameraModel& camera, const Canvas& canvas, const
   canvas_ = canvas;
   spec_ = spec;
   const auto& k = camera.intrinsics();
-  width_ = k.widthPx;
-  height_ = k.heightPx;
+  width_ = k.width_px;
+  height_ = k.height_px;
   mapX_.create(height_, width_, CV_32FC1);
   mapY_.create(height_, width_, CV_32FC1);
   vignette_.create(height_, width_, CV_32FC1);
@@ -115,7 +115,7 @@ void Sensor::init(const camera::CameraModel& camera, const Canvas& canvas, const
       const Eigen::Vector2d p = ideal ? *ideal : Eigen::Vector2d(u, v);
       mapX_.at<float>(v, u) = static_cast<float>(p.x() + canvas.offsetX);
       mapY_.at<float>(v, u) = static_cast<float>(p.y() + canvas.offsetY);
-      const double r = std::hypot(u - k.cxPx, v - k.cyPx) / halfDiag;
+      const double r = std::hypot(u - k.cx_px, v - k.cy_px) / halfDiag;
       // cos^4-like falloff scaled so the corner loses `vignetting`.
       const double c = 1.0 / (1.0 + r * r * (std::pow(1.0 - spec.vignetting, -0.5) - 1.0));
       vignette_.at<float>(v, u) = static_cast<float>(c * c);
@@ -134,8 +134,8 @@ void Sensor::init(const camera::CameraModel& camera, const Canvas& canvas, const
   }
 }
 
-std::vector<std::uint8_t> Sensor::neededCanvas(int marginPx) const {
-  // Dilation of inImage_ by a square of marginPx (separable: rows, then columns).
+std::vector<std::uint8_t> Sensor::neededCanvas(int margin_px) const {
+  // Dilation of inImage_ by a square of margin_px (separable: rows, then columns).
   const int w = canvas_.width;
   const int h = canvas_.height;
   std::vector<std::uint8_t> rows(inImage_.size(), 0);
@@ -143,7 +143,7 @@ std::vector<std::uint8_t> Sensor::neededCanvas(int marginPx) const {
     for (int x = 0; x < w; ++x) {
       if (inImage_[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
                    static_cast<std::size_t>(x)] != 0) {
-        for (int i = std::max(0, x - marginPx); i <= std::min(w - 1, x + marginPx); ++i) {
+        for (int i = std::max(0, x - margin_px); i <= std::min(w - 1, x + margin_px); ++i) {
           rows[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
                static_cast<std::size_t>(i)] = 1;
         }
@@ -155,7 +155,7 @@ std::vector<std::uint8_t> Sensor::neededCanvas(int marginPx) const {
     for (int x = 0; x < w; ++x) {
       if (rows[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
                static_cast<std::size_t>(x)] != 0) {
-        for (int j = std::max(0, y - marginPx); j <= std::min(h - 1, y + marginPx); ++j) {
+        for (int j = std::max(0, y - margin_px); j <= std::min(h - 1, y + margin_px); ++j) {
           out[static_cast<std::size_t>(j) * static_cast<std::size_t>(w) +
               static_cast<std::size_t>(x)] = 1;
         }
@@ -237,7 +237,7 @@ void Sensor::develop(const cv::Mat& linear, const cv::Mat& ids,
     }
     for (std::size_t si = 0; si < streaks.size(); ++si) {
       const MotionStreak& m = streaks[si];
-      const double len = m.motionPx.norm();
+      const double len = m.motion_px.norm();
       if (len < 0.3) {
         continue;
       }
@@ -255,8 +255,8 @@ void Sensor::develop(const cv::Mat& linear, const cv::Mat& ids,
           bool touches = false;
           for (int t = 0; t < taps && !touches; ++t) {
             const double f = (t + 0.5) / taps - 0.5;
-            const int x = static_cast<int>(std::lround(u - f * m.motionPx.x()));
-            const int y = static_cast<int>(std::lround(v - f * m.motionPx.y()));
+            const int x = static_cast<int>(std::lround(u - f * m.motion_px.x()));
+            const int y = static_cast<int>(std::lround(v - f * m.motion_px.y()));
             touches = x >= 0 && y >= 0 && x < width_ && y < height_ &&
                       ids.at<std::int32_t>(y, x) == m.trackId;
           }
@@ -267,9 +267,9 @@ void Sensor::develop(const cv::Mat& linear, const cv::Mat& ids,
           for (int t = 0; t < taps; ++t) {
             const double f = (t + 0.5) / taps - 0.5;
             const float x =
-                static_cast<float>(std::clamp(u + f * m.motionPx.x(), 0.0, width_ - 1.0));
+                static_cast<float>(std::clamp(u + f * m.motion_px.x(), 0.0, width_ - 1.0));
             const float y =
-                static_cast<float>(std::clamp(v + f * m.motionPx.y(), 0.0, height_ - 1.0));
+                static_cast<float>(std::clamp(v + f * m.motion_px.y(), 0.0, height_ - 1.0));
             sum += sharp.at<cv::Vec3f>(static_cast<int>(std::lround(y)),
                                        static_cast<int>(std::lround(x)));
           }
@@ -278,7 +278,7 @@ void Sensor::develop(const cv::Mat& linear, const cv::Mat& ids,
       }
     }
   }
-  cv::GaussianBlur(img, img, cv::Size(0, 0), spec_.blurSigmaPx, spec_.blurSigmaPx,
+  cv::GaussianBlur(img, img, cv::Size(0, 0), spec_.blurSigma_px, spec_.blurSigma_px,
                    cv::BORDER_REPLICATE);
   bgr.create(height_, width_, CV_8UC3);
   const auto gains = spec_.whiteBalance.cast<float>();

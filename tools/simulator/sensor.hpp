@@ -33,7 +33,7 @@ struct SensorSpec {
   double exposureStepChance = 0.02;       // chance per frame of an auto-exposure step
   double fullWellScale = 4000.0;          // shot noise: variance = signal / fullWellScale
   double readNoise = 0.003;               // sigma, linear units
-  double blurSigmaPx = 0.6;               // optics PSF
+  double blurSigma_px = 0.6;              // optics PSF
   double exposureTimeS = 0.002;           // for motion blur
   double contrast = 1.0;
   double saturation = 1.0;
@@ -48,7 +48,7 @@ bool makeCanvas(const camera::CameraModel& camera, int supersampling, Canvas* ca
 // A moving vehicle's image motion during the exposure.
 struct MotionStreak {
   int trackId = 0;
-  Eigen::Vector2d motionPx{0, 0};  // output pixels travelled during the exposure
+  Eigen::Vector2d motion_px{0, 0};  // output pixels travelled during the exposure
 };
 
 class Sensor {
@@ -73,9 +73,9 @@ class Sensor {
   }
   const Canvas& canvas() const { return canvas_; }
   const SensorSpec& spec() const { return spec_; }
-  // Canvas pixels within marginPx of one that maps into the image: the only ones develop()
+  // Canvas pixels within margin_px of one that maps into the image: the only ones develop()
   // reads (the canvas is the bounding box of the lens's ideal field, larger than needed).
-  std::vector<std::uint8_t> neededCanvas(int marginPx) const;
+  std::vector<std::uint8_t> neededCanvas(int margin_px) const;
   // Mean linear level of the canvas part that lands in the image (for auto exposure).
   double meanLevel(const cv::Mat& linear) const;
 

@@ -23,8 +23,8 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kFrameIntervalS = 0.1;
-constexpr std::int64_t kStartNs = 1'700'000'000'000'000'000;
-constexpr std::int64_t kFrameNs = 100'000'000;
+constexpr std::int64_t kStart_ns = 1'700'000'000'000'000'000;
+constexpr std::int64_t kFrame_ns = 100'000'000;
 
 std::string num(double v) {
   char buf[64];
@@ -32,7 +32,7 @@ std::string num(double v) {
   return std::string(buf, r.ptr);
 }
 
-double wrapDeg(double a) {
+double wrap_deg(double a) {
   a = std::fmod(a + 180.0, 360.0);
   if (a < 0) {
     a += 360.0;
@@ -47,8 +47,8 @@ bool fail(std::string* why, const std::string& message) {
   return false;
 }
 
-Eigen::Quaterniond quaternionFromEuler(double rollDeg, double pitchDeg, double yawDeg) {
-  return Eigen::Quaterniond(geodesy::rotationFromEuler({rollDeg, pitchDeg, yawDeg}));
+Eigen::Quaterniond quaternionFromEuler(double roll_deg, double pitch_deg, double yaw_deg) {
+  return Eigen::Quaterniond(geodesy::rotationFromEuler({roll_deg, pitch_deg, yaw_deg}));
 }
 
 }  // namespace
@@ -62,12 +62,12 @@ void Simulator::drawRig() {
   const double scale = options_.width / 2592.0;
   for (int attempt = 0; attempt < 50; ++attempt) {
     camera::Intrinsics k;
-    k.widthPx = options_.width;
-    k.heightPx = options_.height;
-    k.fxPx = 2900.0 * scale * rng.uniform(0.95, 1.05);
-    k.fyPx = k.fxPx * (1.0 + rng.normal(0.0, 0.0005));
-    k.cxPx = 0.5 * (k.widthPx - 1) + rng.normal(0.0, 0.005 * k.widthPx);
-    k.cyPx = 0.5 * (k.heightPx - 1) + rng.normal(0.0, 0.005 * k.heightPx);
+    k.width_px = options_.width;
+    k.height_px = options_.height;
+    k.fx_px = 2900.0 * scale * rng.uniform(0.95, 1.05);
+    k.fy_px = k.fx_px * (1.0 + rng.normal(0.0, 0.0005));
+    k.cx_px = 0.5 * (k.width_px - 1) + rng.normal(0.0, 0.005 * k.width_px);
+    k.cy_px = 0.5 * (k.height_px - 1) + rng.normal(0.0, 0.005 * k.height_px);
     camera::Distortion d;
     if (rng.chance(0.2)) {
       d.model = camera::LensModel::EquivalentSpherical;
@@ -90,28 +90,28 @@ void Simulator::drawRig() {
     }
   }
   r.mount.bodyToBase = {0.0, 0.0, 0.0};
-  r.mount.leverArmM = Eigen::Vector3d(rng.uniform(-0.1, 0.15), 0.0, rng.uniform(0.05, 0.25));
+  r.mount.leverArm_m = Eigen::Vector3d(rng.uniform(-0.1, 0.15), 0.0, rng.uniform(0.05, 0.25));
   r.gimbalReference =
       rng.chance(0.65) ? geodesy::GimbalReference::Earth : geodesy::GimbalReference::Body;
-  r.altitudeM = rng.chance(0.7) ? rng.uniform(75.0, 115.0) : rng.uniform(60.0, 150.0);
-  r.tiltDeg = rng.chance(0.6) ? rng.uniform(0.0, 8.0) : rng.uniform(8.0, 35.0);
-  r.viewAzimuthDeg = rng.uniform(-180.0, 180.0);
-  r.bodyYawOffsetDeg = rng.uniform(-180.0, 180.0);
-  r.positionSigmaM = rng.uniform(0.05, 0.4);
+  r.altitude_m = rng.chance(0.7) ? rng.uniform(75.0, 115.0) : rng.uniform(60.0, 150.0);
+  r.tilt_deg = rng.chance(0.6) ? rng.uniform(0.0, 8.0) : rng.uniform(8.0, 35.0);
+  r.viewAzimuth_deg = rng.uniform(-180.0, 180.0);
+  r.bodyYawOffset_deg = rng.uniform(-180.0, 180.0);
+  r.positionSigma_m = rng.uniform(0.05, 0.4);
   r.positionTauS = rng.uniform(3.0, 10.0);
   if (r.gimbalReference == geodesy::GimbalReference::Earth) {
-    r.attitudeSigmaDeg = rng.uniform(0.5, 2.5);
-    r.gimbalSigmaDeg = rng.uniform(0.01, 0.08);
+    r.attitudeSigma_deg = rng.uniform(0.5, 2.5);
+    r.gimbalSigma_deg = rng.uniform(0.01, 0.08);
   } else {
-    r.attitudeSigmaDeg = rng.uniform(0.03, 0.3);
-    r.gimbalSigmaDeg = 0.0;
+    r.attitudeSigma_deg = rng.uniform(0.03, 0.3);
+    r.gimbalSigma_deg = 0.0;
   }
   r.attitudeTauS = rng.uniform(1.0, 4.0);
-  if (options_.altitudeM) {
-    r.altitudeM = *options_.altitudeM;
+  if (options_.altitude_m) {
+    r.altitude_m = *options_.altitude_m;
   }
-  if (options_.tiltDeg) {
-    r.tiltDeg = *options_.tiltDeg;
+  if (options_.tilt_deg) {
+    r.tilt_deg = *options_.tilt_deg;
   }
 }
 
@@ -127,30 +127,30 @@ lifting::DronePose Simulator::hoverPose() {
     const double zPos = rng.normal();
     const double zAtt = rng.normal();
     const double zGim = rng.normal();
-    const double sPos = r.positionSigmaM * (i == 2 ? 0.5 : 1.0);
-    const double sAtt = r.attitudeSigmaDeg * (i == 2 ? 0.5 : 1.0);
+    const double sPos = r.positionSigma_m * (i == 2 ? 0.5 : 1.0);
+    const double sAtt = r.attitudeSigma_deg * (i == 2 ? 0.5 : 1.0);
     // The first frame starts from the stationary distribution.
     positionOffset_[i] = first ? sPos * zPos : aPos * positionOffset_[i] + bPos * sPos * zPos;
     attitudeOffset_[i] = first ? sAtt * zAtt : aAtt * attitudeOffset_[i] + bAtt * sAtt * zAtt;
-    gimbalOffset_[i] =
-        first ? r.gimbalSigmaDeg * zGim : aAtt * gimbalOffset_[i] + bAtt * r.gimbalSigmaDeg * zGim;
+    gimbalOffset_[i] = first ? r.gimbalSigma_deg * zGim
+                             : aAtt * gimbalOffset_[i] + bAtt * r.gimbalSigma_deg * zGim;
   }
-  const double az = r.viewAzimuthDeg * kPi / 180.0;
-  const double tilt = r.tiltDeg * kPi / 180.0;
+  const double az = r.viewAzimuth_deg * kPi / 180.0;
+  const double tilt = r.tilt_deg * kPi / 180.0;
   const Eigen::Vector3d horizontal(std::sin(az), std::cos(az), 0.0);
-  const Eigen::Vector3d centre = target_ + Eigen::Vector3d(0, 0, r.altitudeM) -
-                                 horizontal * (r.altitudeM * std::tan(tilt)) + positionOffset_;
+  const Eigen::Vector3d centre = target_ + Eigen::Vector3d(0, 0, r.altitude_m) -
+                                 horizontal * (r.altitude_m * std::tan(tilt)) + positionOffset_;
   lifting::DronePose pose;
   const bool earth = r.gimbalReference == geodesy::GimbalReference::Earth;
   const double bodyYaw =
-      wrapDeg(r.viewAzimuthDeg + (earth ? r.bodyYawOffsetDeg : 0.0) + attitudeOffset_.z());
+      wrap_deg(r.viewAzimuth_deg + (earth ? r.bodyYawOffset_deg : 0.0) + attitudeOffset_.z());
   pose.bodyToNed = quaternionFromEuler(attitudeOffset_.x(), attitudeOffset_.y(), bodyYaw);
   pose.gimbal.reference = r.gimbalReference;
-  pose.gimbal.angles.rollDeg = gimbalOffset_.x();
-  pose.gimbal.angles.pitchDeg = -90.0 + r.tiltDeg + gimbalOffset_.y();
-  pose.gimbal.angles.yawDeg = earth ? wrapDeg(r.viewAzimuthDeg + gimbalOffset_.z()) : 0.0;
+  pose.gimbal.angles.roll_deg = gimbalOffset_.x();
+  pose.gimbal.angles.pitch_deg = -90.0 + r.tilt_deg + gimbalOffset_.y();
+  pose.gimbal.angles.yaw_deg = earth ? wrap_deg(r.viewAzimuth_deg + gimbalOffset_.z()) : 0.0;
   const Eigen::Vector3d lever =
-      geodesy::enuFromNed() * (pose.bodyToNed.toRotationMatrix() * r.mount.leverArmM);
+      geodesy::enuFromNed() * (pose.bodyToNed.toRotationMatrix() * r.mount.leverArm_m);
   pose.position = world_.frame().toGeodetic(centre - lever);
   return pose;
 }
@@ -174,9 +174,9 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   // Ground region seen over the whole sequence (with margins for drift and for tall objects
   // beyond the field's edge), and the DTM around it.
   const double halfFov =
-      std::atan(std::hypot(0.5 * canvas_.width, 0.5 * canvas_.height) / rig_.intrinsics.fxPx);
+      std::atan(std::hypot(0.5 * canvas_.width, 0.5 * canvas_.height) / rig_.intrinsics.fx_px);
   const double reach =
-      rig_.altitudeM * std::tan(std::min(rig_.tiltDeg * kPi / 180.0 + halfFov, 1.35)) + 45.0;
+      rig_.altitude_m * std::tan(std::min(rig_.tilt_deg * kPi / 180.0 + halfFov, 1.35)) + 45.0;
   const Eigen::Vector2d lo = scene_.viewCentre - Eigen::Vector2d(reach, reach);
   const Eigen::Vector2d hi = scene_.viewCentre + Eigen::Vector2d(reach, reach);
   const double pathHalf = reach + 30.0;
@@ -196,7 +196,7 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   factory_ = std::make_unique<VehicleFactory>(asm_);
   traffic_.init(scene_, *factory_, pathHalf, options.warmUpS, kFrameIntervalS, rng);
   sensor_.init(camera_, canvas_, sensorSpec_);
-  renderer_.init(scene_, world_, lo, hi, rig_.altitudeM / rig_.intrinsics.fxPx,
+  renderer_.init(scene_, world_, lo, hi, rig_.altitude_m / rig_.intrinsics.fx_px,
                  canvas_.supersampling, options.threads);
   // Bilinear remap reads a canvas pixel's neighbours; lens curvature moves them < 2 px.
   renderer_.setCanvasMask(sensor_.neededCanvas(3));
@@ -210,7 +210,7 @@ bool Simulator::nextFrame(FrameOutput& out, std::string* why) {
     traffic_.step(rng);
   }
   out.frameId = frameIndex_;
-  out.timestampNs = kStartNs + frameIndex_ * kFrameNs;
+  out.timestamp_ns = kStart_ns + frameIndex_ * kFrame_ns;
   out.truePose = hoverPose();
   const auto camPose = lifter_.cameraPose(out.truePose);
   if (!camPose) {
@@ -219,10 +219,10 @@ bool Simulator::nextFrame(FrameOutput& out, std::string* why) {
   const int ss = canvas_.supersampling;
   view_.worldToCamera = camPose->cameraToEnu.transpose();
   view_.centre = camPose->centreEnu;
-  view_.fx = rig_.intrinsics.fxPx * ss;
-  view_.fy = rig_.intrinsics.fyPx * ss;
-  view_.cx = (rig_.intrinsics.cxPx + canvas_.offsetX + 0.5) * ss - 0.5;
-  view_.cy = (rig_.intrinsics.cyPx + canvas_.offsetY + 0.5) * ss - 0.5;
+  view_.fx = rig_.intrinsics.fx_px * ss;
+  view_.fy = rig_.intrinsics.fy_px * ss;
+  view_.cx = (rig_.intrinsics.cx_px + canvas_.offsetX + 0.5) * ss - 0.5;
+  view_.cy = (rig_.intrinsics.cy_px + canvas_.offsetY + 0.5) * ss - 0.5;
   view_.width = canvas_.width * ss;
   view_.height = canvas_.height * ss;
 
@@ -257,11 +257,11 @@ bool Simulator::nextFrame(FrameOutput& out, std::string* why) {
 
   std::vector<MotionStreak> streaks;
   for (const sequence::ObjectTruth& o : out.objects) {
-    if (o.speedMps < 0.1) {
+    if (o.speed_mps < 0.1) {
       continue;
     }
-    const Eigen::Vector3d f(std::cos(o.headingEnuRad), std::sin(o.headingEnuRad), 0.0);
-    const double half = 0.5 * o.speedMps * sensorSpec_.exposureTimeS;
+    const Eigen::Vector3d f(std::cos(o.headingEnu_rad), std::sin(o.headingEnu_rad), 0.0);
+    const double half = 0.5 * o.speed_mps * sensorSpec_.exposureTimeS;
     const auto a = lifter_.worldToPixel(*camPose, o.positionEnu - half * f);
     const auto b = lifter_.worldToPixel(*camPose, o.positionEnu + half * f);
     if (a && b) {
@@ -279,10 +279,10 @@ bool Simulator::nextFrame(FrameOutput& out, std::string* why) {
     const Eigen::Quaterniond noise =
         quaternionFromEuler(rng.normal(0.0, 0.03), rng.normal(0.0, 0.03), rng.normal(0.0, 0.05));
     out.recordedPose.bodyToNed = (out.truePose.bodyToNed * noise).normalized();
-    out.recordedPose.gimbal.angles.rollDeg += rng.normal(0.0, 0.02);
-    out.recordedPose.gimbal.angles.pitchDeg += rng.normal(0.0, 0.02);
-    out.recordedPose.gimbal.angles.yawDeg =
-        wrapDeg(out.recordedPose.gimbal.angles.yawDeg + rng.normal(0.0, 0.02));
+    out.recordedPose.gimbal.angles.roll_deg += rng.normal(0.0, 0.02);
+    out.recordedPose.gimbal.angles.pitch_deg += rng.normal(0.0, 0.02);
+    out.recordedPose.gimbal.angles.yaw_deg =
+        wrap_deg(out.recordedPose.gimbal.angles.yaw_deg + rng.normal(0.0, 0.02));
   }
   ++frameIndex_;
   return true;
@@ -293,24 +293,25 @@ std::string Simulator::rigYaml() const {
   const auto& k = rig_.intrinsics;
   const auto& d = rig_.distortion;
   y << "# Camera rig of a simulated sequence (vp_simulate), application configuration schema.\n";
-  y << "origin:\n  latitude_deg: " << num(origin_.latitudeDeg)
-    << "\n  longitude_deg: " << num(origin_.longitudeDeg)
-    << "\n  height_m: " << num(origin_.heightM) << "\n";
-  y << "camera:\n  width_px: " << k.widthPx << "\n  height_px: " << k.heightPx
-    << "\n  fx_px: " << num(k.fxPx) << "\n  fy_px: " << num(k.fyPx) << "\n  cx_px: " << num(k.cxPx)
-    << "\n  cy_px: " << num(k.cyPx) << "\n  lens_model: " << camera::toString(d.model) << "\n";
+  y << "origin:\n  latitude_deg: " << num(origin_.latitude_deg)
+    << "\n  longitude_deg: " << num(origin_.longitude_deg)
+    << "\n  height_m: " << num(origin_.height_m) << "\n";
+  y << "camera:\n  width_px: " << k.width_px << "\n  height_px: " << k.height_px
+    << "\n  fx_px: " << num(k.fx_px) << "\n  fy_px: " << num(k.fy_px)
+    << "\n  cx_px: " << num(k.cx_px) << "\n  cy_px: " << num(k.cy_px)
+    << "\n  lens_model: " << camera::toString(d.model) << "\n";
   if (d.model == camera::LensModel::BrownConrady) {
     y << "  distortion:\n    k1: " << num(d.k1) << "\n    k2: " << num(d.k2)
       << "\n    p1: " << num(d.p1) << "\n    p2: " << num(d.p2) << "\n    k3: " << num(d.k3)
       << "\n";
   }
   y << "mount:\n  roll_deg: 0\n  pitch_deg: 0\n  yaw_deg: 0\n  lever_arm_m: ["
-    << num(rig_.mount.leverArmM.x()) << ", " << num(rig_.mount.leverArmM.y()) << ", "
-    << num(rig_.mount.leverArmM.z()) << "]\n";
+    << num(rig_.mount.leverArm_m.x()) << ", " << num(rig_.mount.leverArm_m.y()) << ", "
+    << num(rig_.mount.leverArm_m.z()) << "]\n";
   const bool earth = rig_.gimbalReference == geodesy::GimbalReference::Earth;
   y << "  gimbal:\n    reference: " << (earth ? "earth" : "body")
-    << "\n    roll_deg: 0\n    pitch_deg: " << num(-90.0 + rig_.tiltDeg)
-    << "\n    yaw_deg: " << num(earth ? wrapDeg(rig_.viewAzimuthDeg) : 0.0) << "\n";
+    << "\n    roll_deg: 0\n    pitch_deg: " << num(-90.0 + rig_.tilt_deg)
+    << "\n    yaw_deg: " << num(earth ? wrap_deg(rig_.viewAzimuth_deg) : 0.0) << "\n";
   y << "terrain:\n  dtm_path: dtm.tif\n  crs: auto\n";
   return y.str();
 }
@@ -319,9 +320,9 @@ std::string Simulator::summary() const {
   std::ostringstream s;
   s << "scene " << toString(scene_.kind) << ", season " << scene_.season << ", relief "
     << toString(terrainSpec_.kind) << ", lens " << camera::toString(rig_.distortion.model)
-    << ", altitude " << num(std::round(rig_.altitudeM * 10) / 10) << " m, tilt "
-    << num(std::round(rig_.tiltDeg * 10) / 10) << " deg, sun elevation "
-    << num(std::round(scene_.light.sunElevationDeg)) << " deg"
+    << ", altitude " << num(std::round(rig_.altitude_m * 10) / 10) << " m, tilt "
+    << num(std::round(rig_.tilt_deg * 10) / 10) << " deg, sun elevation "
+    << num(std::round(scene_.light.sunElevation_deg)) << " deg"
     << (scene_.light.overcast ? " (overcast)" : "") << ", " << scene_.buildings.size()
     << " buildings, " << scene_.trees.size() << " trees, gimbal "
     << (rig_.gimbalReference == geodesy::GimbalReference::Earth ? "earth" : "body")
@@ -338,7 +339,7 @@ bool Simulator::write(std::string* why, const std::function<void(const FrameOutp
   }
   sequence::SequenceInfo info;
   info.name = std::string(toString(options_.scene)) + "_seed" + std::to_string(options_.seed);
-  info.frameRateHz = 1.0 / kFrameIntervalS;
+  info.frameRate_hz = 1.0 / kFrameIntervalS;
   info.source = "vp_simulate 1.0 seed " + std::to_string(options_.seed) + " scene " +
                 toString(options_.scene);
   info.notes = summary();
@@ -362,9 +363,9 @@ bool Simulator::write(std::string* why, const std::function<void(const FrameOutp
     }
     sequence::FrameRecord record;
     record.frameId = frame.frameId;
-    record.timestampNs = frame.timestampNs;
+    record.timestamp_ns = frame.timestamp_ns;
     sequence::TelemetryRecord telemetry;
-    telemetry.timestampNs = frame.timestampNs;
+    telemetry.timestamp_ns = frame.timestamp_ns;
     telemetry.position = frame.recordedPose.position;
     telemetry.bodyToNed = frame.recordedPose.bodyToNed;
     telemetry.gimbal = frame.recordedPose.gimbal;

@@ -40,8 +40,8 @@ struct SimOptions {
   std::string outDir;
   int width = 2592;
   int height = 2048;
-  std::optional<double> altitudeM;  // above the ground at the view centre, 60..150
-  std::optional<double> tiltDeg;    // optical axis from nadir, 0..35
+  std::optional<double> altitude_m;  // above the ground at the view centre, 60..150
+  std::optional<double> tilt_deg;    // optical axis from nadir, 0..35
   bool png = false;
   int jpegQuality = 92;
   int threads = 1;
@@ -57,20 +57,20 @@ struct RigSpec {
   camera::Distortion distortion{};
   geodesy::CameraMount mount{};
   geodesy::GimbalReference gimbalReference = geodesy::GimbalReference::Earth;
-  double altitudeM = 90.0;
-  double tiltDeg = 0.0;
-  double viewAzimuthDeg = 0.0;    // horizontal direction of the optical axis, clockwise from north
-  double bodyYawOffsetDeg = 0.0;  // earth gimbal: the airframe's heading relative to the view
-  double positionSigmaM = 0.3;
+  double altitude_m = 90.0;
+  double tilt_deg = 0.0;
+  double viewAzimuth_deg = 0.0;    // horizontal direction of the optical axis, clockwise from north
+  double bodyYawOffset_deg = 0.0;  // earth gimbal: the airframe's heading relative to the view
+  double positionSigma_m = 0.3;
   double positionTauS = 5.0;
-  double attitudeSigmaDeg = 1.0;
+  double attitudeSigma_deg = 1.0;
   double attitudeTauS = 2.0;
-  double gimbalSigmaDeg = 0.05;
+  double gimbalSigma_deg = 0.05;
 };
 
 struct FrameOutput {
   std::int64_t frameId = 0;
-  std::int64_t timestampNs = 0;
+  std::int64_t timestamp_ns = 0;
   cv::Mat image;  // CV_8UC3 BGR, camera size
   cv::Mat ids;    // CV_32SC1 object ids (0 ground, > 0 vehicle track ids, < 0 static objects)
   lifting::DronePose truePose{};

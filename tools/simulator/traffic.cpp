@@ -10,9 +10,9 @@ namespace vp::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kPathStepM = 0.25;
+constexpr double kPathStep_m = 0.25;
 constexpr int kSubSteps = 5;
-constexpr double kMaxSteerRad = 0.6;
+constexpr double kMaxSteer_rad = 0.6;
 constexpr double kLateralAccelMps2 = 2.5;
 constexpr double kAllRedS = 2.0;
 
@@ -30,8 +30,8 @@ double segmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
 
 double boxDistance(const Patch& r, const Eigen::Vector2d& p) {
   const Eigen::Vector2d d = p - r.centre;
-  const double qx = std::fabs(d.dot(r.dir)) - r.halfLengthM;
-  const double qy = std::fabs(d.x() * -r.dir.y() + d.y() * r.dir.x()) - r.halfWidthM;
+  const double qx = std::fabs(d.dot(r.dir)) - r.halfLength_m;
+  const double qy = std::fabs(d.x() * -r.dir.y() + d.y() * r.dir.x()) - r.halfWidth_m;
   return std::hypot(std::max(qx, 0.0), std::max(qy, 0.0)) + std::min(std::max(qx, qy), 0.0);
 }
 
@@ -41,9 +41,9 @@ double exponential(Rng& rng, double rate) {
 
 }  // namespace
 
-BicycleState stepBicycle(const BicycleState& s, double v, double delta, double wheelbaseM,
+BicycleState stepBicycle(const BicycleState& s, double v, double delta, double wheelbase_m,
                          double dt) {
-  const double omega = v * std::tan(delta) / wheelbaseM;
+  const double omega = v * std::tan(delta) / wheelbase_m;
   BicycleState out;
   out.psi = s.psi + omega * dt;
   if (std::fabs(omega) < 1e-9) {
@@ -65,16 +65,16 @@ LanePath::LanePath(std::vector<Eigen::Vector2d> points) {
     const Eigen::Vector2d a = points[i - 1];
     const Eigen::Vector2d b = points[i];
     const double len = (b - a).norm();
-    double t = kPathStepM - carried;
+    double t = kPathStep_m - carried;
     while (t <= len) {
       points_.push_back(a + (b - a) * (t / len));
-      t += kPathStepM;
+      t += kPathStep_m;
     }
-    carried = len - (t - kPathStepM);
+    carried = len - (t - kPathStep_m);
   }
   s_.resize(points_.size());
   for (std::size_t i = 0; i < points_.size(); ++i) {
-    s_[i] = static_cast<double>(i) * kPathStepM;
+    s_[i] = static_cast<double>(i) * kPathStep_m;
   }
   radius_.assign(points_.size(), 1e9);
   const std::size_t k = 4;
@@ -91,7 +91,7 @@ Eigen::Vector2d LanePath::at(double s) const {
   if (s <= 0.0) {
     return points_.front() + s * unit(headingAt(0.0));
   }
-  const double f = s / kPathStepM;
+  const double f = s / kPathStep_m;
   const auto i = static_cast<std::size_t>(f);
   if (i + 1 >= points_.size()) {
     return points_.back() + (s - length()) * unit(headingAt(length()));
@@ -102,7 +102,7 @@ Eigen::Vector2d LanePath::at(double s) const {
 
 double LanePath::headingAt(double s) const {
   const auto n = points_.size();
-  auto i = static_cast<std::size_t>(std::clamp(s / kPathStepM, 0.0, static_cast<double>(n - 2)));
+  auto i = static_cast<std::size_t>(std::clamp(s / kPathStep_m, 0.0, static_cast<double>(n - 2)));
   i = std::min(i, n - 2);
   const Eigen::Vector2d d = points_[i + 1] - points_[i];
   return std::atan2(d.y(), d.x());
@@ -110,8 +110,8 @@ double LanePath::headingAt(double s) const {
 
 double LanePath::project(const Eigen::Vector2d& p, double sFrom, double sTo) const {
   const auto n = static_cast<long>(points_.size());
-  const long i0 = std::clamp(static_cast<long>(sFrom / kPathStepM), 0L, n - 1);
-  const long i1 = std::clamp(static_cast<long>(sTo / kPathStepM) + 1, 0L, n - 1);
+  const long i0 = std::clamp(static_cast<long>(sFrom / kPathStep_m), 0L, n - 1);
+  const long i1 = std::clamp(static_cast<long>(sTo / kPathStep_m) + 1, 0L, n - 1);
   double best = 1e18;
   long bestIndex = i0;
   for (long i = i0; i <= i1; ++i) {
@@ -122,7 +122,7 @@ double LanePath::project(const Eigen::Vector2d& p, double sFrom, double sTo) con
     }
   }
   // Refine on the neighbouring segments.
-  double s = static_cast<double>(bestIndex) * kPathStepM;
+  double s = static_cast<double>(bestIndex) * kPathStep_m;
   for (const long j : {bestIndex - 1, bestIndex}) {
     if (j < 0 || j + 1 >= n) {
       continue;
@@ -132,7 +132,7 @@ double LanePath::project(const Eigen::Vector2d& p, double sFrom, double sTo) con
     const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
     if ((a + t * ab - p).squaredNorm() <= best + 1e-12) {
       best = (a + t * ab - p).squaredNorm();
-      s = (static_cast<double>(j) + t) * kPathStepM;
+      s = (static_cast<double>(j) + t) * kPathStep_m;
     }
   }
   return s;
@@ -141,9 +141,9 @@ double LanePath::project(const Eigen::Vector2d& p, double sFrom, double sTo) con
 double LanePath::curveSpeedLimit(double s, double ahead) const {
   const auto n = points_.size();
   const auto i0 =
-      static_cast<std::size_t>(std::clamp(s / kPathStepM, 0.0, static_cast<double>(n - 1)));
+      static_cast<std::size_t>(std::clamp(s / kPathStep_m, 0.0, static_cast<double>(n - 1)));
   const auto i1 = static_cast<std::size_t>(
-      std::clamp((s + ahead) / kPathStepM, 0.0, static_cast<double>(n - 1)));
+      std::clamp((s + ahead) / kPathStep_m, 0.0, static_cast<double>(n - 1)));
   double r = 1e9;
   for (std::size_t i = i0; i <= i1; ++i) {
     r = std::min(r, radius_[i]);
@@ -185,7 +185,7 @@ void Traffic::buildPaths(const SceneSpec& scene, double halfLength) {
       const int lanes = forward ? r.lanesForward : r.lanesBackward;
       const double tc = d.dot(scene.viewCentre - r.centre);
       for (int k = 0; k < lanes; ++k) {
-        const Eigen::Vector2d pE = r.centre + r.laneOffsetM(forward, k) * r.leftNormal();
+        const Eigen::Vector2d pE = r.centre + r.laneOffset_m(forward, k) * r.leftNormal();
         std::vector<int> entry;
         const double t0 = (junction ? 0.0 : tc) - halfLength;
         const double t1 = (junction ? 0.0 : tc) + halfLength;
@@ -193,7 +193,7 @@ void Traffic::buildPaths(const SceneSpec& scene, double halfLength) {
           LanePath straight({pE + t0 * d, pE + t1 * d});
           if (junction) {
             straight.signalGroup = static_cast<int>(ri) * 2;
-            straight.stopS = -r.stopDistanceM - t0;
+            straight.stopS = -r.stopDistance_m - t0;
           }
           entry.push_back(static_cast<int>(paths_.size()));
           paths_.push_back(std::move(straight));
@@ -210,7 +210,7 @@ void Traffic::buildPaths(const SceneSpec& scene, double halfLength) {
             const Eigen::Vector2d dq = qForward ? q.dir : Eigen::Vector2d(-q.dir);
             const int qLanes = qForward ? q.lanesForward : q.lanesBackward;
             const Eigen::Vector2d pX =
-                q.centre + q.laneOffsetM(qForward, right ? qLanes - 1 : 0) * q.leftNormal();
+                q.centre + q.laneOffset_m(qForward, right ? qLanes - 1 : 0) * q.leftNormal();
             // Intersection of the entry and exit lane lines.
             Eigen::Matrix2d m;
             m << d.x(), -dq.x(), d.y(), -dq.y();
@@ -218,8 +218,8 @@ void Traffic::buildPaths(const SceneSpec& scene, double halfLength) {
             const Eigen::Vector2d meet = pE + ts.x() * d;
             const double phi = std::atan2(d.x() * dq.y() - d.y() * dq.x(), d.dot(dq));
             const double halfTan = std::tan(0.5 * std::fabs(phi));
-            double radius = right ? std::max(4.5, scene.cornerRadiusM + 1.5) : 14.0;
-            const double maxTangent = ts.x() + r.stopDistanceM - 1.0;
+            double radius = right ? std::max(4.5, scene.cornerRadius_m + 1.5) : 14.0;
+            const double maxTangent = ts.x() + r.stopDistance_m - 1.0;
             radius = std::max(4.2, std::min(radius, maxTangent / halfTan));
             const double tangent = radius * halfTan;
             const Eigen::Vector2d a = meet - tangent * d;
@@ -238,7 +238,7 @@ void Traffic::buildPaths(const SceneSpec& scene, double halfLength) {
             pts.push_back(b + (halfLength - exitFrom) * dq);
             LanePath turn(std::move(pts));
             turn.signalGroup = static_cast<int>(ri) * 2 + (right ? 0 : 1);
-            turn.stopS = -r.stopDistanceM - t0;
+            turn.stopS = -r.stopDistance_m - t0;
             entry.push_back(static_cast<int>(paths_.size()));
             paths_.push_back(std::move(turn));
           }
@@ -262,21 +262,21 @@ void Traffic::placeParked(const SceneSpec& scene, Rng& rng) {
   for (const Road& r : scene.roads) {
     const double tc = r.along(scene.viewCentre);
     for (const bool right : {true, false}) {
-      const double width = right ? r.parkingRightM : r.parkingLeftM;
+      const double width = right ? r.parkingRight_m : r.parkingLeft_m;
       if (width <= 0.0) {
         continue;
       }
       const double slot = 6.5;
-      const double first = slot * std::floor((tc - 0.6 * scene.extentM) / slot) + 0.5 * slot;
-      for (double a = first; a < tc + 0.6 * scene.extentM; a += slot) {
-        if (scene.kind == SceneKind::Intersection && std::fabs(a) < r.stopDistanceM + 4.0) {
+      const double first = slot * std::floor((tc - 0.6 * scene.extent_m) / slot) + 0.5 * slot;
+      for (double a = first; a < tc + 0.6 * scene.extent_m; a += slot) {
+        if (scene.kind == SceneKind::Intersection && std::fabs(a) < r.stopDistance_m + 4.0) {
           continue;
         }
-        if (r.crosswalkCentreM < 1e8 && scene.kind != SceneKind::Intersection &&
-            std::fabs(a - r.crosswalkCentreM) < 0.5 * r.crosswalkWidthM + 4.0) {
+        if (r.crosswalkCentre_m < 1e8 && scene.kind != SceneKind::Intersection &&
+            std::fabs(a - r.crosswalkCentre_m) < 0.5 * r.crosswalkWidth_m + 4.0) {
           continue;
         }
-        const double kerbLateral = right ? -r.rightHalfM() : r.leftHalfM();
+        const double kerbLateral = right ? -r.rightHalf_m() : r.leftHalf_m();
         const Eigen::Vector2d kerbPoint = r.centre + a * r.dir + kerbLateral * r.leftNormal();
         bool blocked = false;
         for (const Patch& p : scene.paved) {
@@ -297,8 +297,8 @@ void Traffic::placeParked(const SceneSpec& scene, Rng& rng) {
         }
         v.parked = true;
         v.trackId = nextTrackId_++;
-        const double lateral = right ? kerbLateral + kerbGap + v.model->halfWidthM
-                                     : kerbLateral - kerbGap - v.model->halfWidthM;
+        const double lateral = right ? kerbLateral + kerbGap + v.model->halfWidth_m
+                                     : kerbLateral - kerbGap - v.model->halfWidth_m;
         const Eigen::Vector2d c = r.centre + (a + alongJitter) * r.dir + lateral * r.leftNormal();
         const Eigen::Vector2d rear = c + v.model->rearAxleXM * unit(heading);
         v.rear = BicycleState{rear.x(), rear.y(), heading};
@@ -320,17 +320,17 @@ void Traffic::placeParked(const SceneSpec& scene, Rng& rng) {
   }
 }
 
-void Traffic::init(const SceneSpec& scene, const VehicleFactory& factory, double pathHalfLengthM,
+void Traffic::init(const SceneSpec& scene, const VehicleFactory& factory, double pathHalfLength_m,
                    double warmUpS, double frameIntervalS, Rng& rng) {
   scene_ = &scene;
   factory_ = &factory;
   frameIntervalS_ = frameIntervalS;
-  buildPaths(scene, pathHalfLengthM);
+  buildPaths(scene, pathHalfLength_m);
   placeParked(scene, rng);
   const int warmFrames = static_cast<int>(warmUpS / frameIntervalS);
   timeS_ = -warmFrames * frameIntervalS;
   for (std::size_t e = 0; e < entries_.size(); ++e) {
-    nextArrivalS_.push_back(timeS_ + exponential(rng, scene.traffic.arrivalRatePerLaneHz));
+    nextArrivalS_.push_back(timeS_ + exponential(rng, scene.traffic.arrivalRatePerLane_hz));
   }
   for (int i = 0; i < warmFrames; ++i) {
     step(rng);
@@ -354,7 +354,7 @@ void Traffic::spawn(Rng& rng) {
     if (!free) {
       continue;  // stays pending until the entry clears
     }
-    nextArrivalS_[e] = timeS_ + exponential(rng, scene_->traffic.arrivalRatePerLaneHz);
+    nextArrivalS_[e] = timeS_ + exponential(rng, scene_->traffic.arrivalRatePerLane_hz);
     std::vector<double> weights;
     for (std::size_t i = 0; i < entries_[e].size(); ++i) {
       weights.push_back(i == 0 ? 0.6 : 0.2);
@@ -366,14 +366,14 @@ void Traffic::spawn(Rng& rng) {
                   : factory_->makeCar(rng, factory_->drawCarType(rng));
     v.trackId = nextTrackId_++;
     const double large = v.model->type == shape::VehicleType::Large ? 0.85 : 1.0;
-    v.desiredSpeedMps =
-        std::min(15.0, scene_->traffic.speedLimitMps * rng.uniform(0.8, 1.15) * large);
+    v.desiredSpeed_mps =
+        std::min(15.0, scene_->traffic.speedLimit_mps * rng.uniform(0.8, 1.15) * large);
     v.headwayS = rng.uniform(1.1, 1.9);
     const LanePath& path = paths_[static_cast<std::size_t>(v.path)];
     v.s = 0.0;
     const Eigen::Vector2d p = path.at(0.0);
     v.rear = BicycleState{p.x(), p.y(), path.headingAt(0.0)};
-    v.speedMps = 0.8 * v.desiredSpeedMps;
+    v.speed_mps = 0.8 * v.desiredSpeed_mps;
     vehicles_.push_back(std::move(v));
   }
 }
@@ -382,7 +382,7 @@ double Traffic::gapAhead(std::size_t index, double* leaderSpeed) const {
   const SimVehicle& me = vehicles_[index];
   const LanePath& path = paths_[static_cast<std::size_t>(me.path)];
   const double frontDist = me.model->frontXM - me.model->rearAxleXM;
-  const double hw = me.model->halfWidthM;
+  const double hw = me.model->halfWidth_m;
   const double sFront = me.s + frontDist;
   const double horizon = 55.0;
   double gap = 1e9;
@@ -398,15 +398,15 @@ double Traffic::gapAhead(std::size_t index, double* leaderSpeed) const {
       continue;
     }
     const Eigen::Vector2d f = unit(o.rear.psi);
-    const Eigen::Vector2d a = oc + (o.model->rearXM + o.model->halfWidthM) * f;
-    const Eigen::Vector2d b = oc + (o.model->frontXM - o.model->halfWidthM) * f;
-    const double reach = hw + o.model->halfWidthM + 0.25;
+    const Eigen::Vector2d a = oc + (o.model->rearXM + o.model->halfWidth_m) * f;
+    const Eigen::Vector2d b = oc + (o.model->frontXM - o.model->halfWidth_m) * f;
+    const double reach = hw + o.model->halfWidth_m + 0.25;
     for (double s = sFront; s < sFront + std::min(gap, horizon); s += 0.5) {
       if (segmentDistance(path.at(s), a, b) < reach) {
         const double g = s - sFront + hw;
         if (g < gap) {
           gap = g;
-          *leaderSpeed = std::max(0.0, o.speedMps * std::cos(o.rear.psi - path.headingAt(s)));
+          *leaderSpeed = std::max(0.0, o.speed_mps * std::cos(o.rear.psi - path.headingAt(s)));
         }
         break;
       }
@@ -438,7 +438,7 @@ void Traffic::step(Rng& rng) {
       if (stopGap < 0.0 && green(path.signalGroup)) {
         v.committed = true;
       } else if (!green(path.signalGroup) && stopGap > 0.0 && stopGap < 20.0 &&
-                 v.speedMps * v.speedMps / (2.0 * stopGap) > 4.5) {
+                 v.speed_mps * v.speed_mps / (2.0 * stopGap) > 4.5) {
         v.committed = true;  // too late to stop comfortably: clears on amber
       } else if (stopGap < -0.5) {
         v.committed = true;
@@ -449,13 +449,13 @@ void Traffic::step(Rng& rng) {
     const bool large = v.model->type == shape::VehicleType::Large;
     const double aMax = large ? 1.0 : 1.6;
     const double bComfort = 2.0;
-    const double lookAhead = std::max(10.0, v.speedMps * v.speedMps / (2.0 * 1.5) + 5.0);
+    const double lookAhead = std::max(10.0, v.speed_mps * v.speed_mps / (2.0 * 1.5) + 5.0);
     const double v0 = std::max(
-        1.0, std::min(v.desiredSpeedMps, path.curveSpeedLimit(v.s + frontDist * 0.5, lookAhead)));
+        1.0, std::min(v.desiredSpeed_mps, path.curveSpeedLimit(v.s + frontDist * 0.5, lookAhead)));
     const double sStar =
-        2.0 + std::max(0.0, v.speedMps * v.headwayS + v.speedMps * (v.speedMps - leaderSpeed) /
-                                                          (2.0 * std::sqrt(aMax * bComfort)));
-    double a = aMax * (1.0 - std::pow(v.speedMps / v0, 4.0) -
+        2.0 + std::max(0.0, v.speed_mps * v.headwayS + v.speed_mps * (v.speed_mps - leaderSpeed) /
+                                                           (2.0 * std::sqrt(aMax * bComfort)));
+    double a = aMax * (1.0 - std::pow(v.speed_mps / v0, 4.0) -
                        (sStar / std::max(gap, 0.1)) * (sStar / std::max(gap, 0.1)));
     if (gap < 0.3) {
       a = -8.0;
@@ -470,21 +470,21 @@ void Traffic::step(Rng& rng) {
         continue;
       }
       const LanePath& path = paths_[static_cast<std::size_t>(v.path)];
-      const double wheelbase = v.model->wheelbaseM;
+      const double wheelbase = v.model->wheelbase_m;
       v.s = path.project({v.rear.x, v.rear.y}, v.s - 1.0, v.s + 3.0);
       // Pure pursuit on the rear axle: the arc through the look-ahead point.
-      const double lookAhead = std::clamp(2.0 + 0.45 * v.speedMps, 3.5, 10.0);
+      const double lookAhead = std::clamp(2.0 + 0.45 * v.speed_mps, 3.5, 10.0);
       const Eigen::Vector2d target = path.at(v.s + lookAhead);
       const Eigen::Vector2d rel = target - Eigen::Vector2d(v.rear.x, v.rear.y);
       const double alpha = std::atan2(rel.y(), rel.x()) - v.rear.psi;
       const double ld = std::max(rel.norm(), 1.0);
       double steer = std::atan(2.0 * wheelbase * std::sin(alpha) / ld);
-      steer = std::clamp(steer, -kMaxSteerRad, kMaxSteerRad);
+      steer = std::clamp(steer, -kMaxSteer_rad, kMaxSteer_rad);
       const double maxChange = 1.0 * dt;
-      v.steerRad = std::clamp(steer, v.steerRad - maxChange, v.steerRad + maxChange);
-      v.speedMps = std::clamp(v.speedMps + accel[i] * dt, 0.0, 15.0);
-      v.rear = stepBicycle(v.rear, v.speedMps, v.steerRad, wheelbase, dt);
-      v.yawRateRadps = v.speedMps * std::tan(v.steerRad) / wheelbase;
+      v.steer_rad = std::clamp(steer, v.steer_rad - maxChange, v.steer_rad + maxChange);
+      v.speed_mps = std::clamp(v.speed_mps + accel[i] * dt, 0.0, 15.0);
+      v.rear = stepBicycle(v.rear, v.speed_mps, v.steer_rad, wheelbase, dt);
+      v.yawRateRadps = v.speed_mps * std::tan(v.steer_rad) / wheelbase;
     }
   }
   // Vehicles past the end of their path have left the scene.

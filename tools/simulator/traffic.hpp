@@ -32,7 +32,7 @@ struct BicycleState {
 
 // Exact integration over dt for constant speed v and steering angle delta (the motion is an
 // arc of radius L / tan delta), so constant steering traces a circle exactly.
-BicycleState stepBicycle(const BicycleState& s, double v, double delta, double wheelbaseM,
+BicycleState stepBicycle(const BicycleState& s, double v, double delta, double wheelbase_m,
                          double dt);
 
 class LanePath {
@@ -62,13 +62,13 @@ struct SimVehicle {
   int trackId = 0;
   std::shared_ptr<const VehicleModel> model;
   BicycleState rear{};
-  double speedMps = 0.0;
-  double steerRad = 0.0;
+  double speed_mps = 0.0;
+  double steer_rad = 0.0;
   double yawRateRadps = 0.0;
   bool parked = false;
   int path = -1;   // index into Traffic::paths(), -1 for parked vehicles
   double s = 0.0;  // arc length of the rear axle along the path
-  double desiredSpeedMps = 10.0;
+  double desiredSpeed_mps = 10.0;
   double headwayS = 1.5;
   bool committed = false;  // past the point of stopping for the signal
 
@@ -79,9 +79,9 @@ struct SimVehicle {
 
 class Traffic {
  public:
-  // Builds the lane paths of the scene (extending pathHalfLengthM beyond viewCentre), the
+  // Builds the lane paths of the scene (extending pathHalfLength_m beyond viewCentre), the
   // parked vehicles, and runs warmUpS of traffic so that the first frame is in steady state.
-  void init(const SceneSpec& scene, const VehicleFactory& factory, double pathHalfLengthM,
+  void init(const SceneSpec& scene, const VehicleFactory& factory, double pathHalfLength_m,
             double warmUpS, double frameIntervalS, Rng& rng);
   // Advances by one frame interval.
   void step(Rng& rng);

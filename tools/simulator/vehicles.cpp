@@ -123,7 +123,7 @@ void finishExtents(VehicleModel& m) {
   }
   m.frontXM = hi.x();
   m.rearXM = lo.x();
-  m.halfWidthM = 0.5 * (hi.y() - lo.y());
+  m.halfWidth_m = 0.5 * (hi.y() - lo.y());
 }
 
 Eigen::Vector3f srgbToLinear(double r, double g, double b) {
@@ -138,7 +138,7 @@ AxleGeometry axleGeometry(const shape::KeypointModel& keypoints) {
   const double front = 0.5 * (keypoints(0, w[0]) + keypoints(0, w[1]));
   const double rear = 0.5 * (keypoints(0, w[2]) + keypoints(0, w[3]));
   AxleGeometry g;
-  g.wheelbaseM = front - rear;
+  g.wheelbase_m = front - rear;
   g.rearAxleXM = rear;
   return g;
 }
@@ -210,9 +210,9 @@ std::shared_ptr<const VehicleModel> VehicleFactory::carFromGamma(shape::VehicleT
     const double r = shape::wheelRadius(k, w);
     addWheel(*m, k.col(wheels[static_cast<std::size_t>(w)]), r, shape::kWheelWidth_m);
   }
-  m->dimensionsM = shape::boundingBoxSize(k);
+  m->dimensions_m = shape::boundingBoxSize(k);
   const AxleGeometry axles = axleGeometry(k);
-  m->wheelbaseM = axles.wheelbaseM;
+  m->wheelbase_m = axles.wheelbase_m;
   m->rearAxleXM = axles.rearAxleXM;
   computeNormals(*m);
   finishExtents(*m);
@@ -272,8 +272,8 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {
     }
   }
   m->rearAxleXM = rearCount > 0 ? rearSum / rearCount : -0.3 * mesh.length_m;
-  m->wheelbaseM = frontAxle - m->rearAxleXM;
-  m->dimensionsM = Eigen::Vector3d(mesh.length_m, mesh.width_m, mesh.height_m);
+  m->wheelbase_m = frontAxle - m->rearAxleXM;
+  m->dimensions_m = Eigen::Vector3d(mesh.length_m, mesh.width_m, mesh.height_m);
   const bool bus = kind == shape::LargeVehicleKind::CityBus ||
                    kind == shape::LargeVehicleKind::ArticulatedBus ||
                    kind == shape::LargeVehicleKind::Coach;

@@ -60,19 +60,19 @@ struct VehicleModel {
   std::vector<Eigen::Vector3d>
       normals;  // per triangle corner (3 per triangle), smooth within creases
   std::vector<VehicleTriangle> triangles;
-  Eigen::Vector3d dimensionsM{0, 0, 0};  // length, width, height of the 3D bounding box
-  double wheelbaseM = 2.7;
+  Eigen::Vector3d dimensions_m{0, 0, 0};  // length, width, height of the 3D bounding box
+  double wheelbase_m = 2.7;
   double rearAxleXM = -1.35;  // x of the rear axle in the vehicle frame
   double frontXM = 2.3;       // x of the front bumper
   double rearXM = -2.3;
-  double halfWidthM = 0.9;
+  double halfWidth_m = 0.9;
   VehicleLook look{};
 };
 
 // Kinematic bicycle wheelbase L (seed 001) and rear-axle position of an ASM shape, from the
 // wheel-centre keypoints.
 struct AxleGeometry {
-  double wheelbaseM = 2.7;
+  double wheelbase_m = 2.7;
   double rearAxleXM = -1.35;
 };
 AxleGeometry axleGeometry(const shape::KeypointModel& keypoints);

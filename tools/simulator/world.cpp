@@ -26,7 +26,7 @@ TerrainSpec drawTerrain(Rng& rng) {
   const double draw = rng.uniform();
   spec.kind =
       draw < 0.3 ? ReliefKind::Flat : (draw < 0.65 ? ReliefKind::Slope : ReliefKind::Undulating);
-  spec.cellM = rng.chance(0.5) ? 0.5 : 1.0;
+  spec.cell_m = rng.chance(0.5) ? 0.5 : 1.0;
   if (spec.kind != ReliefKind::Flat) {
     const double grade = rng.uniform(0.0, spec.kind == ReliefKind::Slope ? 0.045 : 0.02);
     const double a = rng.uniform(0.0, 2.0 * kPi);
@@ -48,9 +48,9 @@ TerrainSpec drawTerrain(Rng& rng) {
 
 geodesy::GeodeticPoint drawOrigin(Rng& rng) {
   geodesy::GeodeticPoint origin;
-  origin.latitudeDeg = 43.0731 + rng.uniform(-0.01, 0.01);
-  origin.longitudeDeg = -89.4012 + rng.uniform(-0.013, 0.013);
-  origin.heightM = 230.0 + rng.uniform(0.0, 40.0);  // ellipsoidal (geoid ~ -33 m there)
+  origin.latitude_deg = 43.0731 + rng.uniform(-0.01, 0.01);
+  origin.longitude_deg = -89.4012 + rng.uniform(-0.013, 0.013);
+  origin.height_m = 230.0 + rng.uniform(0.0, 40.0);  // ellipsoidal (geoid ~ -33 m there)
   return origin;
 }
 
@@ -66,7 +66,7 @@ double World::relief(double x, double y) const {
 }
 
 bool World::build(const geodesy::GeodeticPoint& origin, const TerrainSpec& spec,
-                  const Eigen::Vector2d& centre, double halfSizeM, std::string* why) {
+                  const Eigen::Vector2d& centre, double halfSize_m, std::string* why) {
   spec_ = spec;
   frame_ = geodesy::LocalFrame(origin);
   terrain::TerrainGrid grid;
@@ -77,17 +77,17 @@ bool World::build(const geodesy::GeodeticPoint& origin, const TerrainSpec& spec,
   grid.crs.utmNorth = centreUtm.northp;
   // UTM grid north differs from true north by the meridian convergence (< 2 deg here):
   // 6 % extra covers the ENU square.
-  const double half = halfSizeM * 1.06;
-  const double cell = spec.cellM;
+  const double half = halfSize_m * 1.06;
+  const double cell = spec.cell_m;
   grid.cols = static_cast<int>(std::ceil(2.0 * half / cell)) + 1;
   grid.rows = grid.cols;
-  grid.transform.x0 = std::floor((centreUtm.eastingM - half) / cell) * cell + 0.5 * cell;
+  grid.transform.x0 = std::floor((centreUtm.easting_m - half) / cell) * cell + 0.5 * cell;
   grid.transform.dxCol = cell;
   grid.transform.dxRow = 0.0;
-  grid.transform.y0 = std::floor((centreUtm.northingM + half) / cell) * cell + 0.5 * cell;
+  grid.transform.y0 = std::floor((centreUtm.northing_m + half) / cell) * cell + 0.5 * cell;
   grid.transform.dyCol = 0.0;
   grid.transform.dyRow = -cell;
-  grid.heightsM.resize(static_cast<std::size_t>(grid.cols) * static_cast<std::size_t>(grid.rows));
+  grid.heights_m.resize(static_cast<std::size_t>(grid.cols) * static_cast<std::size_t>(grid.rows));
   // ENU position of each sample centre: exact (GeographicLib) on a lattice every kStep
   // samples, bilinear in between; the UTM -> ENU map is affine to well below a millimetre
   // over a few metres, and this is ~100 times faster than converting every sample.
@@ -98,12 +98,12 @@ bool World::build(const geodesy::GeodeticPoint& origin, const TerrainSpec& spec,
   for (int j = 0; j < lr; ++j) {
     for (int i = 0; i < lc; ++i) {
       geodesy::UtmPoint u = centreUtm;
-      u.eastingM = grid.transform.x0 + i * kStep * cell;
-      u.northingM = grid.transform.y0 - j * kStep * cell;
+      u.easting_m = grid.transform.x0 + i * kStep * cell;
+      u.northing_m = grid.transform.y0 - j * kStep * cell;
       const geodesy::GeodeticPoint g = geodesy::fromUtm(u);
       lattice[static_cast<std::size_t>(j) * static_cast<std::size_t>(lc) +
               static_cast<std::size_t>(i)] =
-          frame_.toEnu({g.latitudeDeg, g.longitudeDeg, origin.heightM}).head<2>();
+          frame_.toEnu({g.latitude_deg, g.longitude_deg, origin.height_m}).head<2>();
     }
   }
   const auto at = [&](int i, int j) -> const Eigen::Vector2d& {
@@ -118,9 +118,9 @@ bool World::build(const geodesy::GeodeticPoint& origin, const TerrainSpec& spec,
       const double tc = static_cast<double>(c - i * kStep) / kStep;
       const Eigen::Vector2d enu = (1 - tr) * ((1 - tc) * at(i, j) + tc * at(i + 1, j)) +
                                   tr * ((1 - tc) * at(i, j + 1) + tc * at(i + 1, j + 1));
-      grid.heightsM[static_cast<std::size_t>(r) * static_cast<std::size_t>(grid.cols) +
-                    static_cast<std::size_t>(c)] =
-          static_cast<float>(origin.heightM + relief(enu.x(), enu.y()));
+      grid.heights_m[static_cast<std::size_t>(r) * static_cast<std::size_t>(grid.cols) +
+                     static_cast<std::size_t>(c)] =
+          static_cast<float>(origin.height_m + relief(enu.x(), enu.y()));
     }
   }
   return terrain_.init(std::move(grid), frame_, why);

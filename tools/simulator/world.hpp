@@ -30,7 +30,7 @@ struct TerrainSpec {
   std::array<Eigen::Vector3d, 3> waves{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
                                        Eigen::Vector3d::Zero()};
   std::array<double, 3> phases{};
-  double cellM = 0.5;
+  double cell_m = 0.5;
 };
 
 TerrainSpec drawTerrain(Rng& rng);
@@ -41,9 +41,9 @@ geodesy::GeodeticPoint drawOrigin(Rng& rng);
 
 class World {
  public:
-  // Builds the DTM covering the square centre +- halfSizeM (ENU) and the terrain model.
+  // Builds the DTM covering the square centre +- halfSize_m (ENU) and the terrain model.
   bool build(const geodesy::GeodeticPoint& origin, const TerrainSpec& spec,
-             const Eigen::Vector2d& centre, double halfSizeM, std::string* why);
+             const Eigen::Vector2d& centre, double halfSize_m, std::string* why);
 
   const geodesy::LocalFrame& frame() const { return frame_; }
   const terrain::TerrainModel& terrain() const { return terrain_; }

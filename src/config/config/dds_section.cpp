@@ -23,10 +23,10 @@ const Range kMaxBlockingRangeS = Range::closed(0.0, 10.0);
 const Range kHistoryDepthRange = Range::closed(1.0, 1000.0);
 // Deadline, lifespan, liveliness lease: 0 = off; an hour is far beyond any useful setting.
 const Range kQosDurationRangeS = Range::closed(0.0, 3600.0);
-const Range kStatusRateRangeHz = Range::closed(0.01, 100.0);
-const Range kOccupancyRateRangeHz = Range::closed(0.0, 100.0);
-const Range kGridOriginRangeM = Range::closed(-1e5, 1e5);
-const Range kGridResolutionRangeM = Range::closed(0.05, 10.0);
+const Range kStatusRateRange_hz = Range::closed(0.01, 100.0);
+const Range kOccupancyRateRange_hz = Range::closed(0.0, 100.0);
+const Range kGridOriginRange_m = Range::closed(-1e5, 1e5);
+const Range kGridResolutionRange_m = Range::closed(0.05, 10.0);
 // 2048 x 2048 cells is the IDL's bound on the grid (kMaxOccupancyCells).
 const Range kGridCellsRange = Range::closed(1.0, 2048.0);
 
@@ -132,7 +132,7 @@ TelemetryConfig readTelemetry(MapReader section) {
   telemetry.px4GlobalPositionTopic =
       section.text("px4_global_position_topic", defaults.px4GlobalPositionTopic);
   telemetry.ardupilotAltitudeOffset_m = section.number(
-      "ardupilot_altitude_offset_m", kAltitudeOffsetRangeM, defaults.ardupilotAltitudeOffset_m);
+      "ardupilot_altitude_offset_m", kAltitudeOffsetRange_m, defaults.ardupilotAltitudeOffset_m);
   telemetry.historyDepth =
       section.integer("history_depth", kHistoryDepthRange, defaults.historyDepth);
   section.warnUnknownKeys();
@@ -149,9 +149,9 @@ DdsConfig readDds(MapReader section, const std::string& baseDir) {
   dds.partition = section.text("partition", defaults.partition);
   dds.droneId = section.uint32("drone_id", kDroneIdRange, defaults.droneId);
   dds.topicPrefix = section.text("topic_prefix", defaults.topicPrefix);
-  dds.statusRate_hz = section.number("status_rate_hz", kStatusRateRangeHz, defaults.statusRate_hz);
+  dds.statusRate_hz = section.number("status_rate_hz", kStatusRateRange_hz, defaults.statusRate_hz);
   dds.occupancyRate_hz =
-      section.number("occupancy_rate_hz", kOccupancyRateRangeHz, defaults.occupancyRate_hz);
+      section.number("occupancy_rate_hz", kOccupancyRateRange_hz, defaults.occupancyRate_hz);
   {
     MapReader qos = section.section("qos");
     dds.vehicleState = readQos(qos.section("vehicle_state"), defaults.vehicleState);
@@ -162,11 +162,11 @@ DdsConfig readDds(MapReader section, const std::string& baseDir) {
   {
     MapReader grid = section.section("occupancy_grid");
     dds.grid.originEast_m =
-        grid.number("origin_east_m", kGridOriginRangeM, defaults.grid.originEast_m);
+        grid.number("origin_east_m", kGridOriginRange_m, defaults.grid.originEast_m);
     dds.grid.originNorth_m =
-        grid.number("origin_north_m", kGridOriginRangeM, defaults.grid.originNorth_m);
+        grid.number("origin_north_m", kGridOriginRange_m, defaults.grid.originNorth_m);
     dds.grid.resolution_m =
-        grid.number("resolution_m", kGridResolutionRangeM, defaults.grid.resolution_m);
+        grid.number("resolution_m", kGridResolutionRange_m, defaults.grid.resolution_m);
     dds.grid.rows = grid.uint32("rows", kGridCellsRange, defaults.grid.rows);
     dds.grid.cols = grid.uint32("cols", kGridCellsRange, defaults.grid.cols);
     grid.warnUnknownKeys();

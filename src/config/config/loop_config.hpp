@@ -26,11 +26,11 @@ std::vector<CameraPixelFormat> defaultCameraFormats();  // yuyv, nv12, mjpeg
 struct V4l2SourceConfig {
   std::string device = "/dev/video0";
   std::string busInfo;  // when set, the device whose VIDIOC_QUERYCAP bus_info matches
-  int widthPx = 2592;
-  int heightPx = 2048;
+  int width_px = 2592;
+  int height_px = 2048;
   std::vector<CameraPixelFormat> formats = defaultCameraFormats();  // tried in order
   int buffers = 4;
-  int dequeueTimeoutMs = 1000;
+  int dequeueTimeout_ms = 1000;
 };
 
 struct SourceConfig {

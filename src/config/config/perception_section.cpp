@@ -14,14 +14,14 @@ namespace {
 
 const Range kThreadsRange = Range::closed(1.0, 16.0);
 const Range kWorkingScaleRange = Range{0.0, 1.0, true};
-const Range kTileOverlapRangePx = Range::closed(0.0, 1024.0);
+const Range kTileOverlapRange_px = Range::closed(0.0, 1024.0);
 const Range kTopKRange = Range::closed(1.0, 512.0);
 const Range kMaxCropsRange = Range::closed(0.0, 512.0);
-const Range kCutMarginRangePx = Range::closed(0.0, 64.0);
-const Range kFixedGsdRangeM = Range::closed(0.0, 1.0);
-const Range kCarLengthRangeM = Range{0.0, 30.0, true};
+const Range kCutMarginRange_px = Range::closed(0.0, 64.0);
+const Range kFixedGsdRange_m = Range::closed(0.0, 1.0);
+const Range kCarLengthRange_m = Range{0.0, 30.0, true};
 const Range kWhiteBalanceGridRange = Range::closed(1.0, 8.0);  // rows x cols <= 64 regions
-const Range kSampleStrideRangePx = Range::closed(1.0, 64.0);
+const Range kSampleStrideRange_px = Range::closed(1.0, 64.0);
 const Range kMaxGainRange = Range::closed(1.0, 16.0);
 
 constexpr std::string_view kBackendNames = "int8, fp32, opencv";
@@ -54,14 +54,14 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
     wb.regionRows = regions[0];
     wb.regionCols = regions[1];
   }
-  wb.sampleStridePx = section.integer("white_balance_sample_stride_px", kSampleStrideRangePx,
-                                      wbDefaults.sampleStridePx);
+  wb.sampleStride_px = section.integer("white_balance_sample_stride_px", kSampleStrideRange_px,
+                                       wbDefaults.sampleStride_px);
   wb.whitePointShare =
       section.number("white_balance_white_share", kShareRange, wbDefaults.whitePointShare);
   wb.maxGain = section.number("white_balance_max_gain", kMaxGainRange, wbDefaults.maxGain);
   pre.workingScale = section.number("working_scale", kWorkingScaleRange, d.preprocess.workingScale);
-  pre.tileOverlapPx =
-      section.integer("tile_overlap_px", kTileOverlapRangePx, d.preprocess.tileOverlapPx);
+  pre.tileOverlap_px =
+      section.integer("tile_overlap_px", kTileOverlapRange_px, d.preprocess.tileOverlap_px);
 
   detection::DecoderOptions& decoder = det.decoder;
   const detection::DecoderOptions& decoderDefaults = d.detection.decoder;
@@ -71,8 +71,8 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
   decoder.nmsIou = section.number("nms_iou", kShareRange, decoderDefaults.nmsIou);
   decoder.duplicateOverlap =
       section.number("duplicate_overlap", kShareRange, decoderDefaults.duplicateOverlap);
-  decoder.cutEdgeMarginPx =
-      section.number("cut_edge_margin_px", kCutMarginRangePx, decoderDefaults.cutEdgeMarginPx);
+  decoder.cutEdgeMargin_px =
+      section.number("cut_edge_margin_px", kCutMarginRange_px, decoderDefaults.cutEdgeMargin_px);
   det.maxCrops = section.integer("max_crops", kMaxCropsRange, d.detection.maxCrops);
 
   detection::SecondStageOptions& second = det.secondStage;
@@ -85,9 +85,9 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
       section.boolean("crop_large_vehicle_ends", secondDefaults.largeVehicleEnds);
   second.minVehicleProbability = static_cast<float>(section.number(
       "crop_min_vehicle_probability", kProbabilityRange, secondDefaults.minVehicleProbability));
-  det.gsd.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRangeM, d.detection.gsd.fixedGsd_m);
+  det.gsd.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRange_m, d.detection.gsd.fixedGsd_m);
   det.gsd.nominalCarLength_m =
-      section.number("nominal_car_length_m", kCarLengthRangeM, d.detection.gsd.nominalCarLength_m);
+      section.number("nominal_car_length_m", kCarLengthRange_m, d.detection.gsd.nominalCarLength_m);
   p.lift.boxHeightShare =
       section.number("lift_height_share", kProbabilityRange, d.lift.boxHeightShare);
   section.warnUnknownKeys();

@@ -20,7 +20,7 @@ telemetry::PoseBufferConfig readPose(MapReader section) {
   telemetry::PoseBufferConfig p;
   // Converted only when given: the default stays the buffer's own nanoseconds.
   if (section.has("max_age_s")) {
-    p.maxAgeNs =
+    p.maxAge_ns =
         static_cast<std::int64_t>(section.number("max_age_s", kPoseMaxAgeRangeS, kRequired) * 1e9);
   }
   p.capacity = static_cast<std::size_t>(

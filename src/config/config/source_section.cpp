@@ -10,7 +10,7 @@ namespace vp::config::detail {
 namespace {
 
 const Range kCameraBuffersRange = Range::closed(2.0, 16.0);
-const Range kDequeueTimeoutRangeMs = Range::closed(1.0, 60000.0);
+const Range kDequeueTimeoutRange_ms = Range::closed(1.0, 60000.0);
 
 constexpr std::string_view kSourceKindNames = "replay, v4l2";
 constexpr std::string_view kPixelFormatNames = "yuyv, nv12, mjpeg";
@@ -30,15 +30,15 @@ V4l2SourceConfig readV4l2(MapReader section) {
   V4l2SourceConfig v;
   v.device = section.text("device", d.device);
   v.busInfo = section.text("bus_info", d.busInfo);
-  v.widthPx = section.integer("width_px", kImageSizeRangePx, d.widthPx);
-  v.heightPx = section.integer("height_px", kImageSizeRangePx, d.heightPx);
+  v.width_px = section.integer("width_px", kImageSizeRange_px, d.width_px);
+  v.height_px = section.integer("height_px", kImageSizeRange_px, d.height_px);
   if (section.has("formats")) {
     v.formats =
         section.choices<CameraPixelFormat>("formats", pixelFormatFromString, kPixelFormatNames);
   }
   v.buffers = section.integer("buffers", kCameraBuffersRange, d.buffers);
-  v.dequeueTimeoutMs =
-      section.integer("dequeue_timeout_ms", kDequeueTimeoutRangeMs, d.dequeueTimeoutMs);
+  v.dequeueTimeout_ms =
+      section.integer("dequeue_timeout_ms", kDequeueTimeoutRange_ms, d.dequeueTimeout_ms);
   section.warnUnknownKeys();
   return v;
 }

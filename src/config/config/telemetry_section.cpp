@@ -50,7 +50,7 @@ TelemetryLinkConfig readTelemetryLink(MapReader section) {
   t.serialBaud = section.choice<int>("serial_baud", baudFromString, kBaudNames, d.serialBaud);
   t.systemId = section.integer("system_id", kSystemIdRange, d.systemId);
   t.geoidSeparation_m =
-      section.number("geoid_separation_m", kAltitudeOffsetRangeM, d.geoidSeparation_m);
+      section.number("geoid_separation_m", kAltitudeOffsetRange_m, d.geoidSeparation_m);
   t.linkLatency_s = section.number("link_latency_s", kLinkLatencyRangeS, d.linkLatency_s);
   t.replayLookahead_s = section.number("replay_lookahead_s", kLookaheadRangeS, d.replayLookahead_s);
   section.warnUnknownKeys();

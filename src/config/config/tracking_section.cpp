@@ -13,13 +13,13 @@ const Range kMaxTracksRange = Range::closed(1.0, 1024.0);
 const Range kConfirmHitsRange = Range::closed(1.0, 100.0);
 const Range kConfirmWholeHitsRange = Range::closed(0.0, 100.0);
 const Range kTrackTimeRangeS = Range::closed(0.0, 60.0);
-const Range kSpeedRangeMps = Range::closed(0.0, 50.0);
+const Range kSpeedRange_mps = Range::closed(0.0, 50.0);
 const Range kFlipVotesRange = Range::closed(1.0, 100.0);
 const Range kEvidenceWeightRange = Range{0.0, 1.0, true};
 const Range kShapeWeightRange = Range{0.0, 1e6, true};
-const Range kGateDistanceRangeM = Range{0.0, 100.0, true};
-const Range kMeasurementPositionRangeM = Range{0.0, 10.0, true};   // (0, 10] m
-const Range kMeasurementHeadingRangeDeg = Range{0.0, 90.0, true};  // (0, 90] deg
+const Range kGateDistanceRange_m = Range{0.0, 100.0, true};
+const Range kMeasurementPositionRange_m = Range{0.0, 10.0, true};   // (0, 10] m
+const Range kMeasurementHeadingRange_deg = Range{0.0, 90.0, true};  // (0, 90] deg
 const Range kNoiseFactorRange = Range::closed(1.0, 1000.0);
 
 }  // namespace
@@ -35,13 +35,13 @@ tracking::TrackerConfig readTracking(MapReader section) {
   t.maxLostAtFrameEdge_s =
       section.number("max_lost_at_edge_s", kTrackTimeRangeS, d.maxLostAtFrameEdge_s);
   t.maxCoast_s = section.number("coast_s", kTrackTimeRangeS, d.maxCoast_s);
-  t.movingSpeed_mps = section.number("moving_speed_mps", kSpeedRangeMps, d.movingSpeed_mps);
+  t.movingSpeed_mps = section.number("moving_speed_mps", kSpeedRange_mps, d.movingSpeed_mps);
   t.flipVotes = section.integer("flip_votes", kFlipVotesRange, d.flipVotes);
   t.typeEvidenceWeight =
       section.number("type_evidence_weight", kEvidenceWeightRange, d.typeEvidenceWeight);
   t.shapeMaxWeight = section.number("shape_max_weight", kShapeWeightRange, d.shapeMaxWeight);
   t.association.maxDistance_m =
-      section.number("max_distance_m", kGateDistanceRangeM, d.association.maxDistance_m);
+      section.number("max_distance_m", kGateDistanceRange_m, d.association.maxDistance_m);
   // The scores are floats in the tracker; low_score's bound is the high score as written.
   const double highScore =
       section.number("high_score", kProbabilityRange, floatAsDecimal(d.association.highScore));
@@ -49,11 +49,11 @@ tracking::TrackerConfig readTracking(MapReader section) {
   t.association.lowScore = static_cast<float>(section.number(
       "low_score", Range::closed(0.0, highScore), floatAsDecimal(d.association.lowScore)));
   t.noise.measurementPosition_m = section.number(
-      "measurement_position_m", kMeasurementPositionRangeM, d.noise.measurementPosition_m);
+      "measurement_position_m", kMeasurementPositionRange_m, d.noise.measurementPosition_m);
   // Converted only when given: the default stays the motion model's own radians.
   if (section.has("measurement_heading_deg")) {
     t.noise.measurementHeading_rad =
-        section.number("measurement_heading_deg", kMeasurementHeadingRangeDeg, kRequired) *
+        section.number("measurement_heading_deg", kMeasurementHeadingRange_deg, kRequired) *
         (geometry::kPi / 180.0);
   }
   t.noise.steeringDecay_s =

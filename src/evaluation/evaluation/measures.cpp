@@ -16,9 +16,9 @@ enum Placement { kBox = 0, kWorld = 1, kVehicle = 2 };
 // Keypoints of a model placed on a ground plane: x, y horizontal (right-handed), z up.
 Eigen::Matrix<double, 3, shape::kKeypointCount> place(const shape::KeypointModel& model,
                                                       const Eigen::Vector3d& origin,
-                                                      double headingRad) {
-  const double c = std::cos(headingRad);
-  const double s = std::sin(headingRad);
+                                                      double heading_rad) {
+  const double c = std::cos(heading_rad);
+  const double s = std::sin(heading_rad);
   Eigen::Matrix3d rotation;
   rotation << c, -s, 0, s, c, 0, 0, 0, 1;
   return (rotation * model).colwise() + origin;
@@ -95,18 +95,18 @@ void Evaluator::addPair(const ReferenceObject& reference, const PredictedObject&
                         double iou) {
   iou_.push_back(iou);
   // Position.
-  const double distancePx =
+  const double distance_px =
       std::hypot(prediction.box.cx - reference.box.cx, prediction.box.cy - reference.box.cy);
-  positionPx_.push_back(distancePx);
+  positionPx_.push_back(distance_px);
   const bool hasGsd = std::isfinite(reference.gsd_m);
   if (hasGsd) {
-    positionM_.push_back(distancePx * reference.gsd_m);
+    positionM_.push_back(distance_px * reference.gsd_m);
   }
   const bool world = prediction.lifted && reference.hasWorld;
   if (world) {
     positionWorldM_.push_back((prediction.positionEnu - reference.positionEnu).head<2>().norm());
     headingWorldDeg_.push_back(
-        geometry::absAngleDifference(prediction.headingEnuRad, reference.headingEnuRad) *
+        geometry::absAngleDifference(prediction.headingEnu_rad, reference.headingEnu_rad) *
         kDegPerRad);
   }
   // Orientation: axis-aligned references carry no angle.
@@ -129,8 +129,8 @@ void Evaluator::addPair(const ReferenceObject& reference, const PredictedObject&
   // Lifted size against the reference's 3D box.
   if (world) {
     for (int d = 0; d < 3; ++d) {
-      liftedDimensionErrors_[static_cast<std::size_t>(d)].push_back(prediction.dimensionsM[d] -
-                                                                    reference.dimensionsM[d]);
+      liftedDimensionErrors_[static_cast<std::size_t>(d)].push_back(prediction.dimensions_m[d] -
+                                                                    reference.dimensions_m[d]);
     }
   }
   // Shape.
@@ -160,8 +160,8 @@ void Evaluator::addPair(const ReferenceObject& reference, const PredictedObject&
         place(truth, boxOrigin(reference.box, reference.gsd_m), -reference.box.angle));
   }
   if (world) {
-    addKeypoints(kWorld, place(predicted, prediction.positionEnu, prediction.headingEnuRad),
-                 place(truth, reference.positionEnu, reference.headingEnuRad));
+    addKeypoints(kWorld, place(predicted, prediction.positionEnu, prediction.headingEnu_rad),
+                 place(truth, reference.positionEnu, reference.headingEnu_rad));
   }
 }
 
@@ -183,20 +183,20 @@ EvaluationSummary Evaluator::summary() const {
   s.meanMatchedIou = iou_.empty() ? kNan
                                   : std::accumulate(iou_.begin(), iou_.end(), 0.0) /
                                         static_cast<double>(iou_.size());
-  s.positionPx = robustSummary(positionPx_);
-  s.positionM = robustSummary(positionM_);
-  s.positionWorldM = robustSummary(positionWorldM_);
-  s.orientationDeg = robustSummary(orientationDeg_);
-  s.axisOrientationDeg = robustSummary(axisOrientationDeg_);
-  s.headingWorldDeg = robustSummary(headingWorldDeg_);
+  s.position_px = robustSummary(positionPx_);
+  s.position_m = robustSummary(positionM_);
+  s.positionWorld_m = robustSummary(positionWorldM_);
+  s.orientation_deg = robustSummary(orientationDeg_);
+  s.axisOrientation_deg = robustSummary(axisOrientationDeg_);
+  s.headingWorld_deg = robustSummary(headingWorldDeg_);
   s.flipShare = shareAbove(orientationDeg_, kFlipThreshold_deg);
   const std::array<double, 1> ten{10.0};
-  s.shareBelow10Deg = cumulativeShare(orientationDeg_, ten)[0];
+  s.shareBelow10_deg = cumulativeShare(orientationDeg_, ten)[0];
   std::vector<double> thresholds(kCumulativeHistogramBins);
   std::iota(thresholds.begin(), thresholds.end(), 0.0);
   s.orientationCumulative = cumulativeShare(orientationDeg_, thresholds);
-  s.orientationErrorsDeg = orientationDeg_;
-  std::sort(s.orientationErrorsDeg.begin(), s.orientationErrorsDeg.end());
+  s.orientationErrors_deg = orientationDeg_;
+  std::sort(s.orientationErrors_deg.begin(), s.orientationErrors_deg.end());
   s.directionUnknownPredictions = directionUnknown_;
   s.typeSamples = typeSamples_;
   s.typeOa1 = safeRatio(typeTop1_, typeSamples_);

@@ -53,8 +53,8 @@ struct ReferenceObject {
   double gsd_m = std::numeric_limits<double>::quiet_NaN();  // metres per px at the object
   bool hasWorld = false;                                    // the next three are set
   Eigen::Vector3d positionEnu{0, 0, 0};                     // vehicle-frame origin, world ENU, m
-  double headingEnuRad = 0.0;
-  Eigen::Vector3d dimensionsM{0, 0, 0};  // length, width, height
+  double headingEnu_rad = 0.0;
+  Eigen::Vector3d dimensions_m{0, 0, 0};  // length, width, height
 };
 
 struct PredictedObject {
@@ -66,8 +66,8 @@ struct PredictedObject {
   shape::ShapeParams shape{};
   bool lifted = false;  // the next three are set
   Eigen::Vector3d positionEnu{0, 0, 0};
-  double headingEnuRad = 0.0;
-  Eigen::Vector3d dimensionsM{0, 0, 0};
+  double headingEnu_rad = 0.0;
+  Eigen::Vector3d dimensions_m{0, 0, 0};
 };
 
 struct EvaluationOptions {
@@ -105,16 +105,16 @@ struct EvaluationSummary {
   double f1 = 0.0;
   double meanMatchedIou = 0.0;  // NaN without pairs
   // pose
-  RobustSummary positionPx;
-  RobustSummary positionM;                    // px x reference GSD
-  RobustSummary positionWorldM;               // lifted vs reference, horizontal
-  RobustSummary orientationDeg;               // |d_theta| over 360 deg
-  RobustSummary axisOrientationDeg;           // ignoring front/back, [0, 90]
-  RobustSummary headingWorldDeg;              // lifted heading vs reference heading
+  RobustSummary position_px;
+  RobustSummary position_m;                   // px x reference GSD
+  RobustSummary positionWorld_m;              // lifted vs reference, horizontal
+  RobustSummary orientation_deg;              // |d_theta| over 360 deg
+  RobustSummary axisOrientation_deg;          // ignoring front/back, [0, 90]
+  RobustSummary headingWorld_deg;             // lifted heading vs reference heading
   double flipShare = 0.0;                     // share of |d_theta| > 90 deg
-  double shareBelow10Deg = 0.0;               // share of |d_theta| <= 10 deg (the seed quotes it)
+  double shareBelow10_deg = 0.0;              // share of |d_theta| <= 10 deg (the seed quotes it)
   std::vector<double> orientationCumulative;  // [k] share with |d_theta| <= k deg, k = 0..180
-  std::vector<double> orientationErrorsDeg;   // all |d_theta|, sorted (for plots)
+  std::vector<double> orientationErrors_deg;  // all |d_theta|, sorted (for plots)
   int directionUnknownPredictions = 0;        // matched predictions without a known direction
   // type
   int typeSamples = 0;

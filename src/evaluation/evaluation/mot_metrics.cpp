@@ -138,14 +138,15 @@ void MotAccumulator::addFrame(std::span<const MotObject> truth,
     track.trackedBefore = true;
     track.trackedLastPresent = true;
     current[truth[g].id] = hyp.id;
-    if (std::isfinite(truth[g].speedMps) && std::isfinite(hyp.speedMps)) {
-      const double e = hyp.speedMps - truth[g].speedMps;
+    if (std::isfinite(truth[g].speed_mps) && std::isfinite(hyp.speed_mps)) {
+      const double e = hyp.speed_mps - truth[g].speed_mps;
       speedSquaredSum_ += e * e;
       ++sums_.speedSamples;
     }
-    if (std::isfinite(truth[g].headingRad) && std::isfinite(hyp.headingRad)) {
+    if (std::isfinite(truth[g].heading_rad) && std::isfinite(hyp.heading_rad)) {
       ++sums_.headingSamples;
-      if (geometry::absAngleDifference(truth[g].headingRad, hyp.headingRad) > 0.5 * geometry::kPi) {
+      if (geometry::absAngleDifference(truth[g].heading_rad, hyp.heading_rad) >
+          0.5 * geometry::kPi) {
         ++sums_.headingOver90;
       }
     }

@@ -40,8 +40,8 @@ std::vector<int> matchByDistance(std::span<const Eigen::Vector2d> truth,
 struct MotObject {
   int id = 0;
   Eigen::Vector2d position{0.0, 0.0};  // world ENU, m
-  double speedMps = std::numeric_limits<double>::quiet_NaN();
-  double headingRad = std::numeric_limits<double>::quiet_NaN();
+  double speed_mps = std::numeric_limits<double>::quiet_NaN();
+  double heading_rad = std::numeric_limits<double>::quiet_NaN();
   int type = -1;  // static_cast<int>(shape::VehicleType), -1 unknown
 };
 

@@ -9,14 +9,14 @@ namespace vp::evaluation {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kFlipAngleRad = 0.5 * geometry::kPi;  // heading error above: front/back swapped
+constexpr double kFlipAngle_rad = 0.5 * geometry::kPi;  // heading error above: front/back swapped
 
 double share(int count, int samples) {
   return samples > 0 ? static_cast<double>(count) / samples : kNaN;
 }
 
-bool isFlip(double truthHeadingRad, double headingRad) {
-  return geometry::absAngleDifference(truthHeadingRad, headingRad) > kFlipAngleRad;
+bool isFlip(double truthHeading_rad, double heading_rad) {
+  return geometry::absAngleDifference(truthHeading_rad, heading_rad) > kFlipAngle_rad;
 }
 
 }  // namespace
@@ -156,7 +156,7 @@ void TrackingEvaluator::addCountedFrame(std::span<const TruthVehicle> truth,
   std::map<int, int> current;
   for (std::size_t g = 0; g < truth.size(); ++g) {
     const TruthVehicle& t = truth[g];
-    const bool moving = std::abs(t.speedMps) > options_.movingSpeed_mps;
+    const bool moving = std::abs(t.speed_mps) > options_.movingSpeed_mps;
     truthMoving_ += moving ? 1 : 0;
     if (pairs[g] < 0) {
       continue;
@@ -169,8 +169,8 @@ void TrackingEvaluator::addCountedFrame(std::span<const TruthVehicle> truth,
     ++entry->second.first;
     ++matchOrder_;
     if (moving) {
-      const double e = std::abs(track.speedMps) - std::abs(t.speedMps);
-      const int flip = isFlip(t.headingEnuRad, track.headingEnuRad) ? 1 : 0;
+      const double e = std::abs(track.speed_mps) - std::abs(t.speed_mps);
+      const int flip = isFlip(t.headingEnu_rad, track.headingEnu_rad) ? 1 : 0;
       speedSquaredSum_ += e * e;
       ++speedSamples_;
       ++trackHeadingSamples_;
@@ -228,10 +228,10 @@ void TrackingEvaluator::addCountedDetectorFrame(std::span<const TruthVehicle> tr
     const TruthVehicle& t = truth[g];
     const DetectionObservation& detection = detections[static_cast<std::size_t>(pairs[g])];
     ++detectionsMatched_;
-    if (std::abs(t.speedMps) > options_.movingSpeed_mps) {
+    if (std::abs(t.speed_mps) > options_.movingSpeed_mps) {
       if (detection.headingKnown) {
         ++detectorHeadingSamples_;
-        detectorHeadingFlips_ += isFlip(t.headingEnuRad, detection.headingEnuRad) ? 1 : 0;
+        detectorHeadingFlips_ += isFlip(t.headingEnu_rad, detection.headingEnu_rad) ? 1 : 0;
       } else {
         ++detectorDirectionUnknown_;
       }

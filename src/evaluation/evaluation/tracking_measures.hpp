@@ -54,8 +54,8 @@ constexpr double kDefaultMovingSpeed_mps = 0.5;       // truth speed above which
 struct TruthVehicle {
   std::int64_t id = 0;                    // ground-truth track_id (unique within a sequence)
   Eigen::Vector2d positionEnu{0.0, 0.0};  // footprint centre, world ENU, m
-  double headingEnuRad = 0.0;             // driving direction
-  double speedMps = 0.0;
+  double headingEnu_rad = 0.0;            // driving direction
+  double speed_mps = 0.0;
   int type = -1;        // static_cast<int>(shape::VehicleType), -1 unknown
   bool ignore = false;  // hardly visible: left out with whatever is paired with it
 };
@@ -63,14 +63,14 @@ struct TruthVehicle {
 struct TrackObservation {
   std::int64_t id = 0;                  // track_id (unique within a sequence)
   Eigen::Vector2d centreEnu{0.0, 0.0};  // footprint (box) centre, world ENU, m
-  double headingEnuRad = 0.0;
-  double speedMps = 0.0;  // signed
-  int type = -1;          // the fused type of this row
+  double headingEnu_rad = 0.0;
+  double speed_mps = 0.0;  // signed
+  int type = -1;           // the fused type of this row
 };
 
 struct DetectionObservation {
   Eigen::Vector2d positionEnu{0.0, 0.0};  // lifted footprint centre, world ENU, m
-  double headingEnuRad = 0.0;
+  double headingEnu_rad = 0.0;
   bool headingKnown = true;  // false: front/back undecided (left out of the flip share)
   int type = -1;             // top type
 };

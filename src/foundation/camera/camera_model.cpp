@@ -13,7 +13,7 @@ namespace {
 // The equivalent spherical model maps a distorted radius r_d to the field angle
 // 2*asin(r_d/2), which reaches 90 deg at r_d = sqrt(2) where the ideal radius tan(angle)
 // diverges. Stop 1 mrad short of it so every radius inside the field stays finite.
-constexpr double kSphericalMaxFieldAngleRad = std::numbers::pi / 2.0 - 1e-3;
+constexpr double kSphericalMaxFieldAngle_rad = std::numbers::pi / 2.0 - 1e-3;
 
 // Undistortion stops once the distortion of the estimate reproduces the input within this
 // (normalised) residual; with a Jacobian near identity the error of the ideal point is of
@@ -140,14 +140,14 @@ const char* toString(CameraError error) {
 
 bool CameraModel::init(const Intrinsics& intrinsics, const Distortion& distortion,
                        std::string* why) {
-  if (intrinsics.widthPx <= 0) {
-    return fail(why, "width_px must be > 0, got " + std::to_string(intrinsics.widthPx));
+  if (intrinsics.width_px <= 0) {
+    return fail(why, "width_px must be > 0, got " + std::to_string(intrinsics.width_px));
   }
-  if (intrinsics.heightPx <= 0) {
-    return fail(why, "height_px must be > 0, got " + std::to_string(intrinsics.heightPx));
+  if (intrinsics.height_px <= 0) {
+    return fail(why, "height_px must be > 0, got " + std::to_string(intrinsics.height_px));
   }
-  const std::pair<const char*, double> focals[] = {{"fx_px", intrinsics.fxPx},
-                                                   {"fy_px", intrinsics.fyPx}};
+  const std::pair<const char*, double> focals[] = {{"fx_px", intrinsics.fx_px},
+                                                   {"fy_px", intrinsics.fy_px}};
   for (const auto& [name, value] : focals) {
     if (!std::isfinite(value)) {
       return fail(why, std::string(name) + " must be finite, got " + formatValue(value));
@@ -158,8 +158,8 @@ bool CameraModel::init(const Intrinsics& intrinsics, const Distortion& distortio
   }
   // The principal point may legitimately lie outside the image (cropped sensors).
   const std::pair<const char*, double> finiteValues[] = {
-      {"cx_px", intrinsics.cxPx}, {"cy_px", intrinsics.cyPx}, {"k1", distortion.k1},
-      {"k2", distortion.k2},      {"p1", distortion.p1},      {"p2", distortion.p2},
+      {"cx_px", intrinsics.cx_px}, {"cy_px", intrinsics.cy_px}, {"k1", distortion.k1},
+      {"k2", distortion.k2},       {"p1", distortion.p1},       {"p2", distortion.p2},
       {"k3", distortion.k3}};
   for (const auto& [name, value] : finiteValues) {
     if (!std::isfinite(value)) {
@@ -173,19 +173,19 @@ bool CameraModel::init(const Intrinsics& intrinsics, const Distortion& distortio
     case LensModel::Pinhole:
       break;
     case LensModel::EquivalentSpherical:
-      maxIdeal = std::tan(kSphericalMaxFieldAngleRad);
-      maxDistorted = 2.0 * std::sin(0.5 * kSphericalMaxFieldAngleRad);
+      maxIdeal = std::tan(kSphericalMaxFieldAngle_rad);
+      maxDistorted = 2.0 * std::sin(0.5 * kSphericalMaxFieldAngle_rad);
       break;
     case LensModel::BrownConrady: {
       // The radial polynomial turns back on itself (fold-over) past its first stationary
       // point: beyond it two ideal radii share one distorted radius and undistortion is
       // ambiguous. Find the first radius where the derivative stops being positive.
       double cornerRadius = 0.0;
-      for (double u : {-0.5, intrinsics.widthPx - 0.5}) {
-        for (double v : {-0.5, intrinsics.heightPx - 0.5}) {
+      for (double u : {-0.5, intrinsics.width_px - 0.5}) {
+        for (double v : {-0.5, intrinsics.height_px - 0.5}) {
           cornerRadius =
-              std::max(cornerRadius, std::hypot((u - intrinsics.cxPx) / intrinsics.fxPx,
-                                                (v - intrinsics.cyPx) / intrinsics.fyPx));
+              std::max(cornerRadius, std::hypot((u - intrinsics.cx_px) / intrinsics.fx_px,
+                                                (v - intrinsics.cy_px) / intrinsics.fy_px));
         }
       }
       const double step = cornerRadius / kFieldSamplesPerCornerRadius;
@@ -237,8 +237,8 @@ Eigen::Vector2d CameraModel::distortNormalized(const Eigen::Vector2d& ideal) con
 
 Expected<Eigen::Vector2d, CameraError> CameraModel::undistortToNormalized(
     const Eigen::Vector2d& pixel) const {
-  const Eigen::Vector2d distorted((pixel.x() - intrinsics_.cxPx) / intrinsics_.fxPx,
-                                  (pixel.y() - intrinsics_.cyPx) / intrinsics_.fyPx);
+  const Eigen::Vector2d distorted((pixel.x() - intrinsics_.cx_px) / intrinsics_.fx_px,
+                                  (pixel.y() - intrinsics_.cy_px) / intrinsics_.fy_px);
   const double distortedRadius = distorted.norm();
   if (!std::isfinite(distortedRadius)) {
     return unexpected(CameraError::OutsideValidField);
@@ -310,11 +310,11 @@ Eigen::Vector2d CameraModel::distortPixel(const Eigen::Vector2d& idealPixel) con
     // default contraction on aarch64) would change the last bit.
     return idealPixel;
   }
-  const Eigen::Vector2d ideal((idealPixel.x() - intrinsics_.cxPx) / intrinsics_.fxPx,
-                              (idealPixel.y() - intrinsics_.cyPx) / intrinsics_.fyPx);
+  const Eigen::Vector2d ideal((idealPixel.x() - intrinsics_.cx_px) / intrinsics_.fx_px,
+                              (idealPixel.y() - intrinsics_.cy_px) / intrinsics_.fy_px);
   const Eigen::Vector2d distorted = distortNormalized(ideal);
-  return {intrinsics_.cxPx + intrinsics_.fxPx * distorted.x(),
-          intrinsics_.cyPx + intrinsics_.fyPx * distorted.y()};
+  return {intrinsics_.cx_px + intrinsics_.fx_px * distorted.x(),
+          intrinsics_.cy_px + intrinsics_.fy_px * distorted.y()};
 }
 
 Expected<Eigen::Vector2d, CameraError> CameraModel::undistortPixel(
@@ -323,8 +323,8 @@ Expected<Eigen::Vector2d, CameraError> CameraModel::undistortPixel(
   if (!ideal) {
     return unexpected(ideal.error());
   }
-  return Eigen::Vector2d(intrinsics_.cxPx + intrinsics_.fxPx * ideal->x(),
-                         intrinsics_.cyPx + intrinsics_.fyPx * ideal->y());
+  return Eigen::Vector2d(intrinsics_.cx_px + intrinsics_.fx_px * ideal->x(),
+                         intrinsics_.cy_px + intrinsics_.fy_px * ideal->y());
 }
 
 Expected<Eigen::Vector3d, CameraError> CameraModel::pixelToRay(const Eigen::Vector2d& pixel) const {
@@ -346,14 +346,14 @@ Expected<Eigen::Vector2d, CameraError> CameraModel::projectToPixel(
     return unexpected(CameraError::OutsideValidField);
   }
   const Eigen::Vector2d distorted = distortNormalized(ideal);
-  return Eigen::Vector2d(intrinsics_.cxPx + intrinsics_.fxPx * distorted.x(),
-                         intrinsics_.cyPx + intrinsics_.fyPx * distorted.y());
+  return Eigen::Vector2d(intrinsics_.cx_px + intrinsics_.fx_px * distorted.x(),
+                         intrinsics_.cy_px + intrinsics_.fy_px * distorted.y());
 }
 
-bool CameraModel::inImage(const Eigen::Vector2d& pixel, double marginPx) const {
+bool CameraModel::inImage(const Eigen::Vector2d& pixel, double margin_px) const {
   // Pixel centres run from 0 to width-1, so the sensor area spans [-0.5, width-0.5).
-  return pixel.x() >= -0.5 + marginPx && pixel.x() < intrinsics_.widthPx - 0.5 - marginPx &&
-         pixel.y() >= -0.5 + marginPx && pixel.y() < intrinsics_.heightPx - 0.5 - marginPx;
+  return pixel.x() >= -0.5 + margin_px && pixel.x() < intrinsics_.width_px - 0.5 - margin_px &&
+         pixel.y() >= -0.5 + margin_px && pixel.y() < intrinsics_.height_px - 0.5 - margin_px;
 }
 
 }  // namespace vp::camera

@@ -22,12 +22,12 @@
 namespace vp::camera {
 
 struct Intrinsics {
-  int widthPx = 0;
-  int heightPx = 0;
-  double fxPx = 0.0;  // focal length, px
-  double fyPx = 0.0;
-  double cxPx = 0.0;  // principal point, px
-  double cyPx = 0.0;
+  int width_px = 0;
+  int height_px = 0;
+  double fx_px = 0.0;  // focal length, px
+  double fy_px = 0.0;
+  double cx_px = 0.0;  // principal point, px
+  double cy_px = 0.0;
 };
 
 enum class LensModel { Pinhole, BrownConrady, EquivalentSpherical };
@@ -79,7 +79,7 @@ class CameraModel {
 
   // True when the pixel lies inside the image (with an optional margin, px). The image
   // covers [-0.5, width - 0.5) x [-0.5, height - 0.5): the outer edges of the border pixels.
-  bool inImage(const Eigen::Vector2d& pixel, double marginPx = 0.0) const;
+  bool inImage(const Eigen::Vector2d& pixel, double margin_px = 0.0) const;
 
   // Valid field of the lens model (normalised radii): ideal points beyond maxIdealRadius()
   // and distorted points beyond maxDistortedRadius() are OutsideValidField. For

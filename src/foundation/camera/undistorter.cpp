@@ -22,21 +22,22 @@ bool fail(std::string* why, const std::string& message) {
 }
 
 bool validOutput(const Intrinsics& out, std::string* why) {
-  if (out.widthPx <= 0 || out.heightPx <= 0) {
-    return fail(why, "output size must be > 0, got " + std::to_string(out.widthPx) + "x" +
-                         std::to_string(out.heightPx));
+  if (out.width_px <= 0 || out.height_px <= 0) {
+    return fail(why, "output size must be > 0, got " + std::to_string(out.width_px) + "x" +
+                         std::to_string(out.height_px));
   }
-  if (!std::isfinite(out.fxPx) || out.fxPx <= 0.0 || !std::isfinite(out.fyPx) || out.fyPx <= 0.0) {
+  if (!std::isfinite(out.fx_px) || out.fx_px <= 0.0 || !std::isfinite(out.fy_px) ||
+      out.fy_px <= 0.0) {
     return fail(why, "output fx_px and fy_px must be finite and > 0");
   }
-  if (!std::isfinite(out.cxPx) || !std::isfinite(out.cyPx)) {
+  if (!std::isfinite(out.cx_px) || !std::isfinite(out.cy_px)) {
     return fail(why, "output cx_px and cy_px must be finite");
   }
   return true;
 }
 
 cv::Matx33d cameraMatrix(const Intrinsics& k) {
-  return {k.fxPx, 0.0, k.cxPx, 0.0, k.fyPx, k.cyPx, 0.0, 0.0, 1.0};
+  return {k.fx_px, 0.0, k.cx_px, 0.0, k.fy_px, k.cy_px, 0.0, 0.0, 1.0};
 }
 
 }  // namespace
@@ -47,14 +48,14 @@ bool Undistorter::init(const CameraModel& input, std::string* why) {
 
 bool Undistorter::init(const CameraModel& input, const Intrinsics& output, std::string* why) {
   const Intrinsics& in = input.intrinsics();
-  if (in.widthPx <= 0 || in.heightPx <= 0) {
+  if (in.width_px <= 0 || in.height_px <= 0) {
     return fail(why, "input camera model is not initialised");
   }
   if (!validOutput(output, why)) {
     return false;
   }
 
-  const cv::Size outSize(output.widthPx, output.heightPx);
+  const cv::Size outSize(output.width_px, output.height_px);
   cv::Mat floatX;
   cv::Mat floatY;
   const Distortion& distortion = input.distortion();
@@ -72,11 +73,11 @@ bool Undistorter::init(const CameraModel& input, const Intrinsics& output, std::
       auto* rowX = floatX.ptr<float>(v);
       auto* rowY = floatY.ptr<float>(v);
       for (int u = 0; u < outSize.width; ++u) {
-        const Eigen::Vector2d ideal((u - output.cxPx) / output.fxPx,
-                                    (v - output.cyPx) / output.fyPx);
+        const Eigen::Vector2d ideal((u - output.cx_px) / output.fx_px,
+                                    (v - output.cy_px) / output.fy_px);
         const Eigen::Vector2d distorted = input.distortNormalized(ideal);
-        rowX[u] = static_cast<float>(in.cxPx + in.fxPx * distorted.x());
-        rowY[u] = static_cast<float>(in.cyPx + in.fyPx * distorted.y());
+        rowX[u] = static_cast<float>(in.cx_px + in.fx_px * distorted.x());
+        rowY[u] = static_cast<float>(in.cy_px + in.fy_px * distorted.y());
       }
     }
   }
@@ -88,8 +89,8 @@ bool Undistorter::init(const CameraModel& input, const Intrinsics& output, std::
     auto* rowX = floatX.ptr<float>(v);
     auto* rowY = floatY.ptr<float>(v);
     for (int u = 0; u < outSize.width; ++u) {
-      const double x = (u - output.cxPx) / output.fxPx;
-      const double y = (v - output.cyPx) / output.fyPx;
+      const double x = (u - output.cx_px) / output.fx_px;
+      const double y = (v - output.cy_px) / output.fy_px;
       if (!(x * x + y * y <= maxIdealRadius2) || !std::isfinite(rowX[u]) ||
           !std::isfinite(rowY[u])) {
         rowX[u] = kOutsideSource;
@@ -112,10 +113,10 @@ bool Undistorter::apply(const cv::Mat& src, cv::Mat& dst) const {
   if (mapX_.empty() || src.empty()) {
     return false;
   }
-  if (src.cols != input_.widthPx || src.rows != input_.heightPx) {
+  if (src.cols != input_.width_px || src.rows != input_.height_px) {
     return false;
   }
-  if (dst.cols != output_.widthPx || dst.rows != output_.heightPx || dst.type() != src.type()) {
+  if (dst.cols != output_.width_px || dst.rows != output_.height_px || dst.type() != src.type()) {
     return false;
   }
   // remap cannot work in place; overlapping buffers would read already-written output.

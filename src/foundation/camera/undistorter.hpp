@@ -24,7 +24,7 @@ class Undistorter {
   bool init(const CameraModel& input, const Intrinsics& output, std::string* why = nullptr);
   bool init(const CameraModel& input, std::string* why = nullptr);  // output = input's
 
-  cv::Size outputSize() const { return {output_.widthPx, output_.heightPx}; }
+  cv::Size outputSize() const { return {output_.width_px, output_.height_px}; }
   const Intrinsics& outputIntrinsics() const { return output_; }
 
   // src: a frame of the input camera's size; dst: preallocated outputSize(), src.type().

@@ -14,7 +14,7 @@ const char* toString(FrameStatus status) {
   return "unknown";
 }
 
-bool FramePool::init(std::size_t count, int widthPx, int heightPx, std::string* why) {
+bool FramePool::init(std::size_t count, int width_px, int height_px, std::string* why) {
   auto fail = [why](std::string message) {
     if (why != nullptr) {
       *why = "FramePool::init: " + std::move(message);
@@ -25,18 +25,18 @@ bool FramePool::init(std::size_t count, int widthPx, int heightPx, std::string* 
     return fail("frame count " + std::to_string(count) + " outside 1.." +
                 std::to_string(kMaxFrames));
   }
-  if (widthPx <= 0 || heightPx <= 0) {
-    return fail("frame size " + std::to_string(widthPx) + "x" + std::to_string(heightPx) +
+  if (width_px <= 0 || height_px <= 0) {
+    return fail("frame size " + std::to_string(width_px) + "x" + std::to_string(height_px) +
                 " must be positive");
   }
   frames_.clear();
   frames_.resize(count);
   for (Frame& frame : frames_) {
-    frame.image.create(heightPx, widthPx, CV_8UC3);
+    frame.image.create(height_px, width_px, CV_8UC3);
     frame.image.setTo(cv::Scalar::all(0));  // touch every page now, not in the first capture
   }
-  widthPx_ = widthPx;
-  heightPx_ = heightPx;
+  widthPx_ = width_px;
+  heightPx_ = height_px;
   const std::uint64_t mask = count == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << count) - 1;
   freeMask_.store(mask, std::memory_order_release);
   return true;

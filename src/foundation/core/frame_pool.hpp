@@ -38,30 +38,30 @@ enum class FrameStatus : std::uint8_t {
 const char* toString(FrameStatus status);
 
 struct Frame {
-  cv::Mat image;                 // CV_8UC3 BGR, widthPx x heightPx, allocated by init()
-  std::int64_t timestampNs = 0;  // capture time, monotonic clock of the source
-  std::int64_t frameId = 0;      // increasing per source (gaps = frames the source lost)
+  cv::Mat image;                  // CV_8UC3 BGR, width_px x height_px, allocated by init()
+  std::int64_t timestamp_ns = 0;  // capture time, monotonic clock of the source
+  std::int64_t frameId = 0;       // increasing per source (gaps = frames the source lost)
   FrameStatus status = FrameStatus::Ok;
 };
 
 class FramePool {
  public:
   static constexpr std::size_t kMaxFrames = 64;  // one bit each in the free mask
-  static constexpr int kDefaultWidthPx = 2592;   // seed 000's camera
-  static constexpr int kDefaultHeightPx = 2048;
+  static constexpr int kDefaultWidth_px = 2592;  // seed 000's camera
+  static constexpr int kDefaultHeight_px = 2048;
 
   FramePool() = default;
   FramePool(const FramePool&) = delete;
   FramePool& operator=(const FramePool&) = delete;
 
-  // Allocates `count` frames (1..kMaxFrames) of widthPx x heightPx BGR8, all free.
-  bool init(std::size_t count, int widthPx = kDefaultWidthPx, int heightPx = kDefaultHeightPx,
+  // Allocates `count` frames (1..kMaxFrames) of width_px x height_px BGR8, all free.
+  bool init(std::size_t count, int width_px = kDefaultWidth_px, int height_px = kDefaultHeight_px,
             std::string* why = nullptr);
 
   std::size_t capacity() const { return frames_.size(); }
   std::size_t available() const;  // free frames now (a snapshot)
-  int widthPx() const { return widthPx_; }
-  int heightPx() const { return heightPx_; }
+  int width_px() const { return widthPx_; }
+  int height_px() const { return heightPx_; }
 
   // A free frame's index, now owned by the caller; nothing when every frame is in use.
   std::optional<FrameIndex> acquire();

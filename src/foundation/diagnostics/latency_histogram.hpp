@@ -1,7 +1,7 @@
 // diagnostics/latency_histogram: fixed-memory latency statistics for the real-time loop.
 //
 // Contract: record() files a duration (ns) into one of kBinCount logarithmic bins spanning
-// kMinNs..kMaxNs (8 bins per octave: a quantile read back is within 9 % of the true value;
+// kMin_ns..kMax_ns (8 bins per octave: a quantile read back is within 9 % of the true value;
 // durations outside the span land in the first/last bin and are still counted, and the exact
 // minimum, maximum and mean are kept beside the bins). quantile(q) returns the upper edge of
 // the bin holding the q-th sample (a conservative estimate). No allocation, no locks: one
@@ -19,8 +19,8 @@ namespace vp::diagnostics {
 
 class LatencyHistogram {
  public:
-  static constexpr std::int64_t kMinNs = 1'000;           // 1 us
-  static constexpr std::int64_t kMaxNs = 16'000'000'000;  // 16 s
+  static constexpr std::int64_t kMin_ns = 1'000;           // 1 us
+  static constexpr std::int64_t kMax_ns = 16'000'000'000;  // 16 s
   static constexpr int kBinsPerOctave = 8;
   // log2(16 s / 1 us) = 23.9 octaves
   static constexpr int kBinCount = 24 * kBinsPerOctave;
@@ -40,13 +40,13 @@ class LatencyHistogram {
   void reset() { *this = LatencyHistogram(); }
 
   std::uint64_t count() const { return count_; }
-  std::int64_t minNs() const { return count_ ? minNs_ : 0; }
-  std::int64_t maxNs() const { return count_ ? maxNs_ : 0; }
-  double meanNs() const { return count_ ? sumNs_ / static_cast<double>(count_) : 0.0; }
+  std::int64_t min_ns() const { return count_ ? minNs_ : 0; }
+  std::int64_t max_ns() const { return count_ ? maxNs_ : 0; }
+  double mean_ns() const { return count_ ? sumNs_ / static_cast<double>(count_) : 0.0; }
 
   // Upper edge of the bin holding the ceil(q * count)-th smallest sample, clamped to the
   // exact maximum (the exact minimum / maximum for the first / last rank); 0 when empty.
-  std::int64_t quantileNs(double q) const {
+  std::int64_t quantile_ns(double q) const {
     if (count_ == 0)
       return 0;
     const double clamped = q < 0.0 ? 0.0 : (q > 1.0 ? 1.0 : q);
@@ -59,24 +59,24 @@ class LatencyHistogram {
     for (int b = 0; b < kBinCount - 1; ++b) {
       seen += bins_[static_cast<std::size_t>(b)];
       if (seen >= rank) {
-        const std::int64_t edge = upperEdgeNs(b);
+        const std::int64_t edge = upperEdge_ns(b);
         return edge < maxNs_ ? edge : maxNs_;
       }
     }
     return maxNs_;  // the overflow bin
   }
-  std::int64_t medianNs() const { return quantileNs(0.5); }
-  std::int64_t p99Ns() const { return quantileNs(0.99); }
+  std::int64_t median_ns() const { return quantile_ns(0.5); }
+  std::int64_t p99_ns() const { return quantile_ns(0.99); }
 
   static int binOf(std::int64_t ns) {
-    if (ns <= kMinNs)
+    if (ns <= kMin_ns)
       return 0;
-    const double octaves = std::log2(static_cast<double>(ns) / static_cast<double>(kMinNs));
+    const double octaves = std::log2(static_cast<double>(ns) / static_cast<double>(kMin_ns));
     const int bin = static_cast<int>(octaves * kBinsPerOctave);
     return bin >= kBinCount ? kBinCount - 1 : bin;
   }
-  static std::int64_t upperEdgeNs(int bin) {
-    return static_cast<std::int64_t>(static_cast<double>(kMinNs) *
+  static std::int64_t upperEdge_ns(int bin) {
+    return static_cast<std::int64_t>(static_cast<double>(kMin_ns) *
                                      std::exp2(static_cast<double>(bin + 1) / kBinsPerOctave));
   }
 

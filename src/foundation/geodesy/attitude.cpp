@@ -11,9 +11,9 @@ constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 }  // namespace
 
 Eigen::Matrix3d rotationFromEuler(const EulerAnglesDeg& angles) {
-  const Eigen::AngleAxisd yaw(angles.yawDeg * kDegToRad, Eigen::Vector3d::UnitZ());
-  const Eigen::AngleAxisd pitch(angles.pitchDeg * kDegToRad, Eigen::Vector3d::UnitY());
-  const Eigen::AngleAxisd roll(angles.rollDeg * kDegToRad, Eigen::Vector3d::UnitX());
+  const Eigen::AngleAxisd yaw(angles.yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ());
+  const Eigen::AngleAxisd pitch(angles.pitch_deg * kDegToRad, Eigen::Vector3d::UnitY());
+  const Eigen::AngleAxisd roll(angles.roll_deg * kDegToRad, Eigen::Vector3d::UnitX());
   return (yaw * pitch * roll).toRotationMatrix();
 }
 
@@ -22,14 +22,14 @@ EulerAnglesDeg eulerFromRotation(const Eigen::Matrix3d& r) {
   // r22 = cos(pitch) cos(roll), r10 = cos(pitch) sin(yaw), r00 = cos(pitch) cos(yaw).
   EulerAnglesDeg e;
   const double sinPitch = std::clamp(-r(2, 0), -1.0, 1.0);
-  e.pitchDeg = std::asin(sinPitch) * kRadToDeg;
+  e.pitch_deg = std::asin(sinPitch) * kRadToDeg;
   if (std::abs(sinPitch) < 1.0 - 1e-12) {
-    e.rollDeg = std::atan2(r(2, 1), r(2, 2)) * kRadToDeg;
-    e.yawDeg = std::atan2(r(1, 0), r(0, 0)) * kRadToDeg;
+    e.roll_deg = std::atan2(r(2, 1), r(2, 2)) * kRadToDeg;
+    e.yaw_deg = std::atan2(r(1, 0), r(0, 0)) * kRadToDeg;
   } else {
     // Gimbal lock (pitch = +-90 deg): only yaw -+ roll is defined; report it as yaw.
-    e.rollDeg = 0.0;
-    e.yawDeg = std::atan2(-r(0, 1), r(1, 1)) * kRadToDeg;
+    e.roll_deg = 0.0;
+    e.yaw_deg = std::atan2(-r(0, 1), r(1, 1)) * kRadToDeg;
   }
   return e;
 }

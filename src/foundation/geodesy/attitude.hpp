@@ -20,16 +20,16 @@
 namespace vp::geodesy {
 
 struct EulerAnglesDeg {
-  double rollDeg = 0.0;
-  double pitchDeg = 0.0;
-  double yawDeg = 0.0;
+  double roll_deg = 0.0;
+  double pitch_deg = 0.0;
+  double yaw_deg = 0.0;
 };
 
 enum class GimbalReference { Body, Earth };
 
 struct CameraMount {
-  EulerAnglesDeg bodyToBase{};               // fixed mount rotation, body FRD -> gimbal base FRD
-  Eigen::Vector3d leverArmM{0.0, 0.0, 0.0};  // camera centre in the body frame, m (FRD)
+  EulerAnglesDeg bodyToBase{};                // fixed mount rotation, body FRD -> gimbal base FRD
+  Eigen::Vector3d leverArm_m{0.0, 0.0, 0.0};  // camera centre in the body frame, m (FRD)
 };
 
 struct GimbalState {

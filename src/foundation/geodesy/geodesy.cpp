@@ -8,19 +8,19 @@
 namespace vp::geodesy {
 
 bool isValid(const GeodeticPoint& point) {
-  return std::isfinite(point.latitudeDeg) && std::isfinite(point.longitudeDeg) &&
-         std::isfinite(point.heightM) && std::abs(point.latitudeDeg) <= 90.0 &&
-         std::abs(point.longitudeDeg) <= 180.0;
+  return std::isfinite(point.latitude_deg) && std::isfinite(point.longitude_deg) &&
+         std::isfinite(point.height_m) && std::abs(point.latitude_deg) <= 90.0 &&
+         std::abs(point.longitude_deg) <= 180.0;
 }
 
 LocalFrame::LocalFrame(const GeodeticPoint& origin)
     : origin_(origin),
-      cartesian_(origin.latitudeDeg, origin.longitudeDeg, origin.heightM,
+      cartesian_(origin.latitude_deg, origin.longitude_deg, origin.height_m,
                  GeographicLib::Geocentric::WGS84()) {}
 
 Eigen::Vector3d LocalFrame::toEnu(const GeodeticPoint& point) const {
   Eigen::Vector3d enu;
-  cartesian_.Forward(point.latitudeDeg, point.longitudeDeg, point.heightM, enu.x(), enu.y(),
+  cartesian_.Forward(point.latitude_deg, point.longitude_deg, point.height_m, enu.x(), enu.y(),
                      enu.z());
   return enu;
 }
@@ -36,10 +36,10 @@ Eigen::Vector3d LocalFrame::toEnu(const GeodeticPoint& point, Eigen::Matrix3d* l
 
 Eigen::Matrix3d enuToEcef(const GeodeticPoint& point) {
   constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
-  const double sinLat = std::sin(point.latitudeDeg * kDegToRad);
-  const double cosLat = std::cos(point.latitudeDeg * kDegToRad);
-  const double sinLon = std::sin(point.longitudeDeg * kDegToRad);
-  const double cosLon = std::cos(point.longitudeDeg * kDegToRad);
+  const double sinLat = std::sin(point.latitude_deg * kDegToRad);
+  const double cosLat = std::cos(point.latitude_deg * kDegToRad);
+  const double sinLon = std::sin(point.longitude_deg * kDegToRad);
+  const double cosLon = std::cos(point.longitude_deg * kDegToRad);
   Eigen::Matrix3d r;
   // Columns: east, north, up unit vectors in ECEF.
   r << -sinLon, -sinLat * cosLon, cosLat * cosLon,  //
@@ -50,7 +50,7 @@ Eigen::Matrix3d enuToEcef(const GeodeticPoint& point) {
 
 GeodeticPoint LocalFrame::toGeodetic(const Eigen::Vector3d& enu) const {
   GeodeticPoint p;
-  cartesian_.Reverse(enu.x(), enu.y(), enu.z(), p.latitudeDeg, p.longitudeDeg, p.heightM);
+  cartesian_.Reverse(enu.x(), enu.y(), enu.z(), p.latitude_deg, p.longitude_deg, p.height_m);
   return p;
 }
 
@@ -59,25 +59,25 @@ UtmPoint toUtm(const GeodeticPoint& point, std::optional<int> forcedZone) {
   double gamma = 0.0;
   double k = 0.0;
   const int setZone = forcedZone ? *forcedZone : GeographicLib::UTMUPS::STANDARD;
-  GeographicLib::UTMUPS::Forward(point.latitudeDeg, point.longitudeDeg, utm.zone, utm.northp,
-                                 utm.eastingM, utm.northingM, gamma, k, setZone);
-  utm.heightM = point.heightM;
+  GeographicLib::UTMUPS::Forward(point.latitude_deg, point.longitude_deg, utm.zone, utm.northp,
+                                 utm.easting_m, utm.northing_m, gamma, k, setZone);
+  utm.height_m = point.height_m;
   return utm;
 }
 
 GeodeticPoint fromUtm(const UtmPoint& point) {
   GeodeticPoint p;
-  GeographicLib::UTMUPS::Reverse(point.zone, point.northp, point.eastingM, point.northingM,
-                                 p.latitudeDeg, p.longitudeDeg);
-  p.heightM = point.heightM;
+  GeographicLib::UTMUPS::Reverse(point.zone, point.northp, point.easting_m, point.northing_m,
+                                 p.latitude_deg, p.longitude_deg);
+  p.height_m = point.height_m;
   return p;
 }
 
-double azimuthDeg(const GeodeticPoint& a, const GeodeticPoint& b) {
+double azimuth_deg(const GeodeticPoint& a, const GeodeticPoint& b) {
   double azi1 = 0.0;
   double azi2 = 0.0;
-  GeographicLib::Geodesic::WGS84().Inverse(a.latitudeDeg, a.longitudeDeg, b.latitudeDeg,
-                                           b.longitudeDeg, azi1, azi2);
+  GeographicLib::Geodesic::WGS84().Inverse(a.latitude_deg, a.longitude_deg, b.latitude_deg,
+                                           b.longitude_deg, azi1, azi2);
   double azimuth = std::fmod(azi1, 360.0);
   if (azimuth < 0.0) {
     azimuth += 360.0;

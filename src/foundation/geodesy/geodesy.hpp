@@ -15,17 +15,17 @@
 namespace vp::geodesy {
 
 struct GeodeticPoint {
-  double latitudeDeg = 0.0;   // WGS84, positive north
-  double longitudeDeg = 0.0;  // WGS84, positive east
-  double heightM = 0.0;       // ellipsoidal height
+  double latitude_deg = 0.0;   // WGS84, positive north
+  double longitude_deg = 0.0;  // WGS84, positive east
+  double height_m = 0.0;       // ellipsoidal height
 };
 
 struct UtmPoint {
   int zone = 0;        // 1..60 (0 = UPS, polar)
   bool northp = true;  // northern hemisphere
-  double eastingM = 0.0;
-  double northingM = 0.0;
-  double heightM = 0.0;  // ellipsoidal height, carried along
+  double easting_m = 0.0;
+  double northing_m = 0.0;
+  double height_m = 0.0;  // ellipsoidal height, carried along
 };
 
 // Returns true when the point is a finite, valid WGS84 position.
@@ -59,6 +59,6 @@ UtmPoint toUtm(const GeodeticPoint& point, std::optional<int> forcedZone = std::
 GeodeticPoint fromUtm(const UtmPoint& point);
 
 // Azimuth (deg, clockwise from true north, [0, 360)) of the geodesic from a to b.
-double azimuthDeg(const GeodeticPoint& a, const GeodeticPoint& b);
+double azimuth_deg(const GeodeticPoint& a, const GeodeticPoint& b);
 
 }  // namespace vp::geodesy

@@ -79,7 +79,7 @@ bool readRaster(TIFF* tif, const std::string& path, TerrainGrid& grid, std::stri
   }
   grid.cols = static_cast<int>(width);
   grid.rows = static_cast<int>(height);
-  grid.heightsM.assign(static_cast<std::size_t>(width) * height, 0.0F);
+  grid.heights_m.assign(static_cast<std::size_t>(width) * height, 0.0F);
   const std::size_t bytesPerSample = bits / 8;
 
   // Copies a block (strip or tile) of bw x bh samples stored at `block` into the grid at
@@ -97,7 +97,7 @@ bool readRaster(TIFF* tif, const std::string& path, TerrainGrid& grid, std::stri
           std::memcpy(&wide, src, sizeof(double));
           value = static_cast<float>(wide);
         }
-        grid.heightsM[static_cast<std::size_t>(row0 + r) * width + col0 + c] = value;
+        grid.heights_m[static_cast<std::size_t>(row0 + r) * width + col0 + c] = value;
       }
     }
   };

@@ -32,10 +32,10 @@ using terrain::TerrainGrid;
 
 bool validateForWrite(const std::string& path, const TerrainGrid& grid, std::string* why) {
   if (grid.cols <= 0 || grid.rows <= 0 ||
-      grid.heightsM.size() != static_cast<std::size_t>(grid.cols) * grid.rows) {
+      grid.heights_m.size() != static_cast<std::size_t>(grid.cols) * grid.rows) {
     return fail(why, path,
                 "grid is inconsistent (" + std::to_string(grid.cols) + "x" +
-                    std::to_string(grid.rows) + ", " + std::to_string(grid.heightsM.size()) +
+                    std::to_string(grid.rows) + ", " + std::to_string(grid.heights_m.size()) +
                     " heights)");
   }
   if (grid.crs.kind == HorizontalCrs::Utm && (grid.crs.utmZone < 1 || grid.crs.utmZone > 60)) {
@@ -83,7 +83,7 @@ bool writeRaster(const std::string& path, const TerrainGrid& grid, Tags&& tags, 
   }
   std::vector<float> row(static_cast<std::size_t>(grid.cols));
   for (int r = 0; r < grid.rows; ++r) {
-    std::copy_n(grid.heightsM.begin() + static_cast<std::ptrdiff_t>(r) * grid.cols, grid.cols,
+    std::copy_n(grid.heights_m.begin() + static_cast<std::ptrdiff_t>(r) * grid.cols, grid.cols,
                 row.begin());
     if (TIFFWriteScanline(t, row.data(), static_cast<std::uint32_t>(r), 0) < 0) {
       return fail(why, path, "cannot write row " + std::to_string(r) + TiffDiagnostics::detail());

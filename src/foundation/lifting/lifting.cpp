@@ -47,7 +47,7 @@ const char* toString(LiftError error) {
 bool Lifter::init(const camera::CameraModel& camera, const geodesy::CameraMount& mount,
                   const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
                   std::string* why) {
-  if (camera.intrinsics().widthPx <= 0 || camera.intrinsics().fxPx <= 0.0) {
+  if (camera.intrinsics().width_px <= 0 || camera.intrinsics().fx_px <= 0.0) {
     if (why != nullptr) {
       *why = "lifting: the camera model is not initialised";
     }
@@ -59,7 +59,7 @@ bool Lifter::init(const camera::CameraModel& camera, const geodesy::CameraMount&
     }
     return false;
   }
-  if (!mount.leverArmM.allFinite()) {
+  if (!mount.leverArm_m.allFinite()) {
     if (why != nullptr) {
       *why = "lifting: the camera lever arm is not finite";
     }
@@ -75,7 +75,7 @@ bool Lifter::init(const camera::CameraModel& camera, const geodesy::CameraMount&
 Expected<CameraPoseWorld, LiftError> Lifter::cameraPose(const DronePose& pose) const {
   const Eigen::Vector4d q = pose.bodyToNed.coeffs();
   const auto finite = [](const geodesy::EulerAnglesDeg& e) {
-    return std::isfinite(e.rollDeg) && std::isfinite(e.pitchDeg) && std::isfinite(e.yawDeg);
+    return std::isfinite(e.roll_deg) && std::isfinite(e.pitch_deg) && std::isfinite(e.yaw_deg);
   };
   if (!geodesy::isValid(pose.position) || !q.allFinite() || q.norm() < 1e-6 ||
       !finite(pose.gimbal.angles)) {
@@ -88,7 +88,7 @@ Expected<CameraPoseWorld, LiftError> Lifter::cameraPose(const DronePose& pose) c
   const Eigen::Matrix3d bodyToNed = pose.bodyToNed.normalized().toRotationMatrix();
   CameraPoseWorld out;
   out.centreEnu =
-      bodyOriginEnu + localToWorld * geodesy::enuFromNed() * bodyToNed * mount_.leverArmM;
+      bodyOriginEnu + localToWorld * geodesy::enuFromNed() * bodyToNed * mount_.leverArm_m;
   out.cameraToEnu = localToWorld * geodesy::cameraToLocalEnu(pose.bodyToNed, mount_, pose.gimbal);
   return out;
 }
@@ -100,14 +100,14 @@ Expected<Eigen::Vector3d, LiftError> Lifter::pixelToWorld(const CameraPoseWorld&
 
 Expected<Eigen::Vector3d, LiftError> Lifter::pixelToGroundBelow(const CameraPoseWorld& pose,
                                                                 const Eigen::Vector2d& pixel,
-                                                                double heightM) const {
+                                                                double height_m) const {
   const auto ray = camera_->pixelToRay(pixel);
   if (!ray) {
     return unexpected(fromCamera(ray.error()));
   }
   // The ray meets the DTM raised by h where the same ray lowered by h meets the DTM, at the
   // same east/north: that point is the ground below the raised intersection.
-  const Eigen::Vector3d origin = pose.centreEnu - Eigen::Vector3d(0.0, 0.0, heightM);
+  const Eigen::Vector3d origin = pose.centreEnu - Eigen::Vector3d(0.0, 0.0, height_m);
   const auto hit = terrain_->intersectRay(origin, pose.cameraToEnu * *ray);
   if (!hit) {
     return unexpected(fromTerrain(hit.error()));
@@ -158,17 +158,17 @@ Expected<geometry::RotatedBox, LiftError> Lifter::enclosingImageBox(
 
 Expected<GroundBox, LiftError> Lifter::boxToGround(const CameraPoseWorld& pose,
                                                    const geometry::RotatedBox& box,
-                                                   double boxHeightM) const {
+                                                   double boxHeight_m) const {
   GroundBox out;
   const std::array<Eigen::Vector2d, 4> corners = geometry::corners(box);
   for (std::size_t i = 0; i < corners.size(); ++i) {
-    const auto corner = pixelToGroundBelow(pose, corners[i], boxHeightM);
+    const auto corner = pixelToGroundBelow(pose, corners[i], boxHeight_m);
     if (!corner) {
       return unexpected(corner.error());
     }
     out.cornersEnu[i] = *corner;
   }
-  const auto centre = pixelToGroundBelow(pose, {box.cx, box.cy}, boxHeightM);
+  const auto centre = pixelToGroundBelow(pose, {box.cx, box.cy}, boxHeight_m);
   if (!centre) {
     return unexpected(centre.error());
   }
@@ -180,12 +180,12 @@ Expected<GroundBox, LiftError> Lifter::boxToGround(const CameraPoseWorld& pose,
   const Eigen::Vector3d rear = 0.5 * (out.cornersEnu[2] + out.cornersEnu[3]);
   const Eigen::Vector3d sideA = 0.5 * (out.cornersEnu[0] + out.cornersEnu[3]);
   const Eigen::Vector3d sideB = 0.5 * (out.cornersEnu[1] + out.cornersEnu[2]);
-  out.lengthM = (front - rear).norm();
-  out.widthM = (sideA - sideB).norm();
+  out.length_m = (front - rear).norm();
+  out.width_m = (sideA - sideB).norm();
   const Eigen::Vector3d forward = front - rear;
-  out.headingEnuRad = geometry::wrapTwoPi(std::atan2(forward.y(), forward.x()));
-  out.headingTrueNorthDeg =
-      geodesy::azimuthDeg(frame_->toGeodetic(rear), frame_->toGeodetic(front));
+  out.headingEnu_rad = geometry::wrapTwoPi(std::atan2(forward.y(), forward.x()));
+  out.headingTrueNorth_deg =
+      geodesy::azimuth_deg(frame_->toGeodetic(rear), frame_->toGeodetic(front));
   return out;
 }
 

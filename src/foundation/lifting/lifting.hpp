@@ -53,10 +53,10 @@ struct GroundBox {
   std::array<Eigen::Vector3d, 4> cornersEnu{};  // in geometry::corners() order
   Eigen::Vector3d centreEnu{Eigen::Vector3d::Zero()};
   geodesy::GeodeticPoint centreWgs84{};
-  double headingEnuRad = 0.0;        // forward axis, counter-clockwise from east, [0, 2 pi)
-  double headingTrueNorthDeg = 0.0;  // forward axis, clockwise from true north, [0, 360)
-  double lengthM = 0.0;              // along the ground between the rear and front edges
-  double widthM = 0.0;               // along the ground between the side edges
+  double headingEnu_rad = 0.0;        // forward axis, counter-clockwise from east, [0, 2 pi)
+  double headingTrueNorth_deg = 0.0;  // forward axis, clockwise from true north, [0, 360)
+  double length_m = 0.0;              // along the ground between the rear and front edges
+  double width_m = 0.0;               // along the ground between the side edges
 };
 
 class Lifter {
@@ -76,15 +76,15 @@ class Lifter {
   // World ENU point -> distorted pixel (may lie outside the image; check inImage()).
   Expected<Eigen::Vector2d, LiftError> worldToPixel(const CameraPoseWorld& pose,
                                                     const Eigen::Vector3d& pointEnu) const;
-  // Image rotated box -> ground footprint, heading, size. With boxHeightM = 0 the box is the
+  // Image rotated box -> ground footprint, heading, size. With boxHeight_m = 0 the box is the
   // vehicle's outline on the ground. A detector's box encloses the whole vehicle, roof
   // included, so on a tilted view its centre is the image of a point about half the vehicle's
   // height above the ground, not of the footprint centre (0.27 m off for a 1.5 m car seen 20 deg
-  // off nadir): boxHeightM > 0 intersects the rays with the DTM raised by that height and
+  // off nadir): boxHeight_m > 0 intersects the rays with the DTM raised by that height and
   // returns the ground points below the intersections.
   Expected<GroundBox, LiftError> boxToGround(const CameraPoseWorld& pose,
                                              const geometry::RotatedBox& box,
-                                             double boxHeightM = 0.0) const;
+                                             double boxHeight_m = 0.0) const;
 
   // The image box that encloses world points, its axis along the image direction from
   // originEnu to aheadEnu (angle = that direction over 360 degrees): the box a whole vehicle
@@ -96,10 +96,10 @@ class Lifter {
       const Eigen::Vector3d& aheadEnu, std::span<const Eigen::Vector3d> pointsEnu) const;
 
  private:
-  // The ground point below where the pixel's ray is heightM above the DTM.
+  // The ground point below where the pixel's ray is height_m above the DTM.
   Expected<Eigen::Vector3d, LiftError> pixelToGroundBelow(const CameraPoseWorld& pose,
                                                           const Eigen::Vector2d& pixel,
-                                                          double heightM) const;
+                                                          double height_m) const;
 
   const camera::CameraModel* camera_ = nullptr;
   const terrain::TerrainModel* terrain_ = nullptr;

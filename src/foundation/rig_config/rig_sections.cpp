@@ -12,18 +12,18 @@
 namespace vp::config::detail {
 namespace {
 
-const Range kLatitudeRangeDeg = Range::closed(-90.0, 90.0);
-const Range kLongitudeRangeDeg = Range::closed(-180.0, 180.0);
+const Range kLatitudeRange_deg = Range::closed(-90.0, 90.0);
+const Range kLongitudeRange_deg = Range::closed(-180.0, 180.0);
 // Ellipsoidal height of the ENU origin: below the Dead Sea shore to above any launch site.
-const Range kOriginHeightRangeM = Range::closed(-500.0, 9000.0);
+const Range kOriginHeightRange_m = Range::closed(-500.0, 9000.0);
 // Not a physical limit: |coefficient| > 100 means a unit or copy mistake, not a lens.
 const Range kDistortionRange = Range::closed(-100.0, 100.0);
-const Range kRollYawRangeDeg = Range::closed(-180.0, 180.0);
-const Range kMountPitchRangeDeg = Range::closed(-90.0, 90.0);
+const Range kRollYawRange_deg = Range::closed(-180.0, 180.0);
+const Range kMountPitchRange_deg = Range::closed(-90.0, 90.0);
 // Gimbal heads reach a little past nadir (-90) and somewhat above the horizon.
-const Range kGimbalPitchRangeDeg = Range::closed(-120.0, 30.0);
+const Range kGimbalPitchRange_deg = Range::closed(-120.0, 30.0);
 // The camera sits on the airframe: a lever arm of metres more means a unit mistake.
-const Range kLeverArmRangeM = Range::closed(-10.0, 10.0);
+const Range kLeverArmRange_m = Range::closed(-10.0, 10.0);
 
 constexpr std::string_view kLensModelNames = "pinhole, brown_conrady, equivalent_spherical";
 constexpr std::string_view kGimbalReferenceNames = "body, earth";
@@ -55,12 +55,12 @@ std::optional<std::optional<terrain::CrsSpec>> crsSettingFromString(const std::s
   return crs;
 }
 
-geodesy::EulerAnglesDeg readAngles(MapReader& section, const Range& pitchRangeDeg,
+geodesy::EulerAnglesDeg readAngles(MapReader& section, const Range& pitchRange_deg,
                                    const geodesy::EulerAnglesDeg& fallback) {
   geodesy::EulerAnglesDeg angles;
-  angles.rollDeg = section.number("roll_deg", kRollYawRangeDeg, fallback.rollDeg);
-  angles.pitchDeg = section.number("pitch_deg", pitchRangeDeg, fallback.pitchDeg);
-  angles.yawDeg = section.number("yaw_deg", kRollYawRangeDeg, fallback.yawDeg);
+  angles.roll_deg = section.number("roll_deg", kRollYawRange_deg, fallback.roll_deg);
+  angles.pitch_deg = section.number("pitch_deg", pitchRange_deg, fallback.pitch_deg);
+  angles.yaw_deg = section.number("yaw_deg", kRollYawRange_deg, fallback.yaw_deg);
   return angles;
 }
 
@@ -68,9 +68,9 @@ geodesy::EulerAnglesDeg readAngles(MapReader& section, const Range& pitchRangeDe
 
 geodesy::GeodeticPoint readOrigin(MapReader section) {
   geodesy::GeodeticPoint origin;
-  origin.latitudeDeg = section.number("latitude_deg", kLatitudeRangeDeg, kRequired);
-  origin.longitudeDeg = section.number("longitude_deg", kLongitudeRangeDeg, kRequired);
-  origin.heightM = section.number("height_m", kOriginHeightRangeM, kRequired);
+  origin.latitude_deg = section.number("latitude_deg", kLatitudeRange_deg, kRequired);
+  origin.longitude_deg = section.number("longitude_deg", kLongitudeRange_deg, kRequired);
+  origin.height_m = section.number("height_m", kOriginHeightRange_m, kRequired);
   section.warnUnknownKeys();
   return origin;
 }
@@ -78,15 +78,16 @@ geodesy::GeodeticPoint readOrigin(MapReader section) {
 CameraConfig readCamera(MapReader section) {
   CameraConfig config;
   camera::Intrinsics& in = config.intrinsics;
-  in.widthPx = section.integer("width_px", kImageSizeRangePx, kRequired);
-  in.heightPx = section.integer("height_px", kImageSizeRangePx, kRequired);
-  in.fxPx = section.number("fx_px", Range::positive(), kRequired);
-  in.fyPx = section.number("fy_px", Range::positive(), kRequired);
+  in.width_px = section.integer("width_px", kImageSizeRange_px, kRequired);
+  in.height_px = section.integer("height_px", kImageSizeRange_px, kRequired);
+  in.fx_px = section.number("fx_px", Range::positive(), kRequired);
+  in.fy_px = section.number("fy_px", Range::positive(), kRequired);
   // Pixel centres are integers, so the image spans [-0.5, size - 0.5] and its centre is
   // (size - 1) / 2; a principal point outside the image is a calibration error.
-  in.cxPx = section.number("cx_px", Range::closed(-0.5, in.widthPx - 0.5), (in.widthPx - 1) / 2.0);
-  in.cyPx =
-      section.number("cy_px", Range::closed(-0.5, in.heightPx - 0.5), (in.heightPx - 1) / 2.0);
+  in.cx_px =
+      section.number("cx_px", Range::closed(-0.5, in.width_px - 0.5), (in.width_px - 1) / 2.0);
+  in.cy_px =
+      section.number("cy_px", Range::closed(-0.5, in.height_px - 0.5), (in.height_px - 1) / 2.0);
 
   camera::Distortion& lens = config.distortion;
   lens.model = section.choice<camera::LensModel>("lens_model", camera::lensModelFromString,
@@ -111,13 +112,13 @@ MountConfig readMount(MapReader section) {
   // The defaults are those of the structs, so code and file agree on "nothing configured".
   const MountConfig defaults;
   MountConfig config;
-  config.mount.bodyToBase = readAngles(section, kMountPitchRangeDeg, defaults.mount.bodyToBase);
-  config.mount.leverArmM =
-      section.vector3("lever_arm_m", kLeverArmRangeM, defaults.mount.leverArmM);
+  config.mount.bodyToBase = readAngles(section, kMountPitchRange_deg, defaults.mount.bodyToBase);
+  config.mount.leverArm_m =
+      section.vector3("lever_arm_m", kLeverArmRange_m, defaults.mount.leverArm_m);
   MapReader gimbal = section.section("gimbal");
   config.gimbal.reference = gimbal.choice<geodesy::GimbalReference>(
       "reference", gimbalReferenceFromString, kGimbalReferenceNames, defaults.gimbal.reference);
-  config.gimbal.angles = readAngles(gimbal, kGimbalPitchRangeDeg, defaults.gimbal.angles);
+  config.gimbal.angles = readAngles(gimbal, kGimbalPitchRange_deg, defaults.gimbal.angles);
   gimbal.warnUnknownKeys();
   section.warnUnknownKeys();
   return config;

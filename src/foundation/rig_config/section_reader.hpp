@@ -72,9 +72,9 @@ class Diagnostics {
 // Ranges more than one section uses.
 inline const Range kProbabilityRange = Range::closed(0.0, 1.0);
 inline const Range kShareRange = Range{0.0, 1.0, true};  // (0, 1]
-inline const Range kImageSizeRangePx = Range::closed(16.0, 16384.0);
+inline const Range kImageSizeRange_px = Range::closed(16.0, 16384.0);
 // Geoid undulation is within about +-110 m on Earth; more means a unit mistake.
-inline const Range kAltitudeOffsetRangeM = Range::closed(-200.0, 200.0);
+inline const Range kAltitudeOffsetRange_m = Range::closed(-200.0, 200.0);
 
 // A float default as the decimal it was written as (0.45F -> 0.45, not 0.449999988...), so
 // that a range derived from it and its message read as in the header.

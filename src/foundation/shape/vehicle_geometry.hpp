@@ -35,11 +35,11 @@ constexpr double kRearAxleBehindCentrePerLength = 0.28;
 
 struct VehicleGeometry {
   VehicleType type = VehicleType::Sedan;
-  bool hasKeypoints = false;                         // a car with an ASM shape
-  KeypointModel keypointsM = KeypointModel::Zero();  // vehicle frame, m (when hasKeypoints)
-  Eigen::Vector3d sizeM = Eigen::Vector3d::Zero();   // length, width, height; 0 without
-  Eigen::Vector2d footprintCentreM = Eigen::Vector2d::Zero();  // middle of the x/y extents
-  Eigen::Vector3d rearAxleM =
+  bool hasKeypoints = false;                          // a car with an ASM shape
+  KeypointModel keypoints_m = KeypointModel::Zero();  // vehicle frame, m (when hasKeypoints)
+  Eigen::Vector3d size_m = Eigen::Vector3d::Zero();   // length, width, height; 0 without
+  Eigen::Vector2d footprintCentre_m = Eigen::Vector2d::Zero();  // middle of the x/y extents
+  Eigen::Vector3d rearAxle_m =
       Eigen::Vector3d::Zero();  // vehicle frame, road (z = 0); with keypoints
 };
 
@@ -50,9 +50,9 @@ VehicleGeometry vehicleGeometry(const ActiveShapeModel& model, VehicleType type,
 // A footprint on the ground in the world ENU frame (e.g. a lifted detection).
 struct GroundFootprint {
   Eigen::Vector3d centreEnu = Eigen::Vector3d::Zero();  // footprint centre on the terrain, m
-  double headingEnuRad = 0.0;                           // forward axis, counter-clockwise from east
-  double lengthM = 0.0;                                 // along the heading, > 0
-  double widthM = 0.0;                                  // across it, > 0
+  double headingEnu_rad = 0.0;                          // forward axis, counter-clockwise from east
+  double length_m = 0.0;                                // along the heading, > 0
+  double width_m = 0.0;                                 // across it, > 0
 };
 
 struct PlacedVehicle {
@@ -67,7 +67,7 @@ struct PlacedVehicle {
 // point is scaled about the shape's footprint centre like the keypoints (see the contract);
 // without, it is taken as metres from the footprint centre.
 Eigen::Vector2d planPositionEnu(const VehicleGeometry& geometry, const GroundFootprint& footprint,
-                                const Eigen::Vector3d& pointVehicleM);
+                                const Eigen::Vector3d& pointVehicle_m);
 
 // Places the keypoints and the rear-axle point on the ground. groundZ(Eigen::Vector2d xyEnu)
 // returns std::optional<double>: the world ENU z of the terrain at that plan position, or
@@ -77,15 +77,15 @@ template <class GroundZ>
 bool placeOnGround(const VehicleGeometry& geometry, const GroundFootprint& footprint,
                    GroundZ&& groundZ, PlacedVehicle* out) {
   out->hasKeypoints = false;
-  if (!footprint.centreEnu.allFinite() || !std::isfinite(footprint.headingEnuRad) ||
-      !(footprint.lengthM > 0.0) || !(footprint.widthM > 0.0)) {
+  if (!footprint.centreEnu.allFinite() || !std::isfinite(footprint.headingEnu_rad) ||
+      !(footprint.length_m > 0.0) || !(footprint.width_m > 0.0)) {
     return false;
   }
-  const Eigen::Vector3d axleVehicleM =
+  const Eigen::Vector3d axleVehicle_m =
       geometry.hasKeypoints
-          ? geometry.rearAxleM
-          : Eigen::Vector3d(-kRearAxleBehindCentrePerLength * footprint.lengthM, 0.0, 0.0);
-  const Eigen::Vector2d axle = planPositionEnu(geometry, footprint, axleVehicleM);
+          ? geometry.rearAxle_m
+          : Eigen::Vector3d(-kRearAxleBehindCentrePerLength * footprint.length_m, 0.0, 0.0);
+  const Eigen::Vector2d axle = planPositionEnu(geometry, footprint, axleVehicle_m);
   const std::optional<double> axleZ = groundZ(axle);
   if (!axleZ) {
     return false;
@@ -97,7 +97,7 @@ bool placeOnGround(const VehicleGeometry& geometry, const GroundFootprint& footp
     return true;
   }
   for (int k = 0; k < kKeypointCount; ++k) {
-    const Eigen::Vector3d p = geometry.keypointsM.col(k);
+    const Eigen::Vector3d p = geometry.keypoints_m.col(k);
     const Eigen::Vector2d xy = planPositionEnu(geometry, footprint, p);
     const std::optional<double> z = groundZ(xy);
     if (!z) {
@@ -105,8 +105,8 @@ bool placeOnGround(const VehicleGeometry& geometry, const GroundFootprint& footp
     }
     out->keypointsEnu.col(k) = Eigen::Vector3d(xy.x(), xy.y(), *z + p.z());
   }
-  out->lengthScale = footprint.lengthM / geometry.sizeM.x();
-  out->widthScale = footprint.widthM / geometry.sizeM.y();
+  out->lengthScale = footprint.length_m / geometry.size_m.x();
+  out->widthScale = footprint.width_m / geometry.size_m.y();
   out->hasKeypoints = true;
   return true;
 }

@@ -16,20 +16,20 @@ constexpr double kDegToRad = kPi / 180.0;
 // WGS84, for the metres-per-degree estimate of geographic cells (only used to size steps).
 constexpr double kWgs84A = 6378137.0;
 constexpr double kWgs84E2 = 6.69437999014e-3;
-constexpr double kEarthRadiusM = 6371000.0;
+constexpr double kEarthRadius_m = 6371000.0;
 // UTM false northing of the southern hemisphere: converts northings between hemispheres.
-constexpr double kSouthFalseNorthingM = 10000000.0;
+constexpr double kSouthFalseNorthing_m = 10000000.0;
 // Tolerance (in cells) at the grid edges, so points computed on the border (e.g. the
 // corners of the grid fed back through the geodetic round trip) still count as inside.
 constexpr double kEdgeEpsilonCells = 1e-6;
 // Bisection stops once the bracketing interval is shorter than this along the ray.
-constexpr double kBisectionToleranceM = 1e-5;
+constexpr double kBisectionTolerance_m = 1e-5;
 // Upper bound on ray-march steps: a huge grid gets longer steps instead of a longer loop.
 constexpr int kMaxMarchSteps = 200000;
 // Lattice used at init to bound the grid's footprint (ENU and geographic).
 constexpr int kLatticeIntervals = 32;
 
-double wrapDeg(double deg) {
+double wrap_deg(double deg) {
   // Into [-180, 180).
   double wrapped = std::fmod(deg + 180.0, 360.0);
   if (wrapped < 0.0) {
@@ -112,7 +112,7 @@ enum class SampleKind { Valid, Outside, NoData };
 
 struct GridSample {
   SampleKind kind = SampleKind::Outside;
-  double heightM = 0.0;
+  double height_m = 0.0;
 };
 
 }  // namespace
@@ -124,9 +124,9 @@ bool TerrainModel::init(TerrainGrid grid, const geodesy::LocalFrame& frame, std:
     return false;
   }
   const auto expected = static_cast<std::size_t>(grid.cols) * static_cast<std::size_t>(grid.rows);
-  if (grid.heightsM.size() != expected) {
-    setWhy(why, "terrain grid has " + std::to_string(grid.heightsM.size()) + " heights, expected " +
-                    std::to_string(expected));
+  if (grid.heights_m.size() != expected) {
+    setWhy(why, "terrain grid has " + std::to_string(grid.heights_m.size()) +
+                    " heights, expected " + std::to_string(expected));
     return false;
   }
   if (grid.crs.kind == HorizontalCrs::Utm && (grid.crs.utmZone < 1 || grid.crs.utmZone > 60)) {
@@ -152,7 +152,7 @@ bool TerrainModel::init(TerrainGrid grid, const geodesy::LocalFrame& frame, std:
   bool any = false;
   float lo = std::numeric_limits<float>::max();
   float hi = std::numeric_limits<float>::lowest();
-  for (const float h : grid.heightsM) {
+  for (const float h : grid.heights_m) {
     if (std::isnan(h) || !std::isfinite(h) || (grid.noData && h == *grid.noData)) {
       continue;
     }
@@ -172,7 +172,7 @@ bool TerrainModel::init(TerrainGrid grid, const geodesy::LocalFrame& frame, std:
   const bool utm = grid.crs.kind == HorizontalCrs::Utm;
   const double centreX = t.x0 + 0.5 * (grid.cols - 1) * t.dxCol + 0.5 * (grid.rows - 1) * t.dxRow;
   const double centreY = t.y0 + 0.5 * (grid.cols - 1) * t.dyCol + 0.5 * (grid.rows - 1) * t.dyRow;
-  const double lonRef = utm ? 6.0 * grid.crs.utmZone - 183.0 : wrapDeg(centreX);
+  const double lonRef = utm ? 6.0 * grid.crs.utmZone - 183.0 : wrap_deg(centreX);
   double latMin = std::numeric_limits<double>::max();
   double latMax = std::numeric_limits<double>::lowest();
   double dLonMin = latMin;
@@ -190,8 +190,8 @@ bool TerrainModel::init(TerrainGrid grid, const geodesy::LocalFrame& frame, std:
         geodesy::UtmPoint u;
         u.zone = grid.crs.utmZone;
         u.northp = grid.crs.utmNorth;
-        u.eastingM = x;
-        u.northingM = y;
+        u.easting_m = x;
+        u.northing_m = y;
         try {
           p = geodesy::fromUtm(u);
         } catch (const std::exception& e) {
@@ -199,17 +199,17 @@ bool TerrainModel::init(TerrainGrid grid, const geodesy::LocalFrame& frame, std:
           return false;
         }
       } else {
-        p.latitudeDeg = y;
-        p.longitudeDeg = x;
+        p.latitude_deg = y;
+        p.longitude_deg = x;
       }
-      if (!std::isfinite(p.latitudeDeg) || !std::isfinite(p.longitudeDeg) ||
-          std::abs(p.latitudeDeg) > 90.0) {
+      if (!std::isfinite(p.latitude_deg) || !std::isfinite(p.longitude_deg) ||
+          std::abs(p.latitude_deg) > 90.0) {
         setWhy(why, "terrain grid lies outside valid latitudes/longitudes");
         return false;
       }
-      const double dLon = wrapDeg(p.longitudeDeg - lonRef);
-      latMin = std::min(latMin, p.latitudeDeg);
-      latMax = std::max(latMax, p.latitudeDeg);
+      const double dLon = wrap_deg(p.longitude_deg - lonRef);
+      latMin = std::min(latMin, p.latitude_deg);
+      latMax = std::max(latMax, p.latitude_deg);
       dLonMin = std::min(dLonMin, dLon);
       dLonMax = std::max(dLonMax, dLon);
       lattice.push_back(p);
@@ -224,18 +224,18 @@ bool TerrainModel::init(TerrainGrid grid, const geodesy::LocalFrame& frame, std:
   lonRefDeg_ = lonRef;
 
   // Approximate ground size of one cell: the shorter of the two axis steps, in metres.
-  double colStepM = std::hypot(t.dxCol, t.dyCol);
-  double rowStepM = std::hypot(t.dxRow, t.dyRow);
+  double colStep_m = std::hypot(t.dxCol, t.dyCol);
+  double rowStep_m = std::hypot(t.dxRow, t.dyRow);
   if (!utm) {
     const double lat = std::clamp(centreY, -89.0, 89.0) * kDegToRad;
     const double s = std::sin(lat);
     const double w = std::sqrt(1.0 - kWgs84E2 * s * s);
     const double mPerDegLat = kDegToRad * kWgs84A * (1.0 - kWgs84E2) / (w * w * w);
     const double mPerDegLon = kDegToRad * kWgs84A * std::cos(lat) / w;
-    colStepM = std::hypot(t.dxCol * mPerDegLon, t.dyCol * mPerDegLat);
-    rowStepM = std::hypot(t.dxRow * mPerDegLon, t.dyRow * mPerDegLat);
+    colStep_m = std::hypot(t.dxCol * mPerDegLon, t.dyCol * mPerDegLat);
+    rowStep_m = std::hypot(t.dxRow * mPerDegLon, t.dyRow * mPerDegLat);
   }
-  const double cellSize = std::min(colStepM, rowStepM);
+  const double cellSize = std::min(colStep_m, rowStep_m);
   if (!(cellSize > 0.0) || !std::isfinite(cellSize)) {
     setWhy(why, "terrain grid cell size is not positive");
     return false;
@@ -248,25 +248,25 @@ bool TerrainModel::init(TerrainGrid grid, const geodesy::LocalFrame& frame, std:
   // generously) and the projection's bending of the edges (a cell is far more).
   Eigen::Vector3d boxMin = Eigen::Vector3d::Constant(std::numeric_limits<double>::max());
   Eigen::Vector3d boxMax = Eigen::Vector3d::Constant(std::numeric_limits<double>::lowest());
-  double extentM = 0.0;
+  double extent_m = 0.0;
   for (geodesy::GeodeticPoint p : lattice) {
     for (const float h : {lo, hi}) {
-      p.heightM = static_cast<double>(h);
+      p.height_m = static_cast<double>(h);
       const Eigen::Vector3d enu = frame.toEnu(p);
       boxMin = boxMin.cwiseMin(enu);
       boxMax = boxMax.cwiseMax(enu);
     }
   }
-  extentM = (boxMax.head<2>() - boxMin.head<2>()).norm();
+  extent_m = (boxMax.head<2>() - boxMin.head<2>()).norm();
   if (!boxMin.allFinite() || !boxMax.allFinite()) {
     setWhy(why, "terrain grid cannot be placed in the local frame");
     return false;
   }
-  const double latticeStepM = extentM / kLatticeIntervals;
-  const double marginXyM = cellSize + 1e-3 * extentM + 1.0;
-  const double marginZM = 1.0 + latticeStepM * latticeStepM / kEarthRadiusM;
-  boxMin_ = boxMin - Eigen::Vector3d(marginXyM, marginXyM, marginZM);
-  boxMax_ = boxMax + Eigen::Vector3d(marginXyM, marginXyM, marginZM);
+  const double latticeStep_m = extent_m / kLatticeIntervals;
+  const double marginXy_m = cellSize + 1e-3 * extent_m + 1.0;
+  const double marginZM = 1.0 + latticeStep_m * latticeStep_m / kEarthRadius_m;
+  boxMin_ = boxMin - Eigen::Vector3d(marginXy_m, marginXy_m, marginZM);
+  boxMax_ = boxMax + Eigen::Vector3d(marginXy_m, marginXy_m, marginZM);
 
   grid_ = std::move(grid);
   frame_ = frame;
@@ -277,16 +277,16 @@ bool TerrainModel::init(TerrainGrid grid, const geodesy::LocalFrame& frame, std:
   return true;
 }
 
-Expected<double, TerrainError> TerrainModel::heightAt(double latitudeDeg,
-                                                      double longitudeDeg) const {
-  if (grid_.heightsM.empty()) {
+Expected<double, TerrainError> TerrainModel::heightAt(double latitude_deg,
+                                                      double longitude_deg) const {
+  if (grid_.heights_m.empty()) {
     return unexpected(TerrainError::OutsideDtm);
   }
-  if (!std::isfinite(latitudeDeg) || !std::isfinite(longitudeDeg)) {
+  if (!std::isfinite(latitude_deg) || !std::isfinite(longitude_deg)) {
     return unexpected(TerrainError::OutsideDtm);
   }
-  const double dLon = wrapDeg(longitudeDeg - lonRefDeg_);
-  if (latitudeDeg < latMinDeg_ || latitudeDeg > latMaxDeg_ || dLon < dLonMinDeg_ ||
+  const double dLon = wrap_deg(longitude_deg - lonRefDeg_);
+  if (latitude_deg < latMinDeg_ || latitude_deg > latMaxDeg_ || dLon < dLonMinDeg_ ||
       dLon > dLonMaxDeg_) {
     return unexpected(TerrainError::OutsideDtm);
   }
@@ -295,7 +295,8 @@ Expected<double, TerrainError> TerrainModel::heightAt(double latitudeDeg,
   if (grid_.crs.kind == HorizontalCrs::Utm) {
     geodesy::UtmPoint u;
     try {
-      u = geodesy::toUtm(geodesy::GeodeticPoint{latitudeDeg, longitudeDeg, 0.0}, grid_.crs.utmZone);
+      u = geodesy::toUtm(geodesy::GeodeticPoint{latitude_deg, longitude_deg, 0.0},
+                         grid_.crs.utmZone);
     } catch (const std::exception&) {
       // Defensive only: the footprint test above keeps points near the grid's zone.
       return unexpected(TerrainError::OutsideDtm);
@@ -303,18 +304,18 @@ Expected<double, TerrainError> TerrainModel::heightAt(double latitudeDeg,
     if (u.zone != grid_.crs.utmZone) {
       return unexpected(TerrainError::OutsideDtm);
     }
-    x = u.eastingM;
-    y = u.northingM;
+    x = u.easting_m;
+    y = u.northing_m;
     // A grid in one hemisphere may hold points of the other (near the equator): same
     // projection, northings differ only by the southern false northing.
     if (u.northp && !grid_.crs.utmNorth) {
-      y += kSouthFalseNorthingM;
+      y += kSouthFalseNorthing_m;
     } else if (!u.northp && grid_.crs.utmNorth) {
-      y -= kSouthFalseNorthingM;
+      y -= kSouthFalseNorthing_m;
     }
   } else {
     x = lonRefDeg_ + dLon;
-    y = latitudeDeg;
+    y = latitude_deg;
   }
   double col = inverse_.x0 + inverse_.dxCol * x + inverse_.dxRow * y;
   double row = inverse_.y0 + inverse_.dyCol * x + inverse_.dyRow * y;
@@ -332,10 +333,10 @@ Expected<double, TerrainError> TerrainModel::heightAt(double latitudeDeg,
   const double fr = row - r0;
   const std::size_t i00 = static_cast<std::size_t>(r0) * grid_.cols + c0;
   const std::size_t i10 = i00 + static_cast<std::size_t>(grid_.cols);
-  const float h00 = grid_.heightsM[i00];
-  const float h01 = grid_.heightsM[i00 + 1];
-  const float h10 = grid_.heightsM[i10];
-  const float h11 = grid_.heightsM[i10 + 1];
+  const float h00 = grid_.heights_m[i00];
+  const float h01 = grid_.heights_m[i00 + 1];
+  const float h10 = grid_.heights_m[i10];
+  const float h11 = grid_.heights_m[i10 + 1];
   for (const float h : {h00, h01, h10, h11}) {
     if (!std::isfinite(h) || (grid_.noData && h == *grid_.noData)) {
       return unexpected(TerrainError::NoData);
@@ -348,21 +349,21 @@ Expected<double, TerrainError> TerrainModel::heightAt(double latitudeDeg,
 
 Expected<double, TerrainError> TerrainModel::heightAtEnu(const Eigen::Vector3d& enu) const {
   const geodesy::GeodeticPoint p = frame_.toGeodetic(enu);
-  return heightAt(p.latitudeDeg, p.longitudeDeg);
+  return heightAt(p.latitude_deg, p.longitude_deg);
 }
 
-Expected<Eigen::Vector3d, TerrainError> TerrainModel::groundPointEnu(double xEastM,
-                                                                     double yNorthM) const {
+Expected<Eigen::Vector3d, TerrainError> TerrainModel::groundPointEnu(double xEast_m,
+                                                                     double yNorth_m) const {
   // Moving along ENU z shifts the geodetic position by only z * d / R (d: distance from
   // the frame origin), so the fixed-point iteration z += H - h converges in 2-3 steps.
-  Eigen::Vector3d enu(xEastM, yNorthM, 0.0);
+  Eigen::Vector3d enu(xEast_m, yNorth_m, 0.0);
   for (int iteration = 0; iteration < 20; ++iteration) {
     const geodesy::GeodeticPoint p = frame_.toGeodetic(enu);
-    const Expected<double, TerrainError> h = heightAt(p.latitudeDeg, p.longitudeDeg);
+    const Expected<double, TerrainError> h = heightAt(p.latitude_deg, p.longitude_deg);
     if (!h) {
       return unexpected(h.error());
     }
-    const double dz = *h - p.heightM;
+    const double dz = *h - p.height_m;
     enu.z() += dz;
     if (std::abs(dz) < 1e-7) {
       break;
@@ -373,7 +374,7 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::groundPointEnu(double xEas
 
 Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
     const Eigen::Vector3d& originEnu, const Eigen::Vector3d& directionEnu) const {
-  if (grid_.heightsM.empty()) {
+  if (grid_.heights_m.empty()) {
     return unexpected(TerrainError::OutsideDtm);
   }
   const double dirNorm = directionEnu.norm();
@@ -422,11 +423,11 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
   // surface condition, curvature included.
   const auto evaluate = [this, &originEnu, &directionEnu](double t, double* g) -> SampleKind {
     const geodesy::GeodeticPoint p = frame_.toGeodetic(originEnu + t * directionEnu);
-    const Expected<double, TerrainError> h = heightAt(p.latitudeDeg, p.longitudeDeg);
+    const Expected<double, TerrainError> h = heightAt(p.latitude_deg, p.longitude_deg);
     if (!h) {
       return h.error() == TerrainError::NoData ? SampleKind::NoData : SampleKind::Outside;
     }
-    *g = p.heightM - *h;
+    *g = p.height_m - *h;
     return SampleKind::Valid;
   };
 
@@ -494,7 +495,7 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
       case Previous::Above:
         break;
     }
-    // 3. Bisection on [tAbove, t] down to kBisectionToleranceM along the ray, then one
+    // 3. Bisection on [tAbove, t] down to kBisectionTolerance_m along the ray, then one
     // secant step inside the final bracket (g is almost linear there) for the point.
     double tLo = tAbove;
     double gLo = gAbove;
@@ -502,7 +503,7 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
     double gHi = g;
     // The iteration cap only matters for absurd direction scales, where the tolerance in t
     // would fall below the spacing of doubles.
-    for (int iteration = 0; iteration < 200 && (tHi - tLo) * dirNorm > kBisectionToleranceM;
+    for (int iteration = 0; iteration < 200 && (tHi - tLo) * dirNorm > kBisectionTolerance_m;
          ++iteration) {
       const double tMid = 0.5 * (tLo + tHi);
       double gMid = 0.0;

@@ -51,7 +51,7 @@ struct GeoTransform {
 struct TerrainGrid {
   int cols = 0;
   int rows = 0;
-  std::vector<float> heightsM;  // row-major, rows * cols
+  std::vector<float> heights_m;  // row-major, rows * cols
   GeoTransform transform{};
   CrsSpec crs{};
   std::optional<float> noData;  // samples equal to this (or NaN) are missing
@@ -72,17 +72,17 @@ class TerrainModel {
   bool init(TerrainGrid grid, const geodesy::LocalFrame& frame, std::string* why = nullptr);
 
   const TerrainGrid& grid() const { return grid_; }
-  float minHeightM() const { return minHeightM_; }
-  float maxHeightM() const { return maxHeightM_; }
+  float minHeight_m() const { return minHeightM_; }
+  float maxHeight_m() const { return maxHeightM_; }
 
   // Bilinear ellipsoidal height at a WGS84 position.
-  Expected<double, TerrainError> heightAt(double latitudeDeg, double longitudeDeg) const;
+  Expected<double, TerrainError> heightAt(double latitude_deg, double longitude_deg) const;
   // Height at the geodetic position of an ENU point (its own z is ignored).
   Expected<double, TerrainError> heightAtEnu(const Eigen::Vector3d& enu) const;
 
   // Ground point (ENU) of the given x, y: the point whose geodetic position is that of
   // (x, y, z) with z adjusted until it lies on the DTM. Used to place simulated objects.
-  Expected<Eigen::Vector3d, TerrainError> groundPointEnu(double xEastM, double yNorthM) const;
+  Expected<Eigen::Vector3d, TerrainError> groundPointEnu(double xEast_m, double yNorth_m) const;
 
   // First intersection of the ray origin + t * direction (t > 0, ENU, direction need not
   // be unit length) with the terrain. Errors: OutsideDtm when the crossing would lie off

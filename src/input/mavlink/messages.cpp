@@ -41,10 +41,10 @@ void put(Payload& payload, std::size_t offset, T value) {
 
 Attitude decodeAttitude(const Payload& p) {
   Attitude m;
-  m.timeBootMs = get<std::uint32_t>(p, 0);
-  m.rollRad = get<float>(p, 4);
-  m.pitchRad = get<float>(p, 8);
-  m.yawRad = get<float>(p, 12);
+  m.timeBoot_ms = get<std::uint32_t>(p, 0);
+  m.roll_rad = get<float>(p, 4);
+  m.pitch_rad = get<float>(p, 8);
+  m.yaw_rad = get<float>(p, 12);
   m.rollSpeedRadps = get<float>(p, 16);
   m.pitchSpeedRadps = get<float>(p, 20);
   m.yawSpeedRadps = get<float>(p, 24);
@@ -52,10 +52,10 @@ Attitude decodeAttitude(const Payload& p) {
 }
 
 std::size_t encodePayload(const Attitude& m, Payload& p) {
-  put(p, 0, m.timeBootMs);
-  put(p, 4, m.rollRad);
-  put(p, 8, m.pitchRad);
-  put(p, 12, m.yawRad);
+  put(p, 0, m.timeBoot_ms);
+  put(p, 4, m.roll_rad);
+  put(p, 8, m.pitch_rad);
+  put(p, 12, m.yaw_rad);
   put(p, 16, m.rollSpeedRadps);
   put(p, 20, m.pitchSpeedRadps);
   put(p, 24, m.yawSpeedRadps);
@@ -64,7 +64,7 @@ std::size_t encodePayload(const Attitude& m, Payload& p) {
 
 AttitudeQuaternion decodeAttitudeQuaternion(const Payload& p) {
   AttitudeQuaternion m;
-  m.timeBootMs = get<std::uint32_t>(p, 0);
+  m.timeBoot_ms = get<std::uint32_t>(p, 0);
   for (std::size_t i = 0; i < 4; ++i) {
     m.q[i] = get<float>(p, 4 + 4 * i);
     m.reprOffsetQ[i] = get<float>(p, 32 + 4 * i);
@@ -76,7 +76,7 @@ AttitudeQuaternion decodeAttitudeQuaternion(const Payload& p) {
 }
 
 std::size_t encodePayload(const AttitudeQuaternion& m, Payload& p) {
-  put(p, 0, m.timeBootMs);
+  put(p, 0, m.timeBoot_ms);
   for (std::size_t i = 0; i < 4; ++i) {
     put(p, 4 + 4 * i, m.q[i]);
     put(p, 32 + 4 * i, m.reprOffsetQ[i]);
@@ -89,7 +89,7 @@ std::size_t encodePayload(const AttitudeQuaternion& m, Payload& p) {
 
 GlobalPositionInt decodeGlobalPositionInt(const Payload& p) {
   GlobalPositionInt m;
-  m.timeBootMs = get<std::uint32_t>(p, 0);
+  m.timeBoot_ms = get<std::uint32_t>(p, 0);
   m.latitudeDegE7 = get<std::int32_t>(p, 4);
   m.longitudeDegE7 = get<std::int32_t>(p, 8);
   m.altitudeMslMm = get<std::int32_t>(p, 12);
@@ -102,7 +102,7 @@ GlobalPositionInt decodeGlobalPositionInt(const Payload& p) {
 }
 
 std::size_t encodePayload(const GlobalPositionInt& m, Payload& p) {
-  put(p, 0, m.timeBootMs);
+  put(p, 0, m.timeBoot_ms);
   put(p, 4, m.latitudeDegE7);
   put(p, 8, m.longitudeDegE7);
   put(p, 12, m.altitudeMslMm);
@@ -118,7 +118,7 @@ constexpr std::size_t kGimbalBaseLength = 40;  // without the extension fields
 
 GimbalDeviceAttitudeStatus decodeGimbal(const Payload& p, std::size_t payloadLength) {
   GimbalDeviceAttitudeStatus m;
-  m.timeBootMs = get<std::uint32_t>(p, 0);
+  m.timeBoot_ms = get<std::uint32_t>(p, 0);
   for (std::size_t i = 0; i < 4; ++i) {
     m.q[i] = get<float>(p, 4 + 4 * i);
   }
@@ -129,7 +129,7 @@ GimbalDeviceAttitudeStatus decodeGimbal(const Payload& p, std::size_t payloadLen
   m.flags = get<std::uint16_t>(p, 36);
   m.targetSystem = get<std::uint8_t>(p, 38);
   m.targetComponent = get<std::uint8_t>(p, 39);
-  m.deltaYawRad = get<float>(p, 40);
+  m.deltaYaw_rad = get<float>(p, 40);
   m.deltaYawVelocityRadps = get<float>(p, 44);
   m.gimbalDeviceId = get<std::uint8_t>(p, 48);
   m.hasExtensions = payloadLength > kGimbalBaseLength;
@@ -137,7 +137,7 @@ GimbalDeviceAttitudeStatus decodeGimbal(const Payload& p, std::size_t payloadLen
 }
 
 std::size_t encodePayload(const GimbalDeviceAttitudeStatus& m, Payload& p) {
-  put(p, 0, m.timeBootMs);
+  put(p, 0, m.timeBoot_ms);
   for (std::size_t i = 0; i < 4; ++i) {
     put(p, 4 + 4 * i, m.q[i]);
   }
@@ -151,7 +151,7 @@ std::size_t encodePayload(const GimbalDeviceAttitudeStatus& m, Payload& p) {
   if (!m.hasExtensions) {
     return kGimbalBaseLength;
   }
-  put(p, 40, m.deltaYawRad);
+  put(p, 40, m.deltaYaw_rad);
   put(p, 44, m.deltaYawVelocityRadps);
   put(p, 48, m.gimbalDeviceId);
   return 49;

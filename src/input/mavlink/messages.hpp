@@ -70,14 +70,14 @@ constexpr std::uint16_t kGimbalFlagYawInEarthFrame = 64;
 
 // #30: Euler angles of the body (FRD) in local NED, aerospace ZYX.
 struct Attitude {
-  std::uint32_t timeBootMs = 0;
-  float rollRad = 0, pitchRad = 0, yawRad = 0;
+  std::uint32_t timeBoot_ms = 0;
+  float roll_rad = 0, pitch_rad = 0, yaw_rad = 0;
   float rollSpeedRadps = 0, pitchSpeedRadps = 0, yawSpeedRadps = 0;
 };
 
 // #31: q = (w, x, y, z) rotating body FRD vectors into NED (q_nb of docs/conventions.md).
 struct AttitudeQuaternion {
-  std::uint32_t timeBootMs = 0;
+  std::uint32_t timeBoot_ms = 0;
   std::array<float, 4> q{1, 0, 0, 0};
   float rollSpeedRadps = 0, pitchSpeedRadps = 0, yawSpeedRadps = 0;
   std::array<float, 4> reprOffsetQ{0, 0, 0, 0};  // extension; all zero when not sent
@@ -85,7 +85,7 @@ struct AttitudeQuaternion {
 
 // #33: fused global position. Altitude is above mean sea level, not ellipsoidal.
 struct GlobalPositionInt {
-  std::uint32_t timeBootMs = 0;
+  std::uint32_t timeBoot_ms = 0;
   std::int32_t latitudeDegE7 = 0, longitudeDegE7 = 0;
   std::int32_t altitudeMslMm = 0, relativeAltitudeMm = 0;
   std::int16_t vxCmps = 0, vyCmps = 0, vzCmps = 0;  // NED ground speed
@@ -94,13 +94,13 @@ struct GlobalPositionInt {
 
 // #285: the gimbal head's attitude; its frame depends on `flags` (see the pose assembler).
 struct GimbalDeviceAttitudeStatus {
-  std::uint32_t timeBootMs = 0;  // the gimbal device's own boot clock
+  std::uint32_t timeBoot_ms = 0;  // the gimbal device's own boot clock
   std::array<float, 4> q{1, 0, 0, 0};
   float angularVelocityXRadps = 0, angularVelocityYRadps = 0, angularVelocityZRadps = 0;
   std::uint32_t failureFlags = 0;
   std::uint16_t flags = 0;
   std::uint8_t targetSystem = 0, targetComponent = 0;
-  float deltaYawRad = 0;  // extension: NaN or absent (0) when unknown
+  float deltaYaw_rad = 0;  // extension: NaN or absent (0) when unknown
   float deltaYawVelocityRadps = 0;
   std::uint8_t gimbalDeviceId = 0;
   bool hasExtensions = false;  // the sender's payload reached the extension fields

@@ -16,19 +16,19 @@ Eigen::Quaterniond toQuaternion(const std::array<float, 4>& q) {
 }
 
 double yawOf(const Eigen::Quaterniond& q) {
-  return geodesy::eulerFromRotation(q.toRotationMatrix()).yawDeg / kRadToDeg;
+  return geodesy::eulerFromRotation(q.toRotationMatrix()).yaw_deg / kRadToDeg;
 }
 
 }  // namespace
 
-void BootClockMapper::observe(std::uint32_t bootMs, std::int64_t receiveNs) {
-  if (count_ > 0 && bootMs + kRebootJumpMs < lastBootMs_) {
+void BootClockMapper::observe(std::uint32_t boot_ms, std::int64_t receive_ns) {
+  if (count_ > 0 && boot_ms + kRebootJump_ms < lastBootMs_) {
     count_ = 0;
     next_ = 0;
     ++restarts_;
   }
-  lastBootMs_ = bootMs;
-  offsets_[next_] = receiveNs - static_cast<std::int64_t>(bootMs) * 1'000'000;
+  lastBootMs_ = boot_ms;
+  offsets_[next_] = receive_ns - static_cast<std::int64_t>(boot_ms) * 1'000'000;
   next_ = (next_ + 1) % kWindow;
   count_ = std::min(count_ + 1, kWindow);
   offsetNs_ = *std::min_element(offsets_.begin(), offsets_.begin() + static_cast<long>(count_));
@@ -46,76 +46,76 @@ bool MavlinkPoseAssembler::quaternionOk(const std::array<float, 4>& q) const {
 }
 
 bool MavlinkPoseAssembler::add(const Message& message, std::uint8_t systemId,
-                               std::int64_t receiveNs) {
+                               std::int64_t receive_ns) {
   if (config_.systemId != 0 && systemId != config_.systemId) {
     ++counters_.otherSystem;
     return false;
   }
-  receiveNs -= config_.linkLatencyNs;
+  receive_ns -= config_.linkLatency_ns;
   if (const auto* q = std::get_if<AttitudeQuaternion>(&message)) {
     if (!quaternionOk(q->q)) {
       ++counters_.rejected;
       return false;
     }
     sawQuaternion_ = true;
-    return addAttitude(q->timeBootMs, toQuaternion(q->q), receiveNs);
+    return addAttitude(q->timeBoot_ms, toQuaternion(q->q), receive_ns);
   }
   if (const auto* a = std::get_if<Attitude>(&message)) {
     if (sawQuaternion_) {
       return false;  // the quaternion stream is the attitude source
     }
-    if (!std::isfinite(a->rollRad) || !std::isfinite(a->pitchRad) || !std::isfinite(a->yawRad)) {
+    if (!std::isfinite(a->roll_rad) || !std::isfinite(a->pitch_rad) || !std::isfinite(a->yaw_rad)) {
       ++counters_.rejected;
       return false;
     }
-    const geodesy::EulerAnglesDeg euler{static_cast<double>(a->rollRad) * kRadToDeg,
-                                        static_cast<double>(a->pitchRad) * kRadToDeg,
-                                        static_cast<double>(a->yawRad) * kRadToDeg};
-    return addAttitude(a->timeBootMs, Eigen::Quaterniond(geodesy::rotationFromEuler(euler)),
-                       receiveNs);
+    const geodesy::EulerAnglesDeg euler{static_cast<double>(a->roll_rad) * kRadToDeg,
+                                        static_cast<double>(a->pitch_rad) * kRadToDeg,
+                                        static_cast<double>(a->yaw_rad) * kRadToDeg};
+    return addAttitude(a->timeBoot_ms, Eigen::Quaterniond(geodesy::rotationFromEuler(euler)),
+                       receive_ns);
   }
   if (const auto* p = std::get_if<GlobalPositionInt>(&message)) {
-    return addPosition(*p, receiveNs);
+    return addPosition(*p, receive_ns);
   }
   if (const auto* g = std::get_if<GimbalDeviceAttitudeStatus>(&message)) {
-    return addGimbal(*g, receiveNs);
+    return addGimbal(*g, receive_ns);
   }
   return false;
 }
 
-bool MavlinkPoseAssembler::addAttitude(std::uint32_t timeBootMs,
+bool MavlinkPoseAssembler::addAttitude(std::uint32_t timeBoot_ms,
                                        const Eigen::Quaterniond& bodyToNed,
-                                       std::int64_t receiveNs) {
-  autopilotClock_.observe(timeBootMs, receiveNs);
+                                       std::int64_t receive_ns) {
+  autopilotClock_.observe(timeBoot_ms, receive_ns);
   latestYawRad_ = yawOf(bodyToNed);
   hasAttitude_ = true;
   if (!hasPosition_) {
     ++counters_.noPositionYet;
     return false;
   }
-  sample_.timestampNs = autopilotClock_.toLocalNs(timeBootMs);
+  sample_.timestamp_ns = autopilotClock_.toLocal_ns(timeBoot_ms);
   sample_.bodyToNed = bodyToNed;
   ++counters_.samples;
   return true;
 }
 
-bool MavlinkPoseAssembler::addPosition(const GlobalPositionInt& m, std::int64_t receiveNs) {
+bool MavlinkPoseAssembler::addPosition(const GlobalPositionInt& m, std::int64_t receive_ns) {
   geodesy::GeodeticPoint point;
-  point.latitudeDeg = m.latitudeDegE7 * kDegE7;
-  point.longitudeDeg = m.longitudeDegE7 * kDegE7;
-  point.heightM = m.altitudeMslMm * kMmToM + config_.geoidSeparationM;
+  point.latitude_deg = m.latitudeDegE7 * kDegE7;
+  point.longitude_deg = m.longitudeDegE7 * kDegE7;
+  point.height_m = m.altitudeMslMm * kMmToM + config_.geoidSeparation_m;
   if (!geodesy::isValid(point)) {
     ++counters_.rejected;
     return false;
   }
-  autopilotClock_.observe(m.timeBootMs, receiveNs);
+  autopilotClock_.observe(m.timeBoot_ms, receive_ns);
   sample_.position = point;
-  sample_.positionTimestampNs = autopilotClock_.toLocalNs(m.timeBootMs);
+  sample_.positionTimestamp_ns = autopilotClock_.toLocal_ns(m.timeBoot_ms);
   hasPosition_ = true;
   return false;
 }
 
-bool MavlinkPoseAssembler::addGimbal(const GimbalDeviceAttitudeStatus& m, std::int64_t receiveNs) {
+bool MavlinkPoseAssembler::addGimbal(const GimbalDeviceAttitudeStatus& m, std::int64_t receive_ns) {
   const bool vehicleFlag = (m.flags & kGimbalFlagYawInVehicleFrame) != 0;
   const bool earthFlag = (m.flags & kGimbalFlagYawInEarthFrame) != 0;
   if ((vehicleFlag && earthFlag) || !quaternionOk(m.q)) {
@@ -126,21 +126,21 @@ bool MavlinkPoseAssembler::addGimbal(const GimbalDeviceAttitudeStatus& m, std::i
   const bool yawInEarth = earthFlag || (!vehicleFlag && (m.flags & kGimbalFlagYawLock) != 0);
   Eigen::Quaterniond headToNed = toQuaternion(m.q);
   if (!yawInEarth) {
-    if (!hasAttitude_ && !(vehicleFlag && std::isfinite(m.deltaYawRad) && m.hasExtensions)) {
+    if (!hasAttitude_ && !(vehicleFlag && std::isfinite(m.deltaYaw_rad) && m.hasExtensions)) {
       ++counters_.rejected;  // a vehicle-relative yaw needs the vehicle's heading
       return false;
     }
     // delta_yaw is only meaningful with the new frame flags (common.xml).
-    const double deltaYawRad = (vehicleFlag && m.hasExtensions && std::isfinite(m.deltaYawRad))
-                                   ? static_cast<double>(m.deltaYawRad)
-                                   : latestYawRad_;
-    headToNed = Eigen::AngleAxisd(deltaYawRad, Eigen::Vector3d::UnitZ()) * headToNed;
+    const double deltaYaw_rad = (vehicleFlag && m.hasExtensions && std::isfinite(m.deltaYaw_rad))
+                                    ? static_cast<double>(m.deltaYaw_rad)
+                                    : latestYawRad_;
+    headToNed = Eigen::AngleAxisd(deltaYaw_rad, Eigen::Vector3d::UnitZ()) * headToNed;
   }
-  gimbalClock_.observe(m.timeBootMs, receiveNs);
+  gimbalClock_.observe(m.timeBoot_ms, receive_ns);
   sample_.hasGimbal = true;
   sample_.gimbal.reference = geodesy::GimbalReference::Earth;
   sample_.gimbal.angles = geodesy::eulerFromRotation(headToNed.toRotationMatrix());
-  sample_.gimbalTimestampNs = gimbalClock_.toLocalNs(m.timeBootMs);
+  sample_.gimbalTimestamp_ns = gimbalClock_.toLocal_ns(m.timeBoot_ms);
   return false;
 }
 

@@ -15,7 +15,7 @@
 // transport only ever delays a message, so the least-delayed one in the window is the best
 // estimate; the window lets it follow the drift between the two crystals (tens of ppm).
 // The estimate is late by the link's minimum latency, which the configuration may subtract
-// (linkLatencyNs). A boot time going backwards (the sender rebooted) restarts the estimate.
+// (linkLatency_ns). A boot time going backwards (the sender rebooted) restarts the estimate.
 //
 // Frames: ATTITUDE_QUATERNION q is q_nb (body FRD -> NED) as docs/conventions.md uses; when an
 // autopilot sends only ATTITUDE, its ZYX Euler angles are turned into q_nb (once a quaternion
@@ -45,14 +45,14 @@ class BootClockMapper {
  public:
   static constexpr std::size_t kWindow = 64;  // observations the minimum is taken over
   // A boot time this far behind the last one means the sender rebooted.
-  static constexpr std::uint32_t kRebootJumpMs = 1000;
+  static constexpr std::uint32_t kRebootJump_ms = 1000;
 
-  // One message stamped `bootMs` on the sender, received at local `receiveNs`.
-  void observe(std::uint32_t bootMs, std::int64_t receiveNs);
+  // One message stamped `boot_ms` on the sender, received at local `receive_ns`.
+  void observe(std::uint32_t boot_ms, std::int64_t receive_ns);
   bool valid() const { return count_ > 0; }
-  std::int64_t offsetNs() const { return offsetNs_; }  // local = boot + offset
-  std::int64_t toLocalNs(std::uint32_t bootMs) const {
-    return static_cast<std::int64_t>(bootMs) * 1'000'000 + offsetNs_;
+  std::int64_t offset_ns() const { return offsetNs_; }  // local = boot + offset
+  std::int64_t toLocal_ns(std::uint32_t boot_ms) const {
+    return static_cast<std::int64_t>(boot_ms) * 1'000'000 + offsetNs_;
   }
   std::uint64_t restarts() const { return restarts_; }  // reboots seen
 
@@ -66,20 +66,20 @@ class BootClockMapper {
 };
 
 struct PoseAssemblerConfig {
-  double geoidSeparationM = 0.0;          // N of the flying area: ellipsoidal h = MSL height + N
-  std::int64_t linkLatencyNs = 0;         // minimum transport delay, subtracted from the offset
+  double geoidSeparation_m = 0.0;         // N of the flying area: ellipsoidal h = MSL height + N
+  std::int64_t linkLatency_ns = 0;        // minimum transport delay, subtracted from the offset
   std::uint8_t systemId = 0;              // only messages of this system; 0 = any system
   double quaternionNormTolerance = 1e-2;  // |1 - |q|| beyond this rejects the message
 };
 
 struct PoseSample {
-  std::int64_t timestampNs = 0;  // local monotonic time of the attitude
+  std::int64_t timestamp_ns = 0;  // local monotonic time of the attitude
   Eigen::Quaterniond bodyToNed{Eigen::Quaterniond::Identity()};  // q_nb, normalised
   geodesy::GeodeticPoint position{};                             // ellipsoidal height
-  std::int64_t positionTimestampNs = 0;
+  std::int64_t positionTimestamp_ns = 0;
   bool hasGimbal = false;
   geodesy::GimbalState gimbal{};  // reference Earth when hasGimbal
-  std::int64_t gimbalTimestampNs = 0;
+  std::int64_t gimbalTimestamp_ns = 0;
 };
 
 struct AssemblerCounters {
@@ -94,7 +94,7 @@ class MavlinkPoseAssembler {
   explicit MavlinkPoseAssembler(const PoseAssemblerConfig& config = {}) : config_(config) {}
 
   // True when sample() holds a new pose sample.
-  bool add(const Message& message, std::uint8_t systemId, std::int64_t receiveNs);
+  bool add(const Message& message, std::uint8_t systemId, std::int64_t receive_ns);
 
   const PoseSample& sample() const { return sample_; }
   const AssemblerCounters& counters() const { return counters_; }
@@ -102,10 +102,10 @@ class MavlinkPoseAssembler {
   const BootClockMapper& gimbalClock() const { return gimbalClock_; }
 
  private:
-  bool addAttitude(std::uint32_t timeBootMs, const Eigen::Quaterniond& bodyToNed,
-                   std::int64_t receiveNs);
-  bool addPosition(const GlobalPositionInt& message, std::int64_t receiveNs);
-  bool addGimbal(const GimbalDeviceAttitudeStatus& message, std::int64_t receiveNs);
+  bool addAttitude(std::uint32_t timeBoot_ms, const Eigen::Quaterniond& bodyToNed,
+                   std::int64_t receive_ns);
+  bool addPosition(const GlobalPositionInt& message, std::int64_t receive_ns);
+  bool addGimbal(const GimbalDeviceAttitudeStatus& message, std::int64_t receive_ns);
   bool quaternionOk(const std::array<float, 4>& q) const;
 
   PoseAssemblerConfig config_;

@@ -41,7 +41,7 @@ constexpr int kFormatVersion = 1;
 struct SequenceInfo {
   int formatVersion = kFormatVersion;
   std::string name;
-  double frameRateHz = 10.0;
+  double frameRate_hz = 10.0;
   std::string source;  // "simulator <version> seed <n> scene <name>", or a recorder's name
   std::string notes;   // optional free text; not written when empty
 };
@@ -62,12 +62,12 @@ struct Rig {
 
 struct FrameRecord {
   std::int64_t frameId = 0;
-  std::int64_t timestampNs = 0;  // capture time, monotonic clock of the recording
-  std::string file;              // relative to the sequence directory
+  std::int64_t timestamp_ns = 0;  // capture time, monotonic clock of the recording
+  std::string file;               // relative to the sequence directory
 };
 
 struct TelemetryRecord {
-  std::int64_t timestampNs = 0;  // same clock as the frames
+  std::int64_t timestamp_ns = 0;  // same clock as the frames
   geodesy::GeodeticPoint position{};
   Eigen::Quaterniond bodyToNed{Eigen::Quaterniond::Identity()};
   geodesy::GimbalState gimbal{};
@@ -77,11 +77,11 @@ struct ObjectTruth {
   std::int64_t frameId = 0;
   int trackId = 0;
   shape::VehicleType type = shape::VehicleType::Sedan;
-  shape::ShapeParams shape{};            // ASM gamma (count 0 for large vehicles)
-  Eigen::Vector3d dimensionsM{0, 0, 0};  // length, width, height of the 3D bounding box
-  Eigen::Vector3d positionEnu{0, 0, 0};  // vehicle-frame origin in the world (ENU), m
-  double headingEnuRad = 0.0;            // driving direction, counter-clockwise from east
-  double speedMps = 0.0;
+  shape::ShapeParams shape{};             // ASM gamma (count 0 for large vehicles)
+  Eigen::Vector3d dimensions_m{0, 0, 0};  // length, width, height of the 3D bounding box
+  Eigen::Vector3d positionEnu{0, 0, 0};   // vehicle-frame origin in the world (ENU), m
+  double headingEnu_rad = 0.0;            // driving direction, counter-clockwise from east
+  double speed_mps = 0.0;
   double yawRateRadps = 0.0;
   geometry::RotatedBox imageBox{};  // image rotated box (angle = driving direction)
   double truncation = 0.0;          // share of the vehicle outside the image, [0, 1]

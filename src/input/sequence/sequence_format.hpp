@@ -114,23 +114,23 @@ class SequenceRules {
       throw FieldError{"frame_id", "not increasing (" + std::to_string(frame.frameId) + " after " +
                                        std::to_string(frameIds_.back()) + ")"};
     }
-    if (frame.timestampNs <= lastFrameNs_) {
-      throw FieldError{"timestamp_ns", "not increasing (" + std::to_string(frame.timestampNs) +
+    if (frame.timestamp_ns <= lastFrameNs_) {
+      throw FieldError{"timestamp_ns", "not increasing (" + std::to_string(frame.timestamp_ns) +
                                            " after " + std::to_string(lastFrameNs_) + ")"};
     }
   }
   void addFrame(const FrameRecord& frame) {
     checkFrame(frame);
     frameIds_.push_back(frame.frameId);
-    lastFrameNs_ = frame.timestampNs;
+    lastFrameNs_ = frame.timestamp_ns;
   }
 
   void addTelemetry(const TelemetryRecord& record) {
-    if (lastTelemetryNs_ && record.timestampNs < *lastTelemetryNs_) {
-      throw FieldError{"timestamp_ns", "decreasing (" + std::to_string(record.timestampNs) +
+    if (lastTelemetryNs_ && record.timestamp_ns < *lastTelemetryNs_) {
+      throw FieldError{"timestamp_ns", "decreasing (" + std::to_string(record.timestamp_ns) +
                                            " after " + std::to_string(*lastTelemetryNs_) + ")"};
     }
-    lastTelemetryNs_ = record.timestampNs;
+    lastTelemetryNs_ = record.timestamp_ns;
   }
 
   void addObject(const ObjectTruth& object) {

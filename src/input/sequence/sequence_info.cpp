@@ -144,9 +144,9 @@ std::int64_t readInfo(const fs::path& directory, SequenceInfo* info) {
   if (info->name.empty()) {
     reader.fail("name", "must not be empty");
   }
-  info->frameRateHz = reader.number(required("frame_rate_hz"), "frame_rate_hz");
-  if (!(info->frameRateHz > 0.0)) {
-    reader.fail("frame_rate_hz", "must be > 0, got " + numberText(info->frameRateHz));
+  info->frameRate_hz = reader.number(required("frame_rate_hz"), "frame_rate_hz");
+  if (!(info->frameRate_hz > 0.0)) {
+    reader.fail("frame_rate_hz", "must be > 0, got " + numberText(info->frameRate_hz));
   }
   info->source = reader.text(required("source"), "source");
   if (keys.contains("notes")) {
@@ -163,7 +163,7 @@ std::int64_t readInfo(const fs::path& directory, SequenceInfo* info) {
 std::string formatInfo(const SequenceInfo& info, std::size_t frameCount) {
   std::string text = "format_version: " + std::to_string(info.formatVersion) + "\n";
   text += "name: " + yamlQuoted(info.name) + "\n";
-  text += "frame_rate_hz: " + numberText(info.frameRateHz) + "\n";
+  text += "frame_rate_hz: " + numberText(info.frameRate_hz) + "\n";
   text += "source: " + yamlQuoted(info.source) + "\n";
   text += "frame_count: " + std::to_string(frameCount) + "\n";
   if (!info.notes.empty()) {

@@ -222,10 +222,10 @@ bool SequenceReader::loadFrame(std::size_t index, cv::Mat& image, std::string* w
     return false;
   }
   const camera::Intrinsics& camera = rig_.intrinsics;
-  if (decoded.cols != camera.widthPx || decoded.rows != camera.heightPx) {
+  if (decoded.cols != camera.width_px || decoded.rows != camera.height_px) {
     setWhy(why, path + ": image is " + std::to_string(decoded.cols) + "x" +
                     std::to_string(decoded.rows) + ", rig.yaml camera is " +
-                    std::to_string(camera.widthPx) + "x" + std::to_string(camera.heightPx));
+                    std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px));
     return false;
   }
   if (image.size() == decoded.size() && image.type() == decoded.type()) {

@@ -121,8 +121,9 @@ void checkRelativeFile(std::string_view file) {
 FrameRecord parseFrameRow(Fields f) {
   FrameRecord frame;
   frame.frameId = parseInteger(f[0], kFrameColumns[0], 0, std::numeric_limits<std::int64_t>::max());
-  frame.timestampNs = parseInteger(f[1], kFrameColumns[1], std::numeric_limits<std::int64_t>::min(),
-                                   std::numeric_limits<std::int64_t>::max());
+  frame.timestamp_ns =
+      parseInteger(f[1], kFrameColumns[1], std::numeric_limits<std::int64_t>::min(),
+                   std::numeric_limits<std::int64_t>::max());
   checkRelativeFile(f[2]);
   frame.file = std::string(f[2]);
   return frame;
@@ -132,7 +133,7 @@ std::string formatFrameRow(const FrameRecord& frame) {
   std::string row;
   appendNumber(row, frame.frameId);
   row += ',';
-  appendNumber(row, frame.timestampNs);
+  appendNumber(row, frame.timestamp_ns);
   row += ',';
   row += frame.file;
   return row;
@@ -141,11 +142,11 @@ std::string formatFrameRow(const FrameRecord& frame) {
 TelemetryRecord parseTelemetryRow(Fields f) {
   const auto& c = kTelemetryColumns;
   TelemetryRecord record;
-  record.timestampNs = parseInteger(f[0], c[0], std::numeric_limits<std::int64_t>::min(),
-                                    std::numeric_limits<std::int64_t>::max());
-  record.position.latitudeDeg = parseReal(f[1], c[1], -90.0, 90.0);
-  record.position.longitudeDeg = parseReal(f[2], c[2], -180.0, 180.0);
-  record.position.heightM = parseReal<double>(f[3], c[3]);
+  record.timestamp_ns = parseInteger(f[0], c[0], std::numeric_limits<std::int64_t>::min(),
+                                     std::numeric_limits<std::int64_t>::max());
+  record.position.latitude_deg = parseReal(f[1], c[1], -90.0, 90.0);
+  record.position.longitude_deg = parseReal(f[2], c[2], -180.0, 180.0);
+  record.position.height_m = parseReal<double>(f[3], c[3]);
   const double qw = parseReal<double>(f[4], c[4]);
   const double qx = parseReal<double>(f[5], c[5]);
   const double qy = parseReal<double>(f[6], c[6]);
@@ -159,9 +160,9 @@ TelemetryRecord parseTelemetryRow(Fields f) {
                                         numberText(kQuaternionNormTolerance) + ")"};
   }
   record.bodyToNed = Eigen::Quaterniond(qw, qx, qy, qz);
-  record.gimbal.angles.rollDeg = parseReal<double>(f[8], c[8]);
-  record.gimbal.angles.pitchDeg = parseReal<double>(f[9], c[9]);
-  record.gimbal.angles.yawDeg = parseReal<double>(f[10], c[10]);
+  record.gimbal.angles.roll_deg = parseReal<double>(f[8], c[8]);
+  record.gimbal.angles.pitch_deg = parseReal<double>(f[9], c[9]);
+  record.gimbal.angles.yaw_deg = parseReal<double>(f[10], c[10]);
   if (f[11] == "body") {
     record.gimbal.reference = geodesy::GimbalReference::Body;
   } else if (f[11] == "earth") {
@@ -174,11 +175,12 @@ TelemetryRecord parseTelemetryRow(Fields f) {
 
 std::string formatTelemetryRow(const TelemetryRecord& record) {
   std::string row;
-  appendNumber(row, record.timestampNs);
+  appendNumber(row, record.timestamp_ns);
   for (const double value :
-       {record.position.latitudeDeg, record.position.longitudeDeg, record.position.heightM,
+       {record.position.latitude_deg, record.position.longitude_deg, record.position.height_m,
         record.bodyToNed.w(), record.bodyToNed.x(), record.bodyToNed.y(), record.bodyToNed.z(),
-        record.gimbal.angles.rollDeg, record.gimbal.angles.pitchDeg, record.gimbal.angles.yawDeg}) {
+        record.gimbal.angles.roll_deg, record.gimbal.angles.pitch_deg,
+        record.gimbal.angles.yaw_deg}) {
     row += ',';
     appendNumber(row, value);
   }
@@ -221,10 +223,10 @@ ObjectTruth parseObjectRow(Fields f, int gammaCount, const std::vector<std::stri
   const auto nonNegative = [&](std::size_t k) {
     return parseReal(f[t + k], names[t + k], 0.0, std::numeric_limits<double>::max());
   };
-  object.dimensionsM = {nonNegative(0), nonNegative(1), nonNegative(2)};
+  object.dimensions_m = {nonNegative(0), nonNegative(1), nonNegative(2)};
   object.positionEnu = {real(3), real(4), real(5)};
-  object.headingEnuRad = real(6);
-  object.speedMps = real(7);
+  object.headingEnu_rad = real(6);
+  object.speed_mps = real(7);
   object.yawRateRadps = real(8);
   object.imageBox.cx = real(9);
   object.imageBox.cy = real(10);
@@ -252,9 +254,9 @@ std::string formatObjectRow(const ObjectTruth& object, int gammaCount) {
     }
   }
   for (const double value :
-       {object.dimensionsM.x(), object.dimensionsM.y(), object.dimensionsM.z(),
+       {object.dimensions_m.x(), object.dimensions_m.y(), object.dimensions_m.z(),
         object.positionEnu.x(), object.positionEnu.y(), object.positionEnu.z(),
-        object.headingEnuRad, object.speedMps, object.yawRateRadps, object.imageBox.cx,
+        object.headingEnu_rad, object.speed_mps, object.yawRateRadps, object.imageBox.cx,
         object.imageBox.cy, object.imageBox.length, object.imageBox.width, object.imageBox.angle,
         object.truncation, object.occlusion}) {
     row += ',';

@@ -37,8 +37,8 @@ struct SequenceWriter::Files {
 
   fs::path directory;
   SequenceInfo info;
-  int widthPx = 0;
-  int heightPx = 0;
+  int width_px = 0;
+  int height_px = 0;
   int gammaColumns = 0;
   std::vector<std::string> objectNames;
   Csv frames;
@@ -101,7 +101,7 @@ bool SequenceWriter::open(const std::string& directory, const SequenceInfo& info
     setWhy(why, infoName + ": name: must not be empty");
     return false;
   }
-  if (!(info.frameRateHz > 0.0) || !std::isfinite(info.frameRateHz)) {
+  if (!(info.frameRate_hz > 0.0) || !std::isfinite(info.frameRate_hz)) {
     setWhy(why, infoName + ": frame_rate_hz: must be a finite number > 0");
     return false;
   }
@@ -162,8 +162,8 @@ bool SequenceWriter::open(const std::string& directory, const SequenceInfo& info
   auto files = std::make_unique<Files>();
   files->directory = dir;
   files->info = info;
-  files->widthPx = rig.camera.intrinsics.widthPx;
-  files->heightPx = rig.camera.intrinsics.heightPx;
+  files->width_px = rig.camera.intrinsics.width_px;
+  files->height_px = rig.camera.intrinsics.height_px;
   if (!files->openCsv(files->frames, kFramesFile, joinColumns(toStrings(kFrameColumns)), why) ||
       !files->openCsv(files->telemetry, kTelemetryFile, joinColumns(toStrings(kTelemetryColumns)),
                       why)) {
@@ -213,11 +213,11 @@ bool SequenceWriter::writeFrame(const FrameRecord& frame, const cv::Mat& image, 
       throw FieldError{"image", "expected an 8-bit BGR or grey image, got OpenCV type " +
                                     std::to_string(image.type())};
     }
-    if (image.cols != files.widthPx || image.rows != files.heightPx) {
+    if (image.cols != files.width_px || image.rows != files.height_px) {
       throw FieldError{"image", "image is " + std::to_string(image.cols) + "x" +
                                     std::to_string(image.rows) + ", rig.yaml camera is " +
-                                    std::to_string(files.widthPx) + "x" +
-                                    std::to_string(files.heightPx)};
+                                    std::to_string(files.width_px) + "x" +
+                                    std::to_string(files.height_px)};
     }
   } catch (const FieldError& error) {
     setWhy(why, files.where(files.frames, error));

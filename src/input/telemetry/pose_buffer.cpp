@@ -7,7 +7,7 @@ namespace vp::telemetry {
 namespace {
 
 // Signed smallest difference b - a of two angles in degrees, in (-180, 180].
-double deltaDeg(double a, double b) {
+double delta_deg(double a, double b) {
   double d = std::fmod(b - a, 360.0);
   if (d <= -180.0) {
     d += 360.0;
@@ -28,7 +28,7 @@ double wrapDeg180(double angle) {
 }
 
 bool finite(const geodesy::EulerAnglesDeg& e) {
-  return std::isfinite(e.rollDeg) && std::isfinite(e.pitchDeg) && std::isfinite(e.yawDeg);
+  return std::isfinite(e.roll_deg) && std::isfinite(e.pitch_deg) && std::isfinite(e.yaw_deg);
 }
 
 // a * (a^-1 b)^s along the shorter arc; s outside [0, 1] extrapolates at the same rate.
@@ -44,16 +44,16 @@ Eigen::Quaterniond slerp(const Eigen::Quaterniond& a, const Eigen::Quaterniond& 
 }
 
 PoseSample blend(const PoseSample& a, const PoseSample& b, std::int64_t t) {
-  const double s =
-      static_cast<double>(t - a.timestampNs) / static_cast<double>(b.timestampNs - a.timestampNs);
+  const double s = static_cast<double>(t - a.timestamp_ns) /
+                   static_cast<double>(b.timestamp_ns - a.timestamp_ns);
   PoseSample out;
-  out.timestampNs = t;
+  out.timestamp_ns = t;
   out.position = interpolatePosition(a.position, b.position, s);
   out.bodyToNed = slerp(a.bodyToNed, b.bodyToNed, s);
   // Gimbal angles are only comparable in one reference; across a switch take the nearer one.
   if (a.gimbal.reference == b.gimbal.reference) {
     out.gimbal.reference = a.gimbal.reference;
-    out.gimbal.angles = interpolateAnglesDeg(a.gimbal.angles, b.gimbal.angles, s);
+    out.gimbal.angles = interpolateAngles_deg(a.gimbal.angles, b.gimbal.angles, s);
   } else {
     out.gimbal = s < 0.5 ? a.gimbal : b.gimbal;
   }
@@ -97,17 +97,17 @@ const char* toString(PushResult result) {
 geodesy::GeodeticPoint interpolatePosition(const geodesy::GeodeticPoint& a,
                                            const geodesy::GeodeticPoint& b, double s) {
   geodesy::GeodeticPoint out;
-  out.latitudeDeg = a.latitudeDeg + s * (b.latitudeDeg - a.latitudeDeg);
-  out.longitudeDeg = wrapDeg180(a.longitudeDeg + s * deltaDeg(a.longitudeDeg, b.longitudeDeg));
-  out.heightM = a.heightM + s * (b.heightM - a.heightM);
+  out.latitude_deg = a.latitude_deg + s * (b.latitude_deg - a.latitude_deg);
+  out.longitude_deg = wrapDeg180(a.longitude_deg + s * delta_deg(a.longitude_deg, b.longitude_deg));
+  out.height_m = a.height_m + s * (b.height_m - a.height_m);
   return out;
 }
 
-geodesy::EulerAnglesDeg interpolateAnglesDeg(const geodesy::EulerAnglesDeg& a,
-                                             const geodesy::EulerAnglesDeg& b, double s) {
-  return {wrapDeg180(a.rollDeg + s * deltaDeg(a.rollDeg, b.rollDeg)),
-          wrapDeg180(a.pitchDeg + s * deltaDeg(a.pitchDeg, b.pitchDeg)),
-          wrapDeg180(a.yawDeg + s * deltaDeg(a.yawDeg, b.yawDeg))};
+geodesy::EulerAnglesDeg interpolateAngles_deg(const geodesy::EulerAnglesDeg& a,
+                                              const geodesy::EulerAnglesDeg& b, double s) {
+  return {wrapDeg180(a.roll_deg + s * delta_deg(a.roll_deg, b.roll_deg)),
+          wrapDeg180(a.pitch_deg + s * delta_deg(a.pitch_deg, b.pitch_deg)),
+          wrapDeg180(a.yaw_deg + s * delta_deg(a.yaw_deg, b.yaw_deg))};
 }
 
 bool PoseBuffer::init(const PoseBufferConfig& config, std::string* why) {
@@ -120,11 +120,11 @@ bool PoseBuffer::init(const PoseBufferConfig& config, std::string* why) {
   if (config.capacity < 2) {
     return fail("capacity must be at least 2 samples, got " + std::to_string(config.capacity));
   }
-  if (config.maxAgeNs <= 0) {
-    return fail("maxAgeNs must be > 0, got " + std::to_string(config.maxAgeNs));
+  if (config.maxAge_ns <= 0) {
+    return fail("maxAge_ns must be > 0, got " + std::to_string(config.maxAge_ns));
   }
-  if (config.startToleranceNs < 0) {
-    return fail("startToleranceNs must be >= 0, got " + std::to_string(config.startToleranceNs));
+  if (config.startTolerance_ns < 0) {
+    return fail("startTolerance_ns must be >= 0, got " + std::to_string(config.startTolerance_ns));
   }
   config_ = config;
   ring_.assign(config.capacity, PoseSample{});
@@ -152,14 +152,14 @@ PushResult PoseBuffer::push(const PoseSample& sample) {
   if (ring_.empty()) {
     return PushResult::NotInitialised;
   }
-  if (!std::isfinite(p.latitudeDeg) || !std::isfinite(p.longitudeDeg) ||
-      !std::isfinite(p.heightM) || !q.allFinite() || !finite(sample.gimbal.angles)) {
+  if (!std::isfinite(p.latitude_deg) || !std::isfinite(p.longitude_deg) ||
+      !std::isfinite(p.height_m) || !q.allFinite() || !finite(sample.gimbal.angles)) {
     result = PushResult::NotFinite;
-  } else if (std::abs(p.latitudeDeg) > 90.0 || std::abs(p.longitudeDeg) > 180.0) {
+  } else if (std::abs(p.latitude_deg) > 90.0 || std::abs(p.longitude_deg) > 180.0) {
     result = PushResult::OutOfRange;
   } else if (q.norm() < kMinQuaternionNorm) {
     result = PushResult::ZeroQuaternion;
-  } else if (count_ > 0 && sample.timestampNs <= at(count_ - 1).timestampNs) {
+  } else if (count_ > 0 && sample.timestamp_ns <= at(count_ - 1).timestamp_ns) {
     result = PushResult::OutOfOrder;
   }
   switch (result) {
@@ -199,48 +199,48 @@ PushResult PoseBuffer::push(const PoseSample& sample) {
   return PushResult::Accepted;
 }
 
-PoseEstimate PoseBuffer::poseAt(std::int64_t timestampNs) const {
+PoseEstimate PoseBuffer::poseAt(std::int64_t timestamp_ns) const {
   PoseEstimate out;
   if (count_ == 0) {
-    return out;  // NoPose, ageNs -1
+    return out;  // NoPose, age_ns -1
   }
   const PoseSample& oldest = at(0);
   const PoseSample& newest = at(count_ - 1);
 
-  if (timestampNs < oldest.timestampNs) {
+  if (timestamp_ns < oldest.timestamp_ns) {
     out.pose = oldest;
-    out.ageNs = oldest.timestampNs - timestampNs;
-    out.status = out.ageNs <= config_.startToleranceNs ? PoseStatus::Ok : PoseStatus::NoPose;
+    out.age_ns = oldest.timestamp_ns - timestamp_ns;
+    out.status = out.age_ns <= config_.startTolerance_ns ? PoseStatus::Ok : PoseStatus::NoPose;
     if (out.status == PoseStatus::Ok) {
-      out.pose.timestampNs = timestampNs;  // held: the drone barely moves in a few ms
+      out.pose.timestamp_ns = timestamp_ns;  // held: the drone barely moves in a few ms
     }
     return out;
   }
 
-  if (timestampNs >= newest.timestampNs) {
-    out.ageNs = timestampNs - newest.timestampNs;
+  if (timestamp_ns >= newest.timestamp_ns) {
+    out.age_ns = timestamp_ns - newest.timestamp_ns;
     out.pose = newest;
-    if (timestampNs > newest.timestampNs && rejectedSinceNewest_) {
+    if (timestamp_ns > newest.timestamp_ns && rejectedSinceNewest_) {
       out.status = PoseStatus::Invalid;
       return out;
     }
-    if (out.ageNs > config_.maxAgeNs) {
+    if (out.age_ns > config_.maxAge_ns) {
       out.status = PoseStatus::Stale;
       return out;
     }
     out.status = PoseStatus::Ok;
-    if (out.ageNs == 0) {
+    if (out.age_ns == 0) {
       return out;
     }
     // Extrapolate with the last interval's rates when it is recent enough to speak for now.
     if (count_ >= 2) {
       const PoseSample& previous = at(count_ - 2);
-      if (newest.timestampNs - previous.timestampNs <= config_.maxAgeNs) {
-        out.pose = blend(previous, newest, timestampNs);
+      if (newest.timestamp_ns - previous.timestamp_ns <= config_.maxAge_ns) {
+        out.pose = blend(previous, newest, timestamp_ns);
         return out;
       }
     }
-    out.pose.timestampNs = timestampNs;  // hold
+    out.pose.timestamp_ns = timestamp_ns;  // hold
     return out;
   }
 
@@ -249,7 +249,7 @@ PoseEstimate PoseBuffer::poseAt(std::int64_t timestampNs) const {
   std::size_t hi = count_ - 1;  // at(hi) > t, at(lo) <= t
   while (hi - lo > 1) {
     const std::size_t mid = lo + (hi - lo) / 2;
-    if (at(mid).timestampNs <= timestampNs) {
+    if (at(mid).timestamp_ns <= timestamp_ns) {
       lo = mid;
     } else {
       hi = mid;
@@ -257,15 +257,15 @@ PoseEstimate PoseBuffer::poseAt(std::int64_t timestampNs) const {
   }
   const PoseSample& a = at(lo);
   const PoseSample& b = at(hi);
-  const std::int64_t toA = timestampNs - a.timestampNs;
-  const std::int64_t toB = b.timestampNs - timestampNs;
-  out.ageNs = std::min(toA, toB);
-  if (out.ageNs > config_.maxAgeNs) {
+  const std::int64_t toA = timestamp_ns - a.timestamp_ns;
+  const std::int64_t toB = b.timestamp_ns - timestamp_ns;
+  out.age_ns = std::min(toA, toB);
+  if (out.age_ns > config_.maxAge_ns) {
     out.pose = toA <= toB ? a : b;
     out.status = PoseStatus::Stale;
     return out;
   }
-  out.pose = toA == 0 ? a : blend(a, b, timestampNs);
+  out.pose = toA == 0 ? a : blend(a, b, timestamp_ns);
   out.status = PoseStatus::Ok;
   return out;
 }

@@ -9,10 +9,10 @@
 // between the two samples around t: position linearly in latitude, longitude and height
 // (longitude across the antimeridian), attitude by slerp, gimbal angles each along the
 // shorter way round the circle. After the newest sample it extrapolates with the rate of the
-// last two samples (hold when they are further apart than maxAgeNs). The status says whether
+// last two samples (hold when they are further apart than maxAge_ns). The status says whether
 // the pose may be used: Ok; NoPose (nothing usable at t: empty buffer, t before the oldest
-// kept sample by more than startToleranceNs); Stale (the nearest accepted sample is more than
-// maxAgeNs away from t, while interpolating or extrapolating); Invalid (t is after the newest
+// kept sample by more than startTolerance_ns); Stale (the nearest accepted sample is more than
+// maxAge_ns away from t, while interpolating or extrapolating); Invalid (t is after the newest
 // accepted sample and the producer has pushed only rejected samples since: the telemetry is
 // currently broken). Only an Ok estimate carries a pose meant for lifting; the others carry
 // the nearest sample for diagnostics.
@@ -36,7 +36,7 @@
 namespace vp::telemetry {
 
 struct PoseSample {
-  std::int64_t timestampNs = 0;       // capture clock of the frames
+  std::int64_t timestamp_ns = 0;      // capture clock of the frames
   geodesy::GeodeticPoint position{};  // body origin, WGS84, ellipsoidal height
   Eigen::Quaterniond bodyToNed{Eigen::Quaterniond::Identity()};  // autopilot attitude q_nb
   geodesy::GimbalState gimbal{};
@@ -59,9 +59,9 @@ const char* toString(PushResult result);
 constexpr double kMinQuaternionNorm = 1e-6;
 
 struct PoseBufferConfig {
-  std::size_t capacity = 256;                 // samples kept (25 s of 10 Hz telemetry)
-  std::int64_t maxAgeNs = 200'000'000;        // 200 ms: nearest sample further -> Stale
-  std::int64_t startToleranceNs = 5'000'000;  // 5 ms: t this far before the oldest -> held
+  std::size_t capacity = 256;                  // samples kept (25 s of 10 Hz telemetry)
+  std::int64_t maxAge_ns = 200'000'000;        // 200 ms: nearest sample further -> Stale
+  std::int64_t startTolerance_ns = 5'000'000;  // 5 ms: t this far before the oldest -> held
 };
 
 struct PoseBufferCounters {
@@ -76,8 +76,8 @@ struct PoseBufferCounters {
 
 struct PoseEstimate {
   PoseStatus status = PoseStatus::NoPose;
-  PoseSample pose{};        // at the queried time when Ok; nearest sample otherwise
-  std::int64_t ageNs = -1;  // |t - nearest accepted sample|, ns; -1 when the buffer is empty
+  PoseSample pose{};         // at the queried time when Ok; nearest sample otherwise
+  std::int64_t age_ns = -1;  // |t - nearest accepted sample|, ns; -1 when the buffer is empty
 };
 
 class PoseBuffer {
@@ -90,7 +90,7 @@ class PoseBuffer {
   // Validates and stores one sample; on the ring being full the oldest sample is dropped.
   PushResult push(const PoseSample& sample);
   // The pose at the capture time t (same clock as the samples).
-  PoseEstimate poseAt(std::int64_t timestampNs) const;
+  PoseEstimate poseAt(std::int64_t timestamp_ns) const;
 
   void clear();  // forgets every sample (e.g. after a telemetry link restart); keeps counters
   std::size_t size() const { return count_; }
@@ -114,7 +114,7 @@ class PoseBuffer {
 geodesy::GeodeticPoint interpolatePosition(const geodesy::GeodeticPoint& a,
                                            const geodesy::GeodeticPoint& b, double s);
 // Each Euler angle along the shorter way round, result in (-180, 180] deg.
-geodesy::EulerAnglesDeg interpolateAnglesDeg(const geodesy::EulerAnglesDeg& a,
-                                             const geodesy::EulerAnglesDeg& b, double s);
+geodesy::EulerAnglesDeg interpolateAngles_deg(const geodesy::EulerAnglesDeg& a,
+                                              const geodesy::EulerAnglesDeg& b, double s);
 
 }  // namespace vp::telemetry

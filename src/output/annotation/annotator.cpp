@@ -16,10 +16,10 @@ namespace {
 
 constexpr int kShiftBits = 4;  // cv::line fixed-point fraction bits: 1/16 px positions
 constexpr double kShiftScale = 1 << kShiftBits;
-constexpr double kMaxCoordinatePx = 30000.0;  // keeps the fixed-point coordinates in int range
-constexpr int kRearAxleDotRadiusPx = 3;
+constexpr double kMaxCoordinate_px = 30000.0;  // keeps the fixed-point coordinates in int range
+constexpr int kRearAxleDotRadius_px = 3;
 constexpr double kArrowHeadShare = 0.3;  // arrow head length / arrow length
-constexpr int kLabelGapPx = 2;           // between the box and its label
+constexpr int kLabelGap_px = 2;          // between the box and its label
 
 cv::Scalar scalar(Bgr c) {
   return {double(c.b), double(c.g), double(c.r)};
@@ -30,8 +30,8 @@ bool usable(const Eigen::Vector2d& p) {
 }
 
 cv::Point fixedPoint(const Eigen::Vector2d& p) {
-  const double x = std::clamp(p.x(), -kMaxCoordinatePx, kMaxCoordinatePx);
-  const double y = std::clamp(p.y(), -kMaxCoordinatePx, kMaxCoordinatePx);
+  const double x = std::clamp(p.x(), -kMaxCoordinate_px, kMaxCoordinate_px);
+  const double y = std::clamp(p.y(), -kMaxCoordinate_px, kMaxCoordinate_px);
   return {static_cast<int>(std::lround(x * kShiftScale)),
           static_cast<int>(std::lround(y * kShiftScale))};
 }
@@ -94,12 +94,12 @@ bool Annotator::init(const AnnotationStyle& style, std::string* why) {
     return false;
   };
   initialised_ = false;
-  if (style.lineThicknessPx < 1 || style.lineThicknessPx > 8) {
-    return fail("lineThicknessPx must be in 1..8, got " + std::to_string(style.lineThicknessPx));
+  if (style.lineThickness_px < 1 || style.lineThickness_px > 8) {
+    return fail("lineThickness_px must be in 1..8, got " + std::to_string(style.lineThickness_px));
   }
-  if (style.wireframeThicknessPx < 1 || style.wireframeThicknessPx > 8) {
-    return fail("wireframeThicknessPx must be in 1..8, got " +
-                std::to_string(style.wireframeThicknessPx));
+  if (style.wireframeThickness_px < 1 || style.wireframeThickness_px > 8) {
+    return fail("wireframeThickness_px must be in 1..8, got " +
+                std::to_string(style.wireframeThickness_px));
   }
   if (!(style.fontScale >= 0.2 && style.fontScale <= 4.0)) {
     return fail("fontScale must be in 0.2..4, got " + std::to_string(style.fontScale));
@@ -221,7 +221,7 @@ cv::Rect Annotator::drawObservation(cv::Mat& image,
     for (int e = 0; e < edgeCount_; ++e) {
       const auto& edge = edges_[static_cast<std::size_t>(e)];
       drawSegment(image, pixels[edge[0]], pixels[edge[1]], kWireframeColour,
-                  style_.wireframeThicknessPx, bounds);
+                  style_.wireframeThickness_px, bounds);
     }
   }
   if (lifted && observation.hasRearAxle && lifter != nullptr && cameraPose != nullptr) {
@@ -233,9 +233,9 @@ cv::Rect Annotator::drawObservation(cv::Mat& image,
         const double a0 = geometry::kTwoPi * i / kSegments;
         const double a1 = geometry::kTwoPi * (i + 1) / kSegments;
         const Eigen::Vector2d q0 =
-            *p + kRearAxleDotRadiusPx * Eigen::Vector2d(std::cos(a0), std::sin(a0));
+            *p + kRearAxleDotRadius_px * Eigen::Vector2d(std::cos(a0), std::sin(a0));
         const Eigen::Vector2d q1 =
-            *p + kRearAxleDotRadiusPx * Eigen::Vector2d(std::cos(a1), std::sin(a1));
+            *p + kRearAxleDotRadius_px * Eigen::Vector2d(std::cos(a1), std::sin(a1));
         drawSegment(image, q0, q1, kRearAxleColour, 2, bounds);
       }
     }
@@ -246,23 +246,23 @@ cv::Rect Annotator::drawObservation(cv::Mat& image,
   const Bgr boxColour = lifted ? kLiftedBoxColour : kNotLiftedBoxColour;
   for (std::size_t i = 0; i < corners.size(); ++i) {
     drawSegment(image, corners[i], corners[(i + 1) % corners.size()], boxColour,
-                style_.lineThicknessPx, bounds);
+                style_.lineThickness_px, bounds);
   }
 
   // Driving direction: centre -> middle of the front edge.
   const Eigen::Vector2d centre(box.cx, box.cy);
   const Eigen::Vector2d front = 0.5 * (corners[0] + corners[1]);
   if (observation.detection.directionKnown) {
-    drawSegment(image, centre, front, kDirectionColour, style_.lineThicknessPx, bounds);
+    drawSegment(image, centre, front, kDirectionColour, style_.lineThickness_px, bounds);
     const Eigen::Vector2d back = (centre - front) * kArrowHeadShare;
     const Eigen::Vector2d side(-back.y(), back.x());
-    drawSegment(image, front, front + back + 0.5 * side, kDirectionColour, style_.lineThicknessPx,
+    drawSegment(image, front, front + back + 0.5 * side, kDirectionColour, style_.lineThickness_px,
                 bounds);
-    drawSegment(image, front, front + back - 0.5 * side, kDirectionColour, style_.lineThicknessPx,
+    drawSegment(image, front, front + back - 0.5 * side, kDirectionColour, style_.lineThickness_px,
                 bounds);
   } else {
     const Eigen::Vector2d rear = 0.5 * (corners[2] + corners[3]);
-    drawSegment(image, rear, front, kUnknownDirectionColour, style_.lineThicknessPx, bounds);
+    drawSegment(image, rear, front, kUnknownDirectionColour, style_.lineThickness_px, bounds);
   }
 
   // Label above the box's top corner (below it when that leaves the image).
@@ -288,14 +288,14 @@ cv::Rect Annotator::drawObservation(cv::Mat& image,
       maxY = std::max(maxY, c.y());
     }
     const cv::Size size = textSize(text);
-    const double pad = 0.5 * style_.lineThicknessPx + kLabelGapPx;
+    const double pad = 0.5 * style_.lineThickness_px + kLabelGap_px;
     double top = minY - pad - size.height;
     if (top < 0.0) {
       top = maxY + pad;
     }
     const cv::Point topLeft(
-        static_cast<int>(std::lround(std::clamp(minX, -kMaxCoordinatePx, kMaxCoordinatePx))),
-        static_cast<int>(std::lround(std::clamp(top, -kMaxCoordinatePx, kMaxCoordinatePx))));
+        static_cast<int>(std::lround(std::clamp(minX, -kMaxCoordinate_px, kMaxCoordinate_px))),
+        static_cast<int>(std::lround(std::clamp(top, -kMaxCoordinate_px, kMaxCoordinate_px))));
     // Black background, then the text.
     const cv::Rect area = clipped(cv::Rect2d(topLeft.x, topLeft.y, size.width, size.height), image);
     for (int y = area.y; y < area.y + area.height; ++y) {

@@ -47,9 +47,9 @@ constexpr Bgr kLabelTextColour{255, 255, 255};         // white text
 constexpr Bgr kLabelBackgroundColour{0, 0, 0};         // on black
 
 struct AnnotationStyle {
-  int lineThicknessPx = 2;       // boxes and arrows, 1..8
-  int wireframeThicknessPx = 1;  // ASM edges, 1..8
-  double fontScale = 0.5;        // cv::FONT_HERSHEY_SIMPLEX scale, 0.2..4
+  int lineThickness_px = 2;       // boxes and arrows, 1..8
+  int wireframeThickness_px = 1;  // ASM edges, 1..8
+  double fontScale = 0.5;         // cv::FONT_HERSHEY_SIMPLEX scale, 0.2..4
   bool drawLabels = true;
   bool drawWireframe = true;
 };

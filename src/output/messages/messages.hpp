@@ -7,7 +7,7 @@
 // OccupancyGrid::cells, which is sized once at start-up (resize()) and then only overwritten.
 // Units are SI unless a name says otherwise; frames are those of docs/conventions.md (world =
 // local ENU at the configured origin). Times are nanoseconds since the Unix epoch (UTC), the
-// clock DDS source timestamps use; measurementTimeNs is the capture time of the frame the
+// clock DDS source timestamps use; measurementTime_ns is the capture time of the frame the
 // state was estimated from. validate() checks what a receiver relies on, without allocating.
 #pragma once
 
@@ -34,8 +34,8 @@ struct VehicleState {
   std::uint32_t droneId = 0;
   std::uint32_t trackId = 0;
 
-  std::int64_t measurementTimeNs = 0;  // frame capture time, ns since the Unix epoch (UTC)
-  float trackAge_s = 0.0F;             // time since the track was first detected
+  std::int64_t measurementTime_ns = 0;  // frame capture time, ns since the Unix epoch (UTC)
+  float trackAge_s = 0.0F;              // time since the track was first detected
 
   // Reference point: centre of the vehicle's footprint on the road (vehicle-frame origin).
   geodesy::GeodeticPoint position{};       // WGS84, ellipsoidal height

@@ -113,26 +113,26 @@ std::optional<Problem> checkRecord(const DetectionRecord& r, DetectionsKey key, 
     return Problem{layout.liftStatus(), "unknown lift status"};
   }
   if (r.liftStatus == LiftStatus::Ok) {
-    const std::array<double, 10> world{r.positionEnu.x(), r.positionEnu.y(), r.positionEnu.z(),
-                                       r.latitudeDeg,     r.longitudeDeg,    r.heightM,
-                                       r.headingEnuRad,   r.dimensionsM.x(), r.dimensionsM.y(),
-                                       r.dimensionsM.z()};
+    const std::array<double, 10> world{r.positionEnu.x(), r.positionEnu.y(),  r.positionEnu.z(),
+                                       r.latitude_deg,    r.longitude_deg,    r.height_m,
+                                       r.headingEnu_rad,  r.dimensions_m.x(), r.dimensions_m.y(),
+                                       r.dimensions_m.z()};
     for (std::size_t i = 0; i < world.size(); ++i) {
       if (!finite(world[i])) {
         return Problem{layout.world() + static_cast<int>(i), "not finite"};
       }
     }
-    if (std::abs(r.latitudeDeg) > 90.0) {
+    if (std::abs(r.latitude_deg) > 90.0) {
       return Problem{layout.world() + 3, "must be in [-90, 90]"};
     }
-    if (std::abs(r.longitudeDeg) > 180.0) {
+    if (std::abs(r.longitude_deg) > 180.0) {
       return Problem{layout.world() + 4, "must be in [-180, 180]"};
     }
-    if (!(r.headingEnuRad >= 0.0 && r.headingEnuRad < geometry::kTwoPi)) {
+    if (!(r.headingEnu_rad >= 0.0 && r.headingEnu_rad < geometry::kTwoPi)) {
       return Problem{layout.world() + 6, "must be in [0, 2 pi)"};
     }
     for (int i = 0; i < 3; ++i) {
-      if (r.dimensionsM[i] < 0.0) {
+      if (r.dimensions_m[i] < 0.0) {
         return Problem{layout.world() + 7 + i, "must be >= 0"};
       }
     }
@@ -214,8 +214,8 @@ void formatRow(const DetectionRecord& r, const DetectionsFileInfo& info, RowForm
   out.text(toString(r.liftStatus));
   const bool lifted = r.liftStatus == LiftStatus::Ok;
   for (const double v :
-       {r.positionEnu.x(), r.positionEnu.y(), r.positionEnu.z(), r.latitudeDeg, r.longitudeDeg,
-        r.heightM, r.headingEnuRad, r.dimensionsM.x(), r.dimensionsM.y(), r.dimensionsM.z()}) {
+       {r.positionEnu.x(), r.positionEnu.y(), r.positionEnu.z(), r.latitude_deg, r.longitude_deg,
+        r.height_m, r.headingEnu_rad, r.dimensions_m.x(), r.dimensions_m.y(), r.dimensions_m.z()}) {
     out.character(',');
     if (lifted) {
       out.number(v);
@@ -281,11 +281,11 @@ DetectionRecord parseRow(const RowParser& p, const DetectionsFileInfo& info) {
   const int w = layout.world();
   if (r.liftStatus == LiftStatus::Ok) {
     r.positionEnu = {p.real<double>(w), p.real<double>(w + 1), p.real<double>(w + 2)};
-    r.latitudeDeg = p.real<double>(w + 3);
-    r.longitudeDeg = p.real<double>(w + 4);
-    r.heightM = p.real<double>(w + 5);
-    r.headingEnuRad = p.real<double>(w + 6);
-    r.dimensionsM = {p.real<double>(w + 7), p.real<double>(w + 8), p.real<double>(w + 9)};
+    r.latitude_deg = p.real<double>(w + 3);
+    r.longitude_deg = p.real<double>(w + 4);
+    r.height_m = p.real<double>(w + 5);
+    r.headingEnu_rad = p.real<double>(w + 6);
+    r.dimensions_m = {p.real<double>(w + 7), p.real<double>(w + 8), p.real<double>(w + 9)};
   } else {
     for (int i = 0; i < static_cast<int>(kWorldColumns.size()); ++i) {
       if (!p.field(w + i).empty()) {

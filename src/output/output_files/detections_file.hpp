@@ -78,11 +78,11 @@ struct DetectionRecord {
   LiftStatus liftStatus = LiftStatus::NotLifted;
   // Valid when liftStatus == Ok (written as empty fields otherwise):
   Eigen::Vector3d positionEnu{0, 0, 0};  // east_m, north_m, up_m: world ENU of the rig origin
-  double latitudeDeg = 0.0;              // WGS84
-  double longitudeDeg = 0.0;
-  double heightM = 0.0;                  // ellipsoidal height of the position, m
-  double headingEnuRad = 0.0;            // driving direction, counter-clockwise from east
-  Eigen::Vector3d dimensionsM{0, 0, 0};  // length_m, width_m, height_m_vehicle
+  double latitude_deg = 0.0;             // WGS84
+  double longitude_deg = 0.0;
+  double height_m = 0.0;                  // ellipsoidal height of the position, m
+  double headingEnu_rad = 0.0;            // driving direction, counter-clockwise from east
+  Eigen::Vector3d dimensions_m{0, 0, 0};  // length_m, width_m, height_m_vehicle
 
   std::string_view imageStem() const;
   bool setImageStem(std::string_view stem);  // false when longer than kMaxImageStemChars

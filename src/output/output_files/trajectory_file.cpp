@@ -68,22 +68,22 @@ TrajectoryRecord recordOf(std::int64_t frameId, const tracking::TrackState& t,
   r.frameId = frameId;
   r.type = t.type;
   r.trackId = t.id;
-  r.speedMps = t.speedMps;
+  r.speed_mps = t.speed_mps;
   r.rearAxleEnu = t.rearAxleEnu;
   r.centreEnu = t.centreEnu;
-  r.timeS = static_cast<double>(t.timestampNs) * 1e-9;
+  r.timeS = static_cast<double>(t.timestamp_ns) * 1e-9;
   r.status = t.status;
   if (wgs84 != nullptr) {
     r.centreWgs84 = *wgs84;
   }
-  r.headingEnuDeg = t.headingEnuRad * kDegPerRad;
-  r.speedSigmaMps = t.speedSigmaMps;
+  r.headingEnu_deg = t.headingEnu_rad * kDegPerRad;
+  r.speedSigma_mps = t.speedSigma_mps;
   r.accelerationMps2 = t.accelerationMps2;
   r.accelerationSigmaMps2 = t.accelerationSigmaMps2;
   r.yawRateDps = t.yawRateRadps * kDegPerRad;
-  r.lengthM = t.lengthM;
-  r.widthM = t.widthM;
-  r.wheelbaseM = t.wheelbaseM;
+  r.length_m = t.length_m;
+  r.width_m = t.width_m;
+  r.wheelbase_m = t.wheelbase_m;
   r.typeProbabilities = t.typeProbabilities;
   r.gamma = t.shape;
   return r;
@@ -98,7 +98,7 @@ std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) 
   if (type < 0 || type >= shape::kVehicleTypeCount) {
     return Problem{kClassId, "must be in [0, 6] (shape::VehicleType)"};
   }
-  const std::array<std::pair<int, double>, 6> finiteColumns{{{kVelocity, r.speedMps},
+  const std::array<std::pair<int, double>, 6> finiteColumns{{{kVelocity, r.speed_mps},
                                                              {kRearX, r.rearAxleEnu.x()},
                                                              {kRearY, r.rearAxleEnu.y()},
                                                              {kCentreX, r.centreEnu.x()},
@@ -114,18 +114,18 @@ std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) 
   }
   if (r.centreWgs84) {
     const tracking::Wgs84Position& p = *r.centreWgs84;
-    if (!(std::abs(p.latitudeDeg) <= 90.0)) {
+    if (!(std::abs(p.latitude_deg) <= 90.0)) {
       return Problem{kLatitude, "must be in [-90, 90]"};
     }
-    if (!(std::abs(p.longitudeDeg) <= 180.0)) {
+    if (!(std::abs(p.longitude_deg) <= 180.0)) {
       return Problem{kLongitude, "must be in [-180, 180]"};
     }
-    if (!std::isfinite(p.heightM)) {
+    if (!std::isfinite(p.height_m)) {
       return Problem{kHeight, "not finite"};
     }
   }
   // 360 is allowed: a heading just below 2 pi prints as 360.00.
-  if (!(r.headingEnuDeg >= 0.0 && r.headingEnuDeg <= 360.0)) {
+  if (!(r.headingEnu_deg >= 0.0 && r.headingEnu_deg <= 360.0)) {
     return Problem{kHeading, "must be in [0, 360]"};
   }
   const std::array<std::pair<int, double>, 2> finiteMotion{
@@ -136,11 +136,11 @@ std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) 
     }
   }
   const std::array<std::pair<int, double>, 5> nonNegative{
-      {{kSpeedSigma, r.speedSigmaMps},
+      {{kSpeedSigma, r.speedSigma_mps},
        {kAccelerationSigma, r.accelerationSigmaMps2},
-       {kLength, r.lengthM},
-       {kWidth, r.widthM},
-       {kWheelbase, r.wheelbaseM}}};
+       {kLength, r.length_m},
+       {kWidth, r.width_m},
+       {kWheelbase, r.wheelbase_m}}};
   for (const auto& [column, value] : nonNegative) {
     if (!(value >= 0.0 && std::isfinite(value))) {
       return Problem{column, "must be >= 0 and finite"};
@@ -181,7 +181,7 @@ TrajectoryRecord parseRow(const RowParser& p, int gammaColumns) {
   r.type = static_cast<shape::VehicleType>(p.integer(kClassId, 0, shape::kVehicleTypeCount - 1));
   r.trackId =
       static_cast<std::uint32_t>(p.integer(kTrackId, 0, std::numeric_limits<std::uint32_t>::max()));
-  r.speedMps = p.real<double>(kVelocity);
+  r.speed_mps = p.real<double>(kVelocity);
   r.rearAxleEnu = {p.real<double>(kRearX), p.real<double>(kRearY)};
   r.centreEnu = {p.real<double>(kCentreX), p.real<double>(kCentreY)};
   r.timeS = p.real<double>(kTime);
@@ -202,14 +202,14 @@ TrajectoryRecord parseRow(const RowParser& p, int gammaColumns) {
                            : (p.field(kLongitude).empty() ? kLongitude : kHeight);
     p.fail(column, "latitude_deg, longitude_deg, height_m must be all set or all empty");
   }
-  r.headingEnuDeg = p.real<double>(kHeading);
-  r.speedSigmaMps = p.real<double>(kSpeedSigma);
+  r.headingEnu_deg = p.real<double>(kHeading);
+  r.speedSigma_mps = p.real<double>(kSpeedSigma);
   r.accelerationMps2 = p.real<double>(kAcceleration);
   r.accelerationSigmaMps2 = p.real<double>(kAccelerationSigma);
   r.yawRateDps = p.real<double>(kYawRate);
-  r.lengthM = p.real<double>(kLength);
-  r.widthM = p.real<double>(kWidth);
-  r.wheelbaseM = p.real<double>(kWheelbase);
+  r.length_m = p.real<double>(kLength);
+  r.width_m = p.real<double>(kWidth);
+  r.wheelbase_m = p.real<double>(kWheelbase);
   for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
     r.typeProbabilities[static_cast<std::size_t>(t)] = p.real<float>(kProbabilities + t);
   }
@@ -255,26 +255,26 @@ std::vector<std::string> parseHeader(const std::string& file, int line, std::str
 
 }  // namespace
 
-double TrajectoryRecord::headingEnuRad() const {
-  return headingEnuDeg / kDegPerRad;
+double TrajectoryRecord::headingEnu_rad() const {
+  return headingEnu_deg / kDegPerRad;
 }
 
 tracking::TrackState toTrackState(const TrajectoryRecord& r) {
   tracking::TrackState t;
   t.id = r.trackId;
   t.status = r.status;
-  t.timestampNs = std::llround(r.timeS * 1e9);
+  t.timestamp_ns = std::llround(r.timeS * 1e9);
   t.centreEnu = r.centreEnu;
   t.rearAxleEnu = r.rearAxleEnu;
-  t.headingEnuRad = r.headingEnuRad();
-  t.speedMps = r.speedMps;
-  t.speedSigmaMps = r.speedSigmaMps;
+  t.headingEnu_rad = r.headingEnu_rad();
+  t.speed_mps = r.speed_mps;
+  t.speedSigma_mps = r.speedSigma_mps;
   t.accelerationMps2 = r.accelerationMps2;
   t.accelerationSigmaMps2 = r.accelerationSigmaMps2;
   t.yawRateRadps = r.yawRateDps / kDegPerRad;
-  t.lengthM = r.lengthM;
-  t.widthM = r.widthM;
-  t.wheelbaseM = r.wheelbaseM;
+  t.length_m = r.length_m;
+  t.width_m = r.width_m;
+  t.wheelbase_m = r.wheelbase_m;
   t.typeProbabilities = r.typeProbabilities;
   t.type = r.type;
   t.shape = r.gamma;

@@ -46,24 +46,24 @@ struct TrajectoryRecord {
   std::int64_t frameId = 0;                             // frame_id, >= 0
   shape::VehicleType type = shape::VehicleType::Sedan;  // class_id: the fused (argmax) type
   std::uint32_t trackId = 0;                            // track_id
-  double speedMps = 0.0;                                // velocity, signed (< 0 reversing)
+  double speed_mps = 0.0;                               // velocity, signed (< 0 reversing)
   Eigen::Vector2d rearAxleEnu{0.0, 0.0};                // coordinate_world_{x,y}_opt, m
   Eigen::Vector2d centreEnu{0.0, 0.0};                  // coordinate_world_{x,y}, m
   double timeS = 0.0;                                   // time_s
   tracking::TrackStatus status = tracking::TrackStatus::Tentative;
   std::optional<tracking::Wgs84Position> centreWgs84;  // empty fields: not given
-  double headingEnuDeg = 0.0;                          // [0, 360]
-  double speedSigmaMps = 0.0;                          // >= 0
+  double headingEnu_deg = 0.0;                         // [0, 360]
+  double speedSigma_mps = 0.0;                         // >= 0
   double accelerationMps2 = 0.0;
   double accelerationSigmaMps2 = 0.0;  // >= 0
   double yawRateDps = 0.0;
-  double lengthM = 0.0;                                             // >= 0
-  double widthM = 0.0;                                              // >= 0
-  double wheelbaseM = 0.0;                                          // >= 0
+  double length_m = 0.0;                                            // >= 0
+  double width_m = 0.0;                                             // >= 0
+  double wheelbase_m = 0.0;                                         // >= 0
   std::array<float, shape::kVehicleTypeCount> typeProbabilities{};  // sum 1 (1e-3)
   shape::ShapeParams gamma{};  // count <= the file's gammaColumns
 
-  double headingEnuRad() const;
+  double headingEnu_rad() const;
 };
 
 // The track state that trajectoryCsvRow() turns into this record's row (fields the file does

@@ -56,26 +56,26 @@ bool validate(const DecoderOptions& options, std::string* why) {
     return fail(why, "duplicate_overlap: must be in (0, 1], got " +
                          std::to_string(options.duplicateOverlap));
   }
-  if (!(options.cutEdgeMarginPx >= 0.0) || !std::isfinite(options.cutEdgeMarginPx)) {
+  if (!(options.cutEdgeMargin_px >= 0.0) || !std::isfinite(options.cutEdgeMargin_px)) {
     return fail(why, "cut_edge_margin_px: must be finite and >= 0");
   }
   return true;
 }
 
 bool DetectionDecoder::init(const DecoderOptions& options, int gridWidth, int gridHeight,
-                            int stridePx, int maxTiles, std::string* why) {
+                            int stride_px, int maxTiles, std::string* why) {
   if (!validate(options, why)) {
     return false;
   }
-  if (gridWidth <= 0 || gridHeight <= 0 || stridePx <= 0 || maxTiles <= 0) {
+  if (gridWidth <= 0 || gridHeight <= 0 || stride_px <= 0 || maxTiles <= 0) {
     return fail(why, "grid " + std::to_string(gridWidth) + "x" + std::to_string(gridHeight) +
-                         ", stride " + std::to_string(stridePx) + " and max tiles " +
+                         ", stride " + std::to_string(stride_px) + " and max tiles " +
                          std::to_string(maxTiles) + " must all be > 0");
   }
   options_ = options;
   gridWidth_ = gridWidth;
   gridHeight_ = gridHeight;
-  stridePx_ = stridePx;
+  stridePx_ = stride_px;
   maxTiles_ = maxTiles;
   peaks_.assign(static_cast<std::size_t>(gridWidth) * static_cast<std::size_t>(gridHeight), Peak{});
   const std::size_t capacity =
@@ -112,7 +112,7 @@ DecodeStatus DetectionDecoder::decodeTile(const HeadTensors& heads,
     return DecodeStatus::MissingTensor;
   }
   if (heads.gridWidth != gridWidth_ || heads.gridHeight != gridHeight_ ||
-      heads.stridePx != stridePx_) {
+      heads.stride_px != stridePx_) {
     return DecodeStatus::GridMismatch;
   }
   if (tilesThisFrame_ >= maxTiles_) {
@@ -160,7 +160,7 @@ DecodeStatus DetectionDecoder::decodeTile(const HeadTensors& heads,
   const double stride = stridePx_;
   const double cellCentre = (stride - 1.0) / 2.0;
   const double sizeScale = 1.0 / std::sqrt(geometry.scaleX * geometry.scaleY);
-  const double margin = options_.cutEdgeMarginPx;
+  const double margin = options_.cutEdgeMargin_px;
   const preprocess::TileRect& rect = tile.rect;
   for (std::size_t p = 0; p < topK; ++p) {
     const int cell = peaks_[p].cell;
@@ -187,27 +187,27 @@ DecodeStatus DetectionDecoder::decodeTile(const HeadTensors& heads,
     geometry::axisAlignedHalfExtents(box, &halfU, &halfV);
     const bool cut = (rect.innerLeft && box.cx - halfU < -0.5 + margin) ||
                      (rect.innerTop && box.cy - halfV < -0.5 + margin) ||
-                     (rect.innerRight && box.cx + halfU > rect.widthPx - 0.5 - margin) ||
-                     (rect.innerBottom && box.cy + halfV > rect.heightPx - 0.5 - margin);
+                     (rect.innerRight && box.cx + halfU > rect.width_px - 0.5 - margin) ||
+                     (rect.innerBottom && box.cy + halfV > rect.height_px - 0.5 - margin);
 
     Candidate& candidate = candidates_[candidateCount_];
     Detection& d = candidate.detection;
     d = Detection{};
-    d.box.cx = geometry.workingToFrameU(rect.x0Px + box.cx);
-    d.box.cy = geometry.workingToFrameV(rect.y0Px + box.cy);
+    d.box.cx = geometry.workingToFrameU(rect.x0_px + box.cx);
+    d.box.cy = geometry.workingToFrameV(rect.y0_px + box.cy);
     d.box.length = box.length * sizeScale;
     d.box.width = box.width * sizeScale;
     d.box.angle = box.angle;
     if (options_.dropCentresOutsideFrame &&
-        (d.box.cx < -0.5 || d.box.cx >= geometry.frameWidthPx - 0.5 || d.box.cy < -0.5 ||
-         d.box.cy >= geometry.frameHeightPx - 0.5)) {
+        (d.box.cx < -0.5 || d.box.cx >= geometry.frameWidth_px - 0.5 || d.box.cy < -0.5 ||
+         d.box.cy >= geometry.frameHeight_px - 0.5)) {
       continue;
     }
     d.score = peaks_[p].score;
     d.directionKnown = true;
     d.typeProbabilities.fill(1.0F / static_cast<float>(shape::kVehicleTypeCount));
     d.tile = static_cast<std::int16_t>(tile.index);
-    candidate.radiusPx = 0.5 * std::hypot(d.box.length, d.box.width);
+    candidate.radius_px = 0.5 * std::hypot(d.box.length, d.box.width);
     candidate.areaPx2 = d.box.length * d.box.width;
     candidate.cell = cell;
     candidate.cut = cut;
@@ -221,7 +221,7 @@ bool DetectionDecoder::overlapsKept(const Candidate& candidate, std::size_t kept
   for (std::size_t k = 0; k < keptCount; ++k) {
     const Candidate& other = candidates_[kept_[k]];
     const geometry::RotatedBox& b = other.detection.box;
-    if (std::hypot(a.cx - b.cx, a.cy - b.cy) >= candidate.radiusPx + other.radiusPx) {
+    if (std::hypot(a.cx - b.cx, a.cy - b.cy) >= candidate.radius_px + other.radius_px) {
       continue;  // the circumscribed circles are apart: no overlap possible
     }
     const double intersection = geometry::intersectionArea(a, b);

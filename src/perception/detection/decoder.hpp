@@ -12,7 +12,7 @@
 //    pixel-centre map u_frame = (u + 0.5) / scaleX - 0.5 (sizes / sqrt(scaleX scaleY)), as
 //    Predictor maps them back. Candidates whose centre falls outside the frame (in the
 //    padding) are dropped (dropCentresOutsideFrame; the Python code keeps them).
-//  - A candidate whose box reaches within cutEdgeMarginPx of an inner tile edge (one shared
+//  - A candidate whose box reaches within cutEdgeMargin_px of an inner tile edge (one shared
 //    with an overlapping neighbour) is marked cut: the vehicle is probably only partly in
 //    this tile.
 //  - finishFrame(): greedy suppression in the order (whole before cut, then score, tile,
@@ -44,14 +44,14 @@ struct DecoderOptions {
   int topKPerTile = 200;                // peaks kept per tile, >= 1 (evaluate.decode: 200)
   double nmsIou = 0.5;                  // rotated IoU above which the weaker box goes, (0, 1]
   double duplicateOverlap = 0.5;        // cross-tile intersection / smaller area, (0, 1]
-  double cutEdgeMarginPx = 4.0;         // working px (one stride-4 cell), >= 0
+  double cutEdgeMargin_px = 4.0;        // working px (one stride-4 cell), >= 0
   bool dropCentresOutsideFrame = true;  // centres in the padding are not vehicles
 };
 
 bool validate(const DecoderOptions& options, std::string* why);
 
 // One tile's detector outputs: float NHWC tensors (channels contiguous per cell) on a
-// gridWidth x gridHeight grid at stridePx: heatmap 1 channel (probability), offset 2,
+// gridWidth x gridHeight grid at stride_px: heatmap 1 channel (probability), offset 2,
 // size 2 (log px), direction 2 (cos, sin; any length).
 struct HeadTensors {
   const float* heatmap = nullptr;
@@ -60,7 +60,7 @@ struct HeadTensors {
   const float* direction = nullptr;
   int gridWidth = 0;
   int gridHeight = 0;
-  int stridePx = 4;
+  int stride_px = 4;
 };
 
 enum class DecodeStatus {
@@ -77,7 +77,7 @@ class DetectionDecoder {
   DetectionDecoder() = default;
 
   // Start-up: candidate storage for maxTiles x topKPerTile and the peak scratch of one grid.
-  bool init(const DecoderOptions& options, int gridWidth, int gridHeight, int stridePx,
+  bool init(const DecoderOptions& options, int gridWidth, int gridHeight, int stride_px,
             int maxTiles, std::string* why = nullptr);
   bool initialised() const { return gridWidth_ > 0; }
   const DecoderOptions& options() const { return options_; }
@@ -97,7 +97,7 @@ class DetectionDecoder {
  private:
   struct Candidate {
     Detection detection{};
-    double radiusPx = 0.0;  // half diagonal: quick rejection before the exact overlap
+    double radius_px = 0.0;  // half diagonal: quick rejection before the exact overlap
     double areaPx2 = 0.0;
     int cell = 0;
     bool cut = false;

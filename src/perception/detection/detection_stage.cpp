@@ -150,11 +150,11 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
   }
 
   // First stage: detector per tile, decoded into frame pixels.
-  double detectorMs = 0.0;
-  double decodeMs = 0.0;
+  double detector_ms = 0.0;
+  double decode_ms = 0.0;
   decoder_.beginFrame();
   for (const preprocess::TileView& tile : frame.tiles) {
-    if (tile.rect.widthPx != inputWidth_ || tile.rect.heightPx != inputHeight_ ||
+    if (tile.rect.width_px != inputWidth_ || tile.rect.height_px != inputHeight_ ||
         tile.data == nullptr) {
       return DetectionStatus::WrongTileSize;
     }
@@ -171,17 +171,17 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
     heads.direction = detector_.output(headIndex_[3]).data;
     heads.gridWidth = gridWidth_;
     heads.gridHeight = gridHeight_;
-    heads.stridePx = stridePx_;
+    heads.stride_px = stridePx_;
     if (decoder_.decodeTile(heads, tile, frame.geometry) != DecodeStatus::Ok) {
       return DetectionStatus::DecodeFailed;
     }
-    detectorMs += millisecondsBetween(start, ran);
-    decodeMs += millisecondsBetween(ran, Clock::now());
+    detector_ms += millisecondsBetween(start, ran);
+    decode_ms += millisecondsBetween(ran, Clock::now());
   }
   const Clock::time_point nmsStart = Clock::now();
   const std::size_t kept = decoder_.finishFrame(out);
   const Clock::time_point nmsEnd = Clock::now();
-  decodeMs += millisecondsBetween(nmsStart, nmsEnd);
+  decode_ms += millisecondsBetween(nmsStart, nmsEnd);
 
   // Second stage, best detections first.
   if (secondStage && kept > 0) {
@@ -226,8 +226,8 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
   markFrameEdge(frame.geometry, out.first(refinedKept));
   stats_.refinedDuplicates = static_cast<int>(verified - refinedKept);
   stats_.crops_ms = millisecondsBetween(nmsEnd, Clock::now());
-  stats_.detector_ms = detectorMs;
-  stats_.decode_ms = decodeMs;
+  stats_.detector_ms = detector_ms;
+  stats_.decode_ms = decode_ms;
   stats_.tiles = static_cast<int>(frame.tiles.size());
   stats_.candidates = static_cast<int>(decoder_.candidateCount());
   stats_.cutCandidates = static_cast<int>(decoder_.cutCandidateCount());
@@ -241,12 +241,13 @@ void DetectionStage::markFrameEdge(const preprocess::FrameGeometry& geometry,
                                    std::span<Detection> detections) const {
   // The decoder's cut margin (working px) in frame px; frame pixel edges at -0.5, size - 0.5.
   const double margin =
-      options_.decoder.cutEdgeMarginPx / std::min(geometry.scaleX, geometry.scaleY);
-  const double right = geometry.frameWidthPx - 0.5 - margin;
-  const double bottom = geometry.frameHeightPx - 0.5 - margin;
-  const geometry::RotatedBox frame{
-      0.5 * geometry.frameWidthPx - 0.5, 0.5 * geometry.frameHeightPx - 0.5,
-      static_cast<double>(geometry.frameWidthPx), static_cast<double>(geometry.frameHeightPx), 0.0};
+      options_.decoder.cutEdgeMargin_px / std::min(geometry.scaleX, geometry.scaleY);
+  const double right = geometry.frameWidth_px - 0.5 - margin;
+  const double bottom = geometry.frameHeight_px - 0.5 - margin;
+  const geometry::RotatedBox frame{0.5 * geometry.frameWidth_px - 0.5,
+                                   0.5 * geometry.frameHeight_px - 0.5,
+                                   static_cast<double>(geometry.frameWidth_px),
+                                   static_cast<double>(geometry.frameHeight_px), 0.0};
   for (Detection& d : detections) {
     double halfU = 0.0;
     double halfV = 0.0;

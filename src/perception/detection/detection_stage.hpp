@@ -94,7 +94,7 @@ class DetectionStage {
   bool hasVerifier() const { return cropper_.hasVerifier(); }
   int detectorInputWidth() const { return inputWidth_; }
   int detectorInputHeight() const { return inputHeight_; }
-  int stridePx() const { return stridePx_; }
+  int stride_px() const { return stridePx_; }
 
  private:
   // Removes detections that overlap a better one after the second stage; returns the count kept.

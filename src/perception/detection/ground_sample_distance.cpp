@@ -33,11 +33,11 @@ double workingScaleForGsd(double gsd_m) {
   return std::min(1.0, gsd_m / kDetectorWorkingGsd_m);
 }
 
-double nadirGsd(double heightAboveGround_m, double focalLengthPx) {
-  if (!(heightAboveGround_m > 0.0) || !(focalLengthPx > 0.0)) {
+double nadirGsd(double heightAboveGround_m, double focalLength_px) {
+  if (!(heightAboveGround_m > 0.0) || !(focalLength_px > 0.0)) {
     return 0.0;
   }
-  return heightAboveGround_m / focalLengthPx;
+  return heightAboveGround_m / focalLength_px;
 }
 
 double medianLengthGsd(std::span<const Detection> detections, const GsdOptions& options,

@@ -44,7 +44,7 @@ inline constexpr double kDetectorWorkingGsd_m = 0.12;
 double workingScaleForGsd(double gsd_m);
 
 // GSD of a nadir pinhole camera at heightAboveGround_m with focal length fPx.
-double nadirGsd(double heightAboveGround_m, double focalLengthPx);
+double nadirGsd(double heightAboveGround_m, double focalLength_px);
 
 // nominalCarLength_m / median box length (frame px) over the detections, clamped; 0 when
 // there is none. scratch must hold detections.size() values.

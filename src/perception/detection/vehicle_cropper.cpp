@@ -64,8 +64,8 @@ CropMap cropAffine(double centreU, double centreV, double angle, double gsd_m, d
   const double k = cropGsd_m / gsd_m;
   const double c = std::cos(angle);
   const double s = std::sin(angle);
-  const double x0 = (kCropWidthPx - 1) / 2.0;
-  const double y0 = (kCropHeightPx - 1) / 2.0;
+  const double x0 = (kCropWidth_px - 1) / 2.0;
+  const double y0 = (kCropHeight_px - 1) / 2.0;
   CropMap map;
   map(0, 0) = k * c;
   map(0, 1) = -k * s;
@@ -212,11 +212,11 @@ bool VehicleCropper::init(const std::string& cropModelPath,
     return fail(why, "crop model: " + detail);
   }
   const inference::TensorShape input = engine_.inputShape();
-  if (input.h != kCropHeightPx || input.w != kCropWidthPx || input.c != 3) {
+  if (input.h != kCropHeight_px || input.w != kCropWidth_px || input.c != 3) {
     return fail(why, cropModelPath + ": input is " + std::to_string(input.c) + "x" +
                          std::to_string(input.h) + "x" + std::to_string(input.w) +
-                         ", the crop network needs 3x" + std::to_string(kCropHeightPx) + "x" +
-                         std::to_string(kCropWidthPx));
+                         ", the crop network needs 3x" + std::to_string(kCropHeight_px) + "x" +
+                         std::to_string(kCropWidth_px));
   }
   struct Wanted {
     const char* name;
@@ -272,9 +272,9 @@ bool VehicleCropper::init(const std::string& cropModelPath,
   }
   shapeCount_ = engine_.output(shapeIndex_).shape.c;
   options_ = options;
-  crop_.create(kCropHeightPx, kCropWidthPx, CV_8UC3);
+  crop_.create(kCropHeight_px, kCropWidth_px, CV_8UC3);
   crop_.setTo(cv::Scalar::all(0));
-  mirrored_.create(kCropHeightPx, kCropWidthPx, CV_8UC3);
+  mirrored_.create(kCropHeight_px, kCropWidth_px, CV_8UC3);
   return true;
 }
 
@@ -335,8 +335,8 @@ SecondStageStatus VehicleCropper::endsFlipLogit(const cv::Mat& frame, double gsd
   if (!(gsd_m > 0.0) || !std::isfinite(gsd_m)) {
     return SecondStageStatus::BadGsd;
   }
-  const double halfWindowPx = 0.5 * kCropWidthPx * kCropGsd_m / gsd_m;
-  const double offsetPx = std::max(0.0, 0.5 * box.length - halfWindowPx);
+  const double halfWindow_px = 0.5 * kCropWidth_px * kCropGsd_m / gsd_m;
+  const double offset_px = std::max(0.0, 0.5 * box.length - halfWindow_px);
   const double c = std::cos(box.angle);
   const double s = std::sin(box.angle);
   std::array<float, 2> flips{};
@@ -345,7 +345,7 @@ SecondStageStatus VehicleCropper::endsFlipLogit(const cv::Mat& frame, double gsd
     const double angle = end == 0 ? box.angle : geometry::wrapTwoPi(box.angle + geometry::kPi);
     if (!cutCrop(
             frame,
-            cropAffine(box.cx + sign * offsetPx * c, box.cy + sign * offsetPx * s, angle, gsd_m),
+            cropAffine(box.cx + sign * offset_px * c, box.cy + sign * offset_px * s, angle, gsd_m),
             mirrored_)) {
       return SecondStageStatus::CropFailed;
     }

@@ -57,8 +57,8 @@
 
 namespace vp::detection {
 
-constexpr int kCropWidthPx = 96;     // model.CROP_W
-constexpr int kCropHeightPx = 48;    // model.CROP_H
+constexpr int kCropWidth_px = 96;    // model.CROP_W
+constexpr int kCropHeight_px = 48;   // model.CROP_H
 constexpr double kCropGsd_m = 0.06;  // model.CROP_GSD_M, metres per crop pixel
 constexpr int kRefineCount = 5;      // du_m, dv_m, d_angle_rad, length_m, width_m
 // model.REFINE_SCALE / REFINE_OFFSET: refine = raw * scale + offset.

@@ -99,12 +99,13 @@ bool DetectionLifter::init(const terrain::TerrainModel& terrain, const geodesy::
     return false;
   }
   if (!(options.boxHeightShare >= 0.0 && options.boxHeightShare <= 1.0) ||
-      !(options.nominalHeightM > 0.0 && options.nominalHeightM <= 10.0)) {
+      !(options.nominalHeight_m > 0.0 && options.nominalHeight_m <= 10.0)) {
     if (why != nullptr) {
       *why =
           "detection lifter: box height share must be in [0, 1] and the nominal height in "
           "(0, 10] m, got " +
-          std::to_string(options.boxHeightShare) + " and " + std::to_string(options.nominalHeightM);
+          std::to_string(options.boxHeightShare) + " and " +
+          std::to_string(options.nominalHeight_m);
     }
     return false;
   }
@@ -116,13 +117,13 @@ bool DetectionLifter::init(const terrain::TerrainModel& terrain, const geodesy::
 }
 
 FrameFootprint frameFootprint(const lifting::Lifter& lifter, const FrameLiftSummary& summary,
-                              int widthPx, int heightPx) {
+                              int width_px, int height_px) {
   FrameFootprint footprint;
   if (summary.poseStatus != LiftStatus::Ok) {
     return footprint;
   }
-  const double w = widthPx - 1.0;
-  const double h = heightPx - 1.0;
+  const double w = width_px - 1.0;
+  const double h = height_px - 1.0;
   for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0),
                                        Eigen::Vector2d(w, h), Eigen::Vector2d(0, h)}) {
     const auto ground = lifter.pixelToWorld(summary.cameraPose, pixel);
@@ -135,19 +136,21 @@ FrameFootprint frameFootprint(const lifting::Lifter& lifter, const FrameLiftSumm
   return footprint;
 }
 
-FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter,
+                                            std::int64_t timestamp_ns,
                                             const telemetry::PoseEstimate& pose,
                                             std::span<const detection::Detection> detections,
                                             std::span<VehicleObservation> out) const {
-  return liftFrame(lifter, timestampNs, pose.status, toDronePose(pose.pose), detections, out);
+  return liftFrame(lifter, timestamp_ns, pose.status, toDronePose(pose.pose), detections, out);
 }
 
-FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter,
+                                            std::int64_t timestamp_ns,
                                             telemetry::PoseStatus poseStatus,
                                             const lifting::DronePose& pose,
                                             std::span<const detection::Detection> detections,
                                             std::span<VehicleObservation> out) const {
-  return liftFrame(lifter, timestampNs, cameraPoseFor(lifter, poseStatus, pose), detections, out);
+  return liftFrame(lifter, timestamp_ns, cameraPoseFor(lifter, poseStatus, pose), detections, out);
 }
 
 FrameCameraPose DetectionLifter::cameraPoseFor(const lifting::Lifter& lifter,
@@ -169,7 +172,8 @@ FrameCameraPose DetectionLifter::cameraPoseFor(const lifting::Lifter& lifter,
   return camera;
 }
 
-FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter,
+                                            std::int64_t timestamp_ns,
                                             const FrameCameraPose& camera,
                                             std::span<const detection::Detection> detections,
                                             std::span<VehicleObservation> out) const {
@@ -183,7 +187,7 @@ FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter, std::
   for (std::size_t i = 0; i < summary.written; ++i) {
     VehicleObservation& observation = out[i];
     observation = VehicleObservation{};
-    observation.timestampNs = timestampNs;
+    observation.timestamp_ns = timestamp_ns;
     observation.detection = detections[i];
     observation.liftStatus = summary.poseStatus;
     if (summary.poseStatus != LiftStatus::Ok) {
@@ -211,9 +215,10 @@ void DetectionLifter::liftOne(const lifting::Lifter& lifter,
   const shape::VehicleType type = mostLikelyType(observation.detection, nullptr);
   const shape::VehicleGeometry geometry =
       shape::vehicleGeometry(*shapeModel_, type, observation.detection.gamma);
-  const double vehicleHeightM =
-      geometry.hasKeypoints ? geometry.sizeM.z() : options_.nominalHeightM;
-  const auto ground = lifter.boxToGround(cameraPose, box, options_.boxHeightShare * vehicleHeightM);
+  const double vehicleHeight_m =
+      geometry.hasKeypoints ? geometry.size_m.z() : options_.nominalHeight_m;
+  const auto ground =
+      lifter.boxToGround(cameraPose, box, options_.boxHeightShare * vehicleHeight_m);
   if (!ground) {
     observation.liftStatus = liftStatusFrom(ground.error());
     return;
@@ -231,9 +236,9 @@ void DetectionLifter::liftOne(const lifting::Lifter& lifter,
   const double forwardNorm = forward.norm();
   if (forwardNorm > 0.0) {
     const Eigen::Vector3d f = forward / forwardNorm;
-    observation.ground.widthM = (side - side.dot(f) * f).norm();
+    observation.ground.width_m = (side - side.dot(f) * f).norm();
   }
-  observation.heightM = geometry.hasKeypoints ? geometry.sizeM.z() : 0.0;
+  observation.height_m = geometry.hasKeypoints ? geometry.size_m.z() : 0.0;
 
   // Heights of the points around the centre: the centre's ENU z plus the DTM's height
   // difference. Over a car's few metres ENU z and ellipsoidal height change alike (the
@@ -255,16 +260,16 @@ void DetectionLifter::liftOne(const lifting::Lifter& lifter,
   };
   shape::GroundFootprint footprint;
   footprint.centreEnu = centre;
-  footprint.headingEnuRad = observation.ground.headingEnuRad;
+  footprint.headingEnu_rad = observation.ground.headingEnu_rad;
   // The footprint's plan size: GroundBox sizes run along the (possibly sloping) ground, while
   // the keypoints are placed in plan and then stood on the DTM.
   const Eigen::Vector2d planForward = forward.head<2>();
   const Eigen::Vector2d planSide = side.head<2>();
-  footprint.lengthM = planForward.norm();
-  footprint.widthM =
-      footprint.lengthM > 0.0
+  footprint.length_m = planForward.norm();
+  footprint.width_m =
+      footprint.length_m > 0.0
           ? std::abs(planSide.x() * planForward.y() - planSide.y() * planForward.x()) /
-                footprint.lengthM
+                footprint.length_m
           : 0.0;
   shape::PlacedVehicle placed;
   if (shape::placeOnGround(geometry, footprint, groundZ, &placed)) {
@@ -280,7 +285,7 @@ void DetectionLifter::liftOne(const lifting::Lifter& lifter,
   // Some keypoint stands off the DTM (a car at the DTM's edge): keep the rear axle alone
   // when its own ground is known.
   if (geometry.hasKeypoints) {
-    const Eigen::Vector2d axleXy = shape::planPositionEnu(geometry, footprint, geometry.rearAxleM);
+    const Eigen::Vector2d axleXy = shape::planPositionEnu(geometry, footprint, geometry.rearAxle_m);
     const auto z = groundZ(axleXy);
     if (z) {
       observation.hasRearAxle = true;

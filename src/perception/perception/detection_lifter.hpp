@@ -57,13 +57,13 @@ LiftStatus liftStatusFrom(lifting::LiftError error);
 LiftStatus liftStatusFrom(telemetry::PoseStatus status);  // Ok -> Ok
 
 struct VehicleObservation {
-  std::int64_t timestampNs = 0;      // frame capture time
+  std::int64_t timestamp_ns = 0;     // frame capture time
   detection::Detection detection{};  // the image-space detection, copied
   LiftStatus liftStatus = LiftStatus::NoPose;
   // World values: set only when liftStatus is Ok, zero otherwise.
   lifting::GroundBox ground{};  // footprint centre (ENU, WGS84), corners, heading, size
   shape::VehicleType type = shape::VehicleType::Sedan;  // most likely type (shape source)
-  double heightM = 0.0;                                 // ASM shape height, m (0 without keypoints)
+  double height_m = 0.0;                                // ASM shape height, m (0 without keypoints)
   bool hasKeypoints = false;                            // a car shape stood on the DTM
   shape::KeypointModel keypointsEnu = shape::KeypointModel::Zero();  // world ENU, m
   bool hasRearAxle = false;
@@ -89,10 +89,10 @@ struct FrameFootprint {
   std::span<const Eigen::Vector2d> corners() const { return {cornersEnu.data(), count}; }
 };
 
-// The footprint of a widthPx x heightPx frame seen with the summary's camera pose (empty when
+// The footprint of a width_px x height_px frame seen with the summary's camera pose (empty when
 // summary.poseStatus is not Ok). The Lifter is the one the summary was lifted with.
 FrameFootprint frameFootprint(const lifting::Lifter& lifter, const FrameLiftSummary& summary,
-                              int widthPx, int heightPx);
+                              int width_px, int height_px);
 
 // The camera's pose for one frame, or the status saying why there is none (computed once per
 // frame; the pipeline also uses it for the second stage's ground sample distance).
@@ -108,11 +108,11 @@ lifting::DronePose toDronePose(const telemetry::PoseSample& sample);
 
 struct DetectionLifterOptions {
   // Height above the ground at which a box is lifted, as a share of the vehicle's height (the
-  // ASM shape of its most likely type, else nominalHeightM): 0 for boxes that outline the
+  // ASM shape of its most likely type, else nominalHeight_m): 0 for boxes that outline the
   // footprint on the ground; 0.5 for a detector's boxes, which enclose the whole vehicle, so
   // their centre shows the vehicle's middle, about half its height up (Lifter::boxToGround).
-  double boxHeightShare = 0.5;  // [0, 1]; the shipped detector's boxes
-  double nominalHeightM = 1.5;  // vehicles without an ASM shape (large vehicles), m
+  double boxHeightShare = 0.5;   // [0, 1]; the shipped detector's boxes
+  double nominalHeight_m = 1.5;  // vehicles without an ASM shape (large vehicles), m
 };
 
 class DetectionLifter {
@@ -126,7 +126,7 @@ class DetectionLifter {
             const shape::ActiveShapeModel& shapeModel, const DetectionLifterOptions& options,
             std::string* why = nullptr);
 
-  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestamp_ns,
                              telemetry::PoseStatus poseStatus, const lifting::DronePose& pose,
                              std::span<const detection::Detection> detections,
                              std::span<VehicleObservation> out) const;
@@ -134,12 +134,12 @@ class DetectionLifter {
   FrameCameraPose cameraPoseFor(const lifting::Lifter& lifter, telemetry::PoseStatus poseStatus,
                                 const lifting::DronePose& pose) const;
   // The same lift with the frame's camera pose already computed.
-  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestamp_ns,
                              const FrameCameraPose& camera,
                              std::span<const detection::Detection> detections,
                              std::span<VehicleObservation> out) const;
   // The same with the buffer's estimate (its pose is used only when its status is Ok).
-  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestampNs,
+  FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestamp_ns,
                              const telemetry::PoseEstimate& pose,
                              std::span<const detection::Detection> detections,
                              std::span<VehicleObservation> out) const;

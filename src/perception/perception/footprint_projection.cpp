@@ -9,11 +9,11 @@ namespace vp::perception {
 Expected<geometry::RotatedBox, lifting::LiftError> footprintToImageBox(
     const lifting::Lifter& lifter, const lifting::CameraPoseWorld& cameraPose,
     const terrain::TerrainModel& terrain, const shape::GroundFootprint& footprint) {
-  const Eigen::Vector2d f(std::cos(footprint.headingEnuRad), std::sin(footprint.headingEnuRad));
+  const Eigen::Vector2d f(std::cos(footprint.headingEnu_rad), std::sin(footprint.headingEnu_rad));
   const Eigen::Vector2d n(-f.y(), f.x());  // left of the driving direction
   const Eigen::Vector2d c = footprint.centreEnu.head<2>();
-  const double halfL = 0.5 * footprint.lengthM;
-  const double halfW = 0.5 * footprint.widthM;
+  const double halfL = 0.5 * footprint.length_m;
+  const double halfW = 0.5 * footprint.width_m;
   // Front two first (left, right), then rear right, rear left, as geometry::corners().
   const std::array<Eigen::Vector2d, 4> cornersXy = {
       c + halfL * f + halfW * n, c + halfL * f - halfW * n, c - halfL * f - halfW * n,

@@ -62,9 +62,9 @@ bool FramePipeline::init(const PipelineOptions& options, const camera::CameraMod
   }
   // The tiles must be exactly the detector's input.
   preprocess::PreprocessOptions pre = options.preprocess;
-  pre.networkWidthPx = detection_.detectorInputWidth();
-  pre.networkHeightPx = detection_.detectorInputHeight();
-  const cv::Size frameSize(rawCamera.intrinsics().widthPx, rawCamera.intrinsics().heightPx);
+  pre.networkWidth_px = detection_.detectorInputWidth();
+  pre.networkHeight_px = detection_.detectorInputHeight();
+  const cv::Size frameSize(rawCamera.intrinsics().width_px, rawCamera.intrinsics().height_px);
   if (!preprocessor_.init(pre, rawCamera, frameSize, &detail)) {
     if (why)
       *why = "preprocessing: " + detail;
@@ -85,7 +85,7 @@ bool FramePipeline::init(const PipelineOptions& options, const camera::CameraMod
   return true;
 }
 
-PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                       const telemetry::PoseEstimate& pose) {
   timings_ = PipelineTimings{};
   liftSummary_ = FrameLiftSummary{};
@@ -127,7 +127,7 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
 
   const auto liftStart = std::chrono::steady_clock::now();
   liftSummary_ = detectionLifter_.liftFrame(
-      lifter_, timestampNs, camera,
+      lifter_, timestamp_ns, camera,
       std::span<const detection::Detection>(detections_.data(), count), observations_);
   footprint_ = frameFootprint(lifter_, liftSummary_, bgrFrame.cols, bgrFrame.rows);
   timings_.lift_ms = msSince(liftStart);

@@ -93,8 +93,8 @@ class FramePipeline {
             const geodesy::LocalFrame& frame, const shape::ActiveShapeModel& shapeModel,
             std::string* why);
 
-  // Real-time path. The pose estimate is the one at timestampNs (PoseBuffer::poseAt).
-  PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestampNs,
+  // Real-time path. The pose estimate is the one at timestamp_ns (PoseBuffer::poseAt).
+  PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                          const telemetry::PoseEstimate& pose);
 
   std::span<const VehicleObservation> observations() const {

@@ -11,7 +11,7 @@ namespace {
 
 constexpr int kChannels = 3;
 // OpenCV ignores coverage slivers thinner than this (source px) in computeResizeAreaTab.
-constexpr double kSliverPx = 1e-3;
+constexpr double kSliver_px = 1e-3;
 
 bool fail(std::string* why, const std::string& message) {
   if (why != nullptr) {
@@ -38,14 +38,14 @@ void coverageTerms(int srcSize, int dstSize, int channels, double scale, std::ve
     int s2 = static_cast<int>(std::floor(fs2));
     s2 = std::min(s2, srcSize - 1);
     s1 = std::min(s1, s2);
-    if (s1 - fs1 > kSliverPx) {
+    if (s1 - fs1 > kSliver_px) {
       terms->push_back(
           {d * channels, (s1 - 1) * channels, static_cast<float>((s1 - fs1) / cellWidth)});
     }
     for (int s = s1; s < s2; ++s) {
       terms->push_back({d * channels, s * channels, static_cast<float>(1.0 / cellWidth)});
     }
-    if (fs2 - s2 > kSliverPx) {
+    if (fs2 - s2 > kSliver_px) {
       terms->push_back(
           {d * channels, s2 * channels,
            static_cast<float>(std::min(std::min(fs2 - s2, 1.0), cellWidth) / cellWidth)});

@@ -9,9 +9,9 @@ namespace {
 
 // Source position for output pixels that must stay black (beyond the valid field): far enough
 // outside the frame that no bilinear neighbour is inside (the value camera::Undistorter uses).
-constexpr float kOutsideSourcePx = -100.0F;
+constexpr float kOutsideSource_px = -100.0F;
 // Largest frame side the 16-bit source coordinates can address.
-constexpr int kMaxFrameSidePx = 32000;
+constexpr int kMaxFrameSide_px = 32000;
 // Bilinear weights are products of two 5-bit fractions: they sum to 32 * 32.
 constexpr int kWeightBits = 2 * kRemapFractionBits;
 constexpr int kWeightRound = 1 << (kWeightBits - 1);
@@ -28,41 +28,42 @@ bool fail(std::string* why, const std::string& message) {
 bool FrameRemap::init(const camera::CameraModel& input, const camera::Intrinsics& output,
                       std::string* why) {
   const camera::Intrinsics& in = input.intrinsics();
-  if (in.widthPx <= 0 || in.heightPx <= 0) {
+  if (in.width_px <= 0 || in.height_px <= 0) {
     return fail(why, "the input camera model is not initialised");
   }
-  if (in.widthPx > kMaxFrameSidePx || in.heightPx > kMaxFrameSidePx) {
-    return fail(why, "input frame " + std::to_string(in.widthPx) + "x" +
-                         std::to_string(in.heightPx) + " exceeds the map's 16-bit coordinates");
+  if (in.width_px > kMaxFrameSide_px || in.height_px > kMaxFrameSide_px) {
+    return fail(why, "input frame " + std::to_string(in.width_px) + "x" +
+                         std::to_string(in.height_px) + " exceeds the map's 16-bit coordinates");
   }
-  if (output.widthPx <= 0 || output.heightPx <= 0 || !(output.fxPx > 0.0) || !(output.fyPx > 0.0) ||
-      !std::isfinite(output.fxPx) || !std::isfinite(output.fyPx) || !std::isfinite(output.cxPx) ||
-      !std::isfinite(output.cyPx)) {
+  if (output.width_px <= 0 || output.height_px <= 0 || !(output.fx_px > 0.0) ||
+      !(output.fy_px > 0.0) || !std::isfinite(output.fx_px) || !std::isfinite(output.fy_px) ||
+      !std::isfinite(output.cx_px) || !std::isfinite(output.cy_px)) {
     return fail(why,
                 "output intrinsics need a size > 0, finite fx_px, fy_px > 0 and a finite "
                 "principal point");
   }
   const std::size_t pixels =
-      static_cast<std::size_t>(output.widthPx) * static_cast<std::size_t>(output.heightPx);
+      static_cast<std::size_t>(output.width_px) * static_cast<std::size_t>(output.height_px);
   sourceXY_.assign(2 * pixels, 0);
   sourceFrac_.assign(pixels, 0);
   const double maxIdealRadius2 = input.maxIdealRadius() * input.maxIdealRadius();
   // Beyond this every bilinear neighbour is outside the frame: clamping there keeps wildly
   // diverging lens models inside the 16-bit coordinates without changing the (black) result.
-  const auto farOutsidePx = static_cast<float>(std::max(in.widthPx, in.heightPx) + 100);
+  const auto farOutside_px = static_cast<float>(std::max(in.width_px, in.height_px) + 100);
   std::size_t i = 0;
-  for (int v = 0; v < output.heightPx; ++v) {
-    for (int u = 0; u < output.widthPx; ++u, ++i) {
-      const Eigen::Vector2d ideal((u - output.cxPx) / output.fxPx, (v - output.cyPx) / output.fyPx);
-      float x = kOutsideSourcePx;
-      float y = kOutsideSourcePx;
+  for (int v = 0; v < output.height_px; ++v) {
+    for (int u = 0; u < output.width_px; ++u, ++i) {
+      const Eigen::Vector2d ideal((u - output.cx_px) / output.fx_px,
+                                  (v - output.cy_px) / output.fy_px);
+      float x = kOutsideSource_px;
+      float y = kOutsideSource_px;
       if (ideal.squaredNorm() <= maxIdealRadius2) {
         const Eigen::Vector2d distorted = input.distortNormalized(ideal);
-        const auto sx = static_cast<float>(in.cxPx + in.fxPx * distorted.x());
-        const auto sy = static_cast<float>(in.cyPx + in.fyPx * distorted.y());
+        const auto sx = static_cast<float>(in.cx_px + in.fx_px * distorted.x());
+        const auto sy = static_cast<float>(in.cy_px + in.fy_px * distorted.y());
         if (std::isfinite(sx) && std::isfinite(sy)) {
-          x = std::clamp(sx, kOutsideSourcePx, farOutsidePx);
-          y = std::clamp(sy, kOutsideSourcePx, farOutsidePx);
+          x = std::clamp(sx, kOutsideSource_px, farOutside_px);
+          y = std::clamp(sy, kOutsideSource_px, farOutside_px);
         }
       }
       // cv::convertMaps(CV_32FC1 -> CV_16SC2): round to 1/32 px, split integer and fraction.
@@ -81,9 +82,9 @@ bool FrameRemap::init(const camera::CameraModel& input, const camera::Intrinsics
 }
 
 void FrameRemap::applyRows(const cv::Mat& src, cv::Mat& dst, int rowBegin, int rowEnd) const {
-  const int width = output_.widthPx;
-  const int srcWidth = input_.widthPx;
-  const int srcHeight = input_.heightPx;
+  const int width = output_.width_px;
+  const int srcWidth = input_.width_px;
+  const int srcHeight = input_.height_px;
   const std::size_t srcStep = src.step[0];
   const std::uint8_t* srcData = src.data;
   for (int v = rowBegin; v < rowEnd; ++v) {
@@ -145,7 +146,7 @@ bool FrameRemap::apply(const cv::Mat& src, cv::Mat& dst) const {
   if (src.datastart < dst.dataend && dst.datastart < src.dataend) {
     return false;  // remapping in place would read already written output
   }
-  applyRows(src, dst, 0, output_.heightPx);
+  applyRows(src, dst, 0, output_.height_px);
   return true;
 }
 

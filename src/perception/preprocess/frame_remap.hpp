@@ -36,8 +36,8 @@ class FrameRemap {
             std::string* why = nullptr);
   bool initialised() const { return !sourceXY_.empty(); }
 
-  cv::Size inputSize() const { return {input_.widthPx, input_.heightPx}; }
-  cv::Size outputSize() const { return {output_.widthPx, output_.heightPx}; }
+  cv::Size inputSize() const { return {input_.width_px, input_.height_px}; }
+  cv::Size outputSize() const { return {output_.width_px, output_.height_px}; }
 
   // Remaps output rows [rowBegin, rowEnd) of dst from src. The caller guarantees src is
   // CV_8UC3 of inputSize(), dst CV_8UC3 of outputSize(), and that they do not overlap.

@@ -50,16 +50,16 @@ bool validate(const PreprocessOptions& options, std::string* why) {
     return fail(why,
                 "working_scale: must be in (0, 1], got " + std::to_string(options.workingScale));
   }
-  if (options.networkWidthPx < 32 || options.networkHeightPx < 32) {
+  if (options.networkWidth_px < 32 || options.networkHeight_px < 32) {
     return fail(why, "network input: must be >= 32 x 32 px, got " +
-                         std::to_string(options.networkWidthPx) + " x " +
-                         std::to_string(options.networkHeightPx));
+                         std::to_string(options.networkWidth_px) + " x " +
+                         std::to_string(options.networkHeight_px));
   }
-  const int smallerSide = std::min(options.networkWidthPx, options.networkHeightPx);
-  if (options.tileOverlapPx < 0 || options.tileOverlapPx >= smallerSide / 2) {
+  const int smallerSide = std::min(options.networkWidth_px, options.networkHeight_px);
+  if (options.tileOverlap_px < 0 || options.tileOverlap_px >= smallerSide / 2) {
     return fail(why, "tile_overlap_px: must be in [0, " + std::to_string(smallerSide / 2) +
                          ") (half the network input), got " +
-                         std::to_string(options.tileOverlapPx));
+                         std::to_string(options.tileOverlap_px));
   }
   if (options.padValue < 0 || options.padValue > 255) {
     return fail(why, "pad_value: must be in [0, 255], got " + std::to_string(options.padValue));
@@ -85,10 +85,10 @@ bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraMo
     return fail(why, "frame size must be > 0, got " + std::to_string(frameSize.width) + "x" +
                          std::to_string(frameSize.height));
   }
-  if (k.widthPx != frameSize.width || k.heightPx != frameSize.height) {
+  if (k.width_px != frameSize.width || k.height_px != frameSize.height) {
     return fail(why, "frame size " + std::to_string(frameSize.width) + "x" +
                          std::to_string(frameSize.height) + " differs from the camera model's " +
-                         std::to_string(k.widthPx) + "x" + std::to_string(k.heightPx) +
+                         std::to_string(k.width_px) + "x" + std::to_string(k.height_px) +
                          " (calibrate at the capture resolution)");
   }
   std::string detail;
@@ -121,30 +121,30 @@ bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraMo
 
   // 3. Working image: Python's int(round(w * s)) (half to even), padded to the network input.
   FrameGeometry geometry;
-  geometry.frameWidthPx = frameSize.width;
-  geometry.frameHeightPx = frameSize.height;
-  geometry.workingWidthPx =
+  geometry.frameWidth_px = frameSize.width;
+  geometry.frameHeight_px = frameSize.height;
+  geometry.workingWidth_px =
       std::max(1, static_cast<int>(std::nearbyint(frameSize.width * options.workingScale)));
-  geometry.workingHeightPx =
+  geometry.workingHeight_px =
       std::max(1, static_cast<int>(std::nearbyint(frameSize.height * options.workingScale)));
-  geometry.scaleX = static_cast<double>(geometry.workingWidthPx) / frameSize.width;
-  geometry.scaleY = static_cast<double>(geometry.workingHeightPx) / frameSize.height;
-  const cv::Size content(geometry.workingWidthPx, geometry.workingHeightPx);
+  geometry.scaleX = static_cast<double>(geometry.workingWidth_px) / frameSize.width;
+  geometry.scaleY = static_cast<double>(geometry.workingHeight_px) / frameSize.height;
+  const cv::Size content(geometry.workingWidth_px, geometry.workingHeight_px);
   if (!resizer_.init(frameSize, content, parallel_.slots(), &detail)) {
     return fail(why, detail);
   }
-  working_.create(std::max(content.height, options.networkHeightPx),
-                  std::max(content.width, options.networkWidthPx), CV_8UC3);
+  working_.create(std::max(content.height, options.networkHeight_px),
+                  std::max(content.width, options.networkWidth_px), CV_8UC3);
   working_.setTo(cv::Scalar::all(options.padValue));
   workingContent_ = working_(cv::Rect(0, 0, content.width, content.height));
 
   // 4. Tiles.
   std::array<TileRect, kMaxTiles> rects{};
-  tileCount_ = layoutTiles(content.width, content.height, options.networkWidthPx,
-                           options.networkHeightPx, options.tileOverlapPx, rects);
+  tileCount_ = layoutTiles(content.width, content.height, options.networkWidth_px,
+                           options.networkHeight_px, options.tileOverlap_px, rects);
   if (tileCount_ == 0) {
-    const int nx = tilesAlongAxis(content.width, options.networkWidthPx, options.tileOverlapPx);
-    const int ny = tilesAlongAxis(content.height, options.networkHeightPx, options.tileOverlapPx);
+    const int nx = tilesAlongAxis(content.width, options.networkWidth_px, options.tileOverlap_px);
+    const int ny = tilesAlongAxis(content.height, options.networkHeight_px, options.tileOverlap_px);
     return fail(why, "working image " + std::to_string(content.width) + "x" +
                          std::to_string(content.height) + " needs " + std::to_string(nx) + " x " +
                          std::to_string(ny) + " tiles, more than " + std::to_string(kMaxTiles) +
@@ -155,7 +155,7 @@ bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraMo
     tile.rect = rects[i];
     tile.index = static_cast<int>(i);
     tile.data =
-        working_.ptr<std::uint8_t>(rects[i].y0Px) + static_cast<std::size_t>(rects[i].x0Px) * 3;
+        working_.ptr<std::uint8_t>(rects[i].y0_px) + static_cast<std::size_t>(rects[i].x0_px) * 3;
     tile.strideBytes = working_.step[0];
   }
 

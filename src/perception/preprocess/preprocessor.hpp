@@ -54,11 +54,11 @@ struct PreprocessOptions {
   bool whiteBalance = false;  // seed 001 AWB (the detector is trained without it)
   WhiteBalanceOptions whiteBalanceOptions{};
   double workingScale = kDefaultWorkingScale;  // working px per frame px, (0, 1]
-  int networkWidthPx = 672;                    // detector input (must equal the model's input)
-  int networkHeightPx = 512;
-  int tileOverlapPx = 96;  // working px, >= the longest vehicle at the working scale
-  int padValue = 128;      // 8-bit grey of the padding (the networks' mean: input 0)
-  int threads = 1;         // row-loop threads (1 = the caller's thread), [1, 16]
+  int networkWidth_px = 672;                   // detector input (must equal the model's input)
+  int networkHeight_px = 512;
+  int tileOverlap_px = 96;  // working px, >= the longest vehicle at the working scale
+  int padValue = 128;       // 8-bit grey of the padding (the networks' mean: input 0)
+  int threads = 1;          // row-loop threads (1 = the caller's thread), [1, 16]
 };
 
 // Checks ranges; false with a message naming the option otherwise.
@@ -67,11 +67,11 @@ bool validate(const PreprocessOptions& options, std::string* why);
 // Frame <-> working pixels (pixel-centre convention, docs/conventions.md):
 // working = (frame + 0.5) * scale - 0.5, as tools/detector/evaluate.py maps detections back.
 struct FrameGeometry {
-  int frameWidthPx = 0;
-  int frameHeightPx = 0;
-  int workingWidthPx = 0;  // round(frame * workingScale): the scaled content, no padding
-  int workingHeightPx = 0;
-  double scaleX = 1.0;  // workingWidthPx / frameWidthPx
+  int frameWidth_px = 0;
+  int frameHeight_px = 0;
+  int workingWidth_px = 0;  // round(frame * workingScale): the scaled content, no padding
+  int workingHeight_px = 0;
+  double scaleX = 1.0;  // workingWidth_px / frameWidth_px
   double scaleY = 1.0;
   double workingToFrameU(double u) const { return (u + 0.5) / scaleX - 0.5; }
   double workingToFrameV(double v) const { return (v + 0.5) / scaleY - 0.5; }

@@ -41,10 +41,10 @@ std::size_t layoutTiles(int contentWidth, int contentHeight, int tileWidth, int 
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i, ++k) {
       TileRect& t = tiles[k];
-      t.x0Px = tileStart(i, nx, contentWidth, tileWidth);
-      t.y0Px = tileStart(j, ny, contentHeight, tileHeight);
-      t.widthPx = tileWidth;
-      t.heightPx = tileHeight;
+      t.x0_px = tileStart(i, nx, contentWidth, tileWidth);
+      t.y0_px = tileStart(j, ny, contentHeight, tileHeight);
+      t.width_px = tileWidth;
+      t.height_px = tileHeight;
       t.innerLeft = i > 0;
       t.innerRight = i + 1 < nx;
       t.innerTop = j > 0;

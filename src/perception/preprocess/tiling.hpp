@@ -16,10 +16,10 @@
 namespace vp::preprocess {
 
 struct TileRect {
-  int x0Px = 0;  // top-left corner in the working image
-  int y0Px = 0;
-  int widthPx = 0;  // the network input size
-  int heightPx = 0;
+  int x0_px = 0;  // top-left corner in the working image
+  int y0_px = 0;
+  int width_px = 0;  // the network input size
+  int height_px = 0;
   bool innerLeft = false;  // edges shared with an overlapping neighbour tile
   bool innerTop = false;
   bool innerRight = false;

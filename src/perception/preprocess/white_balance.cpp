@@ -35,9 +35,9 @@ bool validate(const WhiteBalanceOptions& options, std::string* why) {
                          std::to_string(options.regionRows) + " x " +
                          std::to_string(options.regionCols));
   }
-  if (options.sampleStridePx < 1) {
+  if (options.sampleStride_px < 1) {
     return fail(why,
-                "sample_stride_px: must be >= 1, got " + std::to_string(options.sampleStridePx));
+                "sample_stride_px: must be >= 1, got " + std::to_string(options.sampleStride_px));
   }
   if (!(options.whitePointShare > 0.0 && options.whitePointShare <= 1.0)) {
     return fail(why, "white_point_share: must be in (0, 1], got " +
@@ -61,8 +61,8 @@ bool WhiteBalancer::init(const WhiteBalanceOptions& options, cv::Size frameSize,
   }
   options_ = options;
   frameSize_ = frameSize;
-  samplesX_ = (frameSize.width + options.sampleStridePx - 1) / options.sampleStridePx;
-  samplesY_ = (frameSize.height + options.sampleStridePx - 1) / options.sampleStridePx;
+  samplesX_ = (frameSize.width + options.sampleStride_px - 1) / options.sampleStride_px;
+  samplesY_ = (frameSize.height + options.sampleStride_px - 1) / options.sampleStride_px;
   const std::size_t samples =
       static_cast<std::size_t>(samplesX_) * static_cast<std::size_t>(samplesY_);
   luma_.assign(samples, 0.0F);
@@ -81,7 +81,7 @@ WhiteBalanceGains WhiteBalancer::estimate(const cv::Mat& bgrFrame) {
   std::array<double, kMaxWhiteBalanceRegions> sumCb{};
   std::array<double, kMaxWhiteBalanceRegions> sumCr{};
   std::array<int, kMaxWhiteBalanceRegions> count{};
-  const int stride = options_.sampleStridePx;
+  const int stride = options_.sampleStride_px;
   auto regionOf = [&](int sx, int sy) {
     return (sy * options_.regionRows / samplesY_) * options_.regionCols +
            sx * options_.regionCols / samplesX_;

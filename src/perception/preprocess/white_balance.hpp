@@ -3,7 +3,7 @@
 // applied through per-channel lookup tables, with no heap allocation per frame.
 //
 // Contract: estimate() reads a regular subsample of an 8-bit BGR frame (every
-// sampleStridePx-th pixel in both axes; pure black pixels, e.g. the blank corners of an
+// sampleStride_px-th pixel in both axes; pure black pixels, e.g. the blank corners of an
 // undistorted frame, are skipped) and
 //  1. converts it to YCbCr (BT.601, full range, Cb/Cr centred on 0),
 //  2. splits it into regionRows x regionCols regions (the seed's 12) and computes per region
@@ -35,7 +35,7 @@ constexpr int kMaxWhiteBalanceRegions = 64;
 struct WhiteBalanceOptions {
   int regionRows = 3;  // the seed's 12 regions: 3 x 4 over a landscape frame
   int regionCols = 4;
-  int sampleStridePx = 4;           // estimate on every 4th pixel in u and v, >= 1
+  int sampleStride_px = 4;          // estimate on every 4th pixel in u and v, >= 1
   double whitePointShare = 0.10;    // brightest share of the candidates, (0, 1] (seed: 10 %)
   double minRegionDeviation = 0.5;  // chroma mean abs deviation, 8-bit units, >= 0
   double maxGain = 4.0;             // gains limited to [1/maxGain, maxGain], >= 1

@@ -32,7 +32,7 @@ float Associator::pairCost(const TrackView& track, const WorldDetection& detecti
     return kInfeasibleCost;
   }
   if (detection.headingKnown &&
-      geometry::axisAngleDifference(detection.headingEnuRad, track.headingRad) >
+      geometry::axisAngleDifference(detection.headingEnu_rad, track.heading_rad) >
           params_.maxAxisAngle_rad) {
     return kInfeasibleCost;
   }
@@ -46,11 +46,11 @@ float Associator::pairCost(const TrackView& track, const WorldDetection& detecti
   }
   // The overlap term breaks ties the centre cannot: two cars side by side in a queue differ
   // little in centre distance relative to S, but much in footprint overlap.
-  const geometry::RotatedBox a{track.centre.x(), track.centre.y(), track.lengthM, track.widthM,
-                               track.headingRad};
-  const geometry::RotatedBox b{detection.centreEnu.x(), detection.centreEnu.y(), detection.lengthM,
-                               detection.widthM,
-                               detection.headingKnown ? detection.headingEnuRad : track.headingRad};
+  const geometry::RotatedBox a{track.centre.x(), track.centre.y(), track.length_m, track.width_m,
+                               track.heading_rad};
+  const geometry::RotatedBox b{
+      detection.centreEnu.x(), detection.centreEnu.y(), detection.length_m, detection.width_m,
+      detection.headingKnown ? detection.headingEnu_rad : track.heading_rad};
   const double iou = geometry::rotatedIou(a, b);
   const double cost = params_.mahalanobisWeight * mahalanobis2 / params_.mahalanobisGate +
                       params_.iouWeight * (1.0 - iou);

@@ -35,9 +35,9 @@ struct AssociationParams {
 
 struct TrackView {
   Eigen::Vector2d centre{0.0, 0.0};
-  double headingRad = 0.0;
-  double lengthM = 4.5;
-  double widthM = 1.8;
+  double heading_rad = 0.0;
+  double length_m = 4.5;
+  double width_m = 1.8;
   Eigen::Matrix2d centreInnovationCov{Eigen::Matrix2d::Identity()};  // S = H P H^T + R, m^2
   bool secondPass = true;  // may take low-score detections
 };

@@ -7,12 +7,12 @@ bool toWorldDetection(const perception::VehicleObservation& observation, WorldDe
     return false;
   }
   const detection::Detection& d = observation.detection;
-  out->timestampNs = observation.timestampNs;
+  out->timestamp_ns = observation.timestamp_ns;
   out->centreEnu = observation.ground.centreEnu.head<2>();
-  out->headingEnuRad = observation.ground.headingEnuRad;
+  out->headingEnu_rad = observation.ground.headingEnu_rad;
   out->headingKnown = d.directionKnown;
-  out->lengthM = observation.ground.lengthM;
-  out->widthM = observation.ground.widthM;
+  out->length_m = observation.ground.length_m;
+  out->width_m = observation.ground.width_m;
   out->score = d.score;
   out->typeProbabilities = d.typeProbabilities;
   out->shape = d.gamma;

@@ -62,15 +62,15 @@ Eigen::Matrix2d centreNoise(double sigma, double psi, double alongAxisFactor) {
 
 }  // namespace
 
-void MotionModel::initialise(const Eigen::Vector2d& centre, double headingRad, double wheelbaseM,
-                             double rearToCentreM, const MotionNoise& noise,
+void MotionModel::initialise(const Eigen::Vector2d& centre, double heading_rad, double wheelbase_m,
+                             double rearToCentre_m, const MotionNoise& noise,
                              double alongAxisFactor) {
-  wheelbase_ = wheelbaseM;
-  rearToCentre_ = rearToCentreM;
-  const double psi = geometry::wrapTwoPi(headingRad);
+  wheelbase_ = wheelbase_m;
+  rearToCentre_ = rearToCentre_m;
+  const double psi = geometry::wrapTwoPi(heading_rad);
   x_ = StateVector::Zero();
-  x_[kX] = centre.x() - rearToCentreM * std::cos(psi);
-  x_[kY] = centre.y() - rearToCentreM * std::sin(psi);
+  x_[kX] = centre.x() - rearToCentre_m * std::cos(psi);
+  x_[kY] = centre.y() - rearToCentre_m * std::sin(psi);
   x_[kPsi] = psi;
   p_ = StateMatrix::Zero();
   const double sp = noise.measurementPosition_m;
@@ -78,7 +78,7 @@ void MotionModel::initialise(const Eigen::Vector2d& centre, double headingRad, d
   const double k = std::isfinite(alongAxisFactor) ? std::max(1.0, alongAxisFactor) : 1.0;
   p_.topLeftCorner<2, 2>() =
       centreNoise(sp, psi, k) +
-      Eigen::Matrix2d::Identity() * std::pow(rearToCentreM * noise.measurementHeading_rad, 2);
+      Eigen::Matrix2d::Identity() * std::pow(rearToCentre_m * noise.measurementHeading_rad, 2);
   p_(kPsi, kPsi) = noise.measurementHeading_rad * noise.measurementHeading_rad;
   p_(kV, kV) = noise.initialSpeed_mps * noise.initialSpeed_mps;
   p_(kA, kA) = noise.initialAcceleration_mps2 * noise.initialAcceleration_mps2;
@@ -165,12 +165,12 @@ bool MotionModel::predict(double dt, const MotionNoise& noise) {
   return true;
 }
 
-Innovation MotionModel::innovation(const Eigen::Vector2d& centre, double headingRad,
+Innovation MotionModel::innovation(const Eigen::Vector2d& centre, double heading_rad,
                                    bool hasHeading, const MotionNoise& noise) const {
   Innovation out;
   const Eigen::Vector2d predicted = this->centre();
   out.residual.head<2>() = centre - predicted;
-  out.residual[2] = hasHeading ? geometry::angleDifference(headingRad, x_[kPsi]) : 0.0;
+  out.residual[2] = hasHeading ? geometry::angleDifference(heading_rad, x_[kPsi]) : 0.0;
   const auto h = measurementJacobian(x_, rearToCentre_);
   Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
   r(0, 0) = r(1, 1) = noise.measurementPosition_m * noise.measurementPosition_m;
@@ -180,9 +180,9 @@ Innovation MotionModel::innovation(const Eigen::Vector2d& centre, double heading
   return out;
 }
 
-bool MotionModel::update(const Eigen::Vector2d& centre, double headingRad, bool hasHeading,
+bool MotionModel::update(const Eigen::Vector2d& centre, double heading_rad, bool hasHeading,
                          const MotionNoise& noise, double alongAxisFactor) {
-  if (!finite(centre) || (hasHeading && !std::isfinite(headingRad)) || !(alongAxisFactor >= 1.0) ||
+  if (!finite(centre) || (hasHeading && !std::isfinite(heading_rad)) || !(alongAxisFactor >= 1.0) ||
       !std::isfinite(alongAxisFactor)) {
     return false;
   }
@@ -195,7 +195,7 @@ bool MotionModel::update(const Eigen::Vector2d& centre, double headingRad, bool 
   if (hasHeading) {
     Eigen::Vector3d residual;
     residual.head<2>() = centre - predicted;
-    residual[2] = geometry::angleDifference(headingRad, x_[kPsi]);
+    residual[2] = geometry::angleDifference(heading_rad, x_[kPsi]);
     Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
     r.topLeftCorner<2, 2>() = rPosition;
     r(2, 2) = noise.measurementHeading_rad * noise.measurementHeading_rad;
@@ -210,11 +210,11 @@ bool MotionModel::update(const Eigen::Vector2d& centre, double headingRad, bool 
   return ok;
 }
 
-void MotionModel::setGeometry(double wheelbaseM, double rearToCentreM) {
-  if (!(wheelbaseM > 0.1) || !std::isfinite(rearToCentreM)) {
+void MotionModel::setGeometry(double wheelbase_m, double rearToCentre_m) {
+  if (!(wheelbase_m > 0.1) || !std::isfinite(rearToCentre_m)) {
     return;
   }
-  const double shift = rearToCentre_ - rearToCentreM;
+  const double shift = rearToCentre_ - rearToCentre_m;
   const double c = std::cos(x_[kPsi]);
   const double s = std::sin(x_[kPsi]);
   x_[kX] += shift * c;
@@ -223,8 +223,8 @@ void MotionModel::setGeometry(double wheelbaseM, double rearToCentreM) {
   j(kX, kPsi) = -shift * s;
   j(kY, kPsi) = shift * c;
   p_ = j * p_ * j.transpose();
-  wheelbase_ = wheelbaseM;
-  rearToCentre_ = rearToCentreM;
+  wheelbase_ = wheelbase_m;
+  rearToCentre_ = rearToCentre_m;
 }
 
 void MotionModel::flipDirection() {

@@ -72,23 +72,23 @@ class MotionModel {
 
   // Starts a track at a detected box centre and heading, speed 0 with a wide prior;
   // alongAxisFactor as in update().
-  void initialise(const Eigen::Vector2d& centre, double headingRad, double wheelbaseM,
-                  double rearToCentreM, const MotionNoise& noise, double alongAxisFactor = 1.0);
+  void initialise(const Eigen::Vector2d& centre, double heading_rad, double wheelbase_m,
+                  double rearToCentre_m, const MotionNoise& noise, double alongAxisFactor = 1.0);
 
   // Propagates the state by dt >= 0 seconds; false (state unchanged) for a bad dt.
   bool predict(double dt, const MotionNoise& noise);
 
   // Innovation of a detection against the predicted state; hasHeading adds the heading row.
-  Innovation innovation(const Eigen::Vector2d& centre, double headingRad, bool hasHeading,
+  Innovation innovation(const Eigen::Vector2d& centre, double heading_rad, bool hasHeading,
                         const MotionNoise& noise) const;
   // EKF update with that detection; false (state unchanged) when S is not positive definite.
   // alongAxisFactor >= 1 scales the position noise along the track's axis only (a detection
   // that tells where the vehicle is across its lane better than where along it).
-  bool update(const Eigen::Vector2d& centre, double headingRad, bool hasHeading,
+  bool update(const Eigen::Vector2d& centre, double heading_rad, bool hasHeading,
               const MotionNoise& noise, double alongAxisFactor = 1.0);
 
   // New wheelbase / rear-to-centre offset (fused ASM shape); keeps the box centre fixed.
-  void setGeometry(double wheelbaseM, double rearToCentreM);
+  void setGeometry(double wheelbase_m, double rearToCentre_m);
   // Same footprint, opposite driving direction: psi + pi, v, a, delta negated.
   void flipDirection();
 

@@ -22,8 +22,8 @@ shape::VehicleType mostLikelyType(const std::array<double, shape::kVehicleTypeCo
 
 bool valid(const WorldDetection& d) {
   if (!std::isfinite(d.centreEnu.x()) || !std::isfinite(d.centreEnu.y()) ||
-      !std::isfinite(d.headingEnuRad) || !std::isfinite(d.lengthM) || !std::isfinite(d.widthM) ||
-      !(d.lengthM > 0.0) || !(d.widthM > 0.0) || !(d.score >= 0.0f) || !(d.score <= 1.0f) ||
+      !std::isfinite(d.headingEnu_rad) || !std::isfinite(d.length_m) || !std::isfinite(d.width_m) ||
+      !(d.length_m > 0.0) || !(d.width_m > 0.0) || !(d.score >= 0.0f) || !(d.score <= 1.0f) ||
       !(d.insideShare >= 0.0 && d.insideShare <= 1.0)) {
     return false;
   }
@@ -112,8 +112,8 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
 
 void TrackManager::updateGeometry(Slot& slot) {
   TrackState& out = slot.out;
-  double wheelbase = kWheelbasePerLength * out.lengthM;
-  double rearToCentre = kRearAxlePerLength * out.lengthM;
+  double wheelbase = kWheelbasePerLength * out.length_m;
+  double rearToCentre = kRearAxlePerLength * out.length_m;
   if (config_.asmModel != nullptr && out.type != shape::VehicleType::Large &&
       config_.asmModel->componentCount() > 0 && out.shape.count > 0) {
     const shape::KeypointModel model = config_.asmModel->shape(out.shape);
@@ -131,21 +131,21 @@ void TrackManager::updateGeometry(Slot& slot) {
   }
 }
 
-void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t timestampNs) {
+void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t timestamp_ns) {
   slot = Slot{};
   slot.live = true;
-  slot.lastUpdateNs = timestampNs;
+  slot.lastUpdate_ns = timestamp_ns;
   TrackState& out = slot.out;
   out.id = nextId_++;
   out.status = TrackStatus::Tentative;
   out.hits = 1;
   slot.wholeHits = partial(d) ? 0 : 1;
   slot.lastAtFrameEdge = d.atFrameEdge;
-  out.birthNs = timestampNs;
+  out.birth_ns = timestamp_ns;
   out.score = static_cast<double>(d.score);
   out.updated = true;
-  out.lengthM = d.lengthM;
-  out.widthM = d.widthM;
+  out.length_m = d.length_m;
+  out.width_m = d.width_m;
   slot.sizeWeight = std::max(1e-3, static_cast<double>(d.score));
   for (std::size_t k = 0; k < slot.typeLog.size(); ++k) {
     slot.typeLog[k] =
@@ -162,12 +162,12 @@ void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t times
   }
   // The type decides whether the ASM applies; set it before the geometry.
   out.type = mostLikelyType(slot.typeLog);
-  slot.motion.initialise(d.centreEnu, d.headingEnuRad, kWheelbasePerLength * d.lengthM,
-                         kRearAxlePerLength * d.lengthM, config_.noise, alongAxisFactor(d));
+  slot.motion.initialise(d.centreEnu, d.headingEnu_rad, kWheelbasePerLength * d.length_m,
+                         kRearAxlePerLength * d.length_m, config_.noise, alongAxisFactor(d));
   updateGeometry(slot);
 }
 
-void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timestampNs,
+void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timestamp_ns,
                         StepReport& report) {
   TrackState& out = slot.out;
   const MotionModel& m = slot.motion;
@@ -175,7 +175,7 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   const double sigmaV = std::sqrt(std::max(0.0, m.covariance()(kV, kV)));
   const bool movingForward = v > config_.movingSpeed_mps && v > 3.0 * sigmaV;
 
-  double heading = d.headingEnuRad;
+  double heading = d.headingEnu_rad;
   if (d.headingKnown) {
     if (geometry::absAngleDifference(heading, m.heading()) > 0.5 * geometry::kPi) {
       heading = geometry::wrapTwoPi(heading + geometry::kPi);
@@ -222,8 +222,8 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   const double w = std::max(1e-3, static_cast<double>(d.score)) *
                    (d.atFrameEdge ? config_.frameEdgeShapeWeight : 1.0);
   const double keep = std::min(1.0, config_.shapeMaxWeight / (slot.sizeWeight + w));
-  out.lengthM = (slot.sizeWeight * out.lengthM + w * d.lengthM) / (slot.sizeWeight + w);
-  out.widthM = (slot.sizeWeight * out.widthM + w * d.widthM) / (slot.sizeWeight + w);
+  out.length_m = (slot.sizeWeight * out.length_m + w * d.length_m) / (slot.sizeWeight + w);
+  out.width_m = (slot.sizeWeight * out.width_m + w * d.width_m) / (slot.sizeWeight + w);
   slot.sizeWeight = (slot.sizeWeight + w) * keep;
   if (d.shape.count > 0) {
     const double keepG = std::min(1.0, config_.shapeMaxWeight / (slot.gammaWeight + w));
@@ -240,7 +240,7 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   }
   updateGeometry(slot);
 
-  slot.lastUpdateNs = timestampNs;
+  slot.lastUpdate_ns = timestamp_ns;
   slot.lastAtFrameEdge = d.atFrameEdge;
   out.updated = true;
   ++out.hits;
@@ -264,29 +264,29 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   }
 }
 
-void TrackManager::publish(Slot& slot, std::int64_t timestampNs) {
+void TrackManager::publish(Slot& slot, std::int64_t timestamp_ns) {
   TrackState& out = slot.out;
   const MotionModel& m = slot.motion;
   const StateVector& x = m.state();
   const StateMatrix& p = m.covariance();
-  out.timestampNs = timestampNs;
-  out.lastUpdateNs = slot.lastUpdateNs;
+  out.timestamp_ns = timestamp_ns;
+  out.lastUpdate_ns = slot.lastUpdate_ns;
   out.centreEnu = m.centre();
   out.rearAxleEnu = m.rearAxle();
-  out.headingEnuRad = m.heading();
-  out.speedMps = x[kV];
-  out.speedSigmaMps = std::sqrt(std::max(0.0, p(kV, kV)));
+  out.headingEnu_rad = m.heading();
+  out.speed_mps = x[kV];
+  out.speedSigma_mps = std::sqrt(std::max(0.0, p(kV, kV)));
   out.accelerationMps2 = x[kA];
   out.accelerationSigmaMps2 = std::sqrt(std::max(0.0, p(kA, kA)));
   out.yawRateRadps = m.yawRate();
   out.yawRateSigmaRadps = m.yawRateSigma();
-  out.steeringRad = x[kDelta];
-  out.wheelbaseM = m.wheelbase();
+  out.steering_rad = x[kDelta];
+  out.wheelbase_m = m.wheelbase();
   out.poseCovariance = m.poseCovariance();
   const Eigen::Matrix2d c = out.poseCovariance.topLeftCorner<2, 2>();
   const double tr = 0.5 * (c(0, 0) + c(1, 1));
   const double det = c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0);
-  out.positionSigmaM = std::sqrt(std::max(0.0, tr + std::sqrt(std::max(0.0, tr * tr - det))));
+  out.positionSigma_m = std::sqrt(std::max(0.0, tr + std::sqrt(std::max(0.0, tr * tr - det))));
   double total = 0.0;
   for (double l : slot.typeLog) {
     total += std::exp(l);
@@ -301,17 +301,17 @@ void TrackManager::publish(Slot& slot, std::int64_t timestampNs) {
   out.type = static_cast<shape::VehicleType>(best);
 }
 
-Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestampNs,
+Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestamp_ns,
                                                     std::span<const WorldDetection> detections) {
   if (!initialised_) {
     return unexpected(TrackError::NotInitialised);
   }
-  if (started_ && timestampNs < lastTimeNs_) {
+  if (started_ && timestamp_ns < lastTimeNs_) {
     return unexpected(TrackError::TimeWentBackwards);
   }
-  const double dt = started_ ? static_cast<double>(timestampNs - lastTimeNs_) / kNsPerS : 0.0;
+  const double dt = started_ ? static_cast<double>(timestamp_ns - lastTimeNs_) / kNsPerS : 0.0;
   started_ = true;
-  lastTimeNs_ = timestampNs;
+  lastTimeNs_ = timestamp_ns;
   StepReport report;
 
   int nDet = 0;
@@ -337,9 +337,9 @@ Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestampNs,
     slot.out.updated = false;
     TrackView& view = views_[static_cast<std::size_t>(nViews)];
     view.centre = slot.motion.centre();
-    view.headingRad = slot.motion.heading();
-    view.lengthM = slot.out.lengthM;
-    view.widthM = slot.out.widthM;
+    view.heading_rad = slot.motion.heading();
+    view.length_m = slot.out.length_m;
+    view.width_m = slot.out.width_m;
     view.centreInnovationCov = slot.motion.centreCovariance() +
                                Eigen::Matrix2d::Identity() * config_.noise.measurementPosition_m *
                                    config_.noise.measurementPosition_m;
@@ -361,10 +361,10 @@ Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestampNs,
     Slot& slot = slots_[static_cast<std::size_t>(viewSlot_[static_cast<std::size_t>(v)])];
     const int d = trackToDet_[static_cast<std::size_t>(v)];
     if (d >= 0) {
-      fuse(slot, detections_[static_cast<std::size_t>(d)], timestampNs, report);
+      fuse(slot, detections_[static_cast<std::size_t>(d)], timestamp_ns, report);
       continue;
     }
-    const double since = static_cast<double>(timestampNs - slot.lastUpdateNs) / kNsPerS;
+    const double since = static_cast<double>(timestamp_ns - slot.lastUpdate_ns) / kNsPerS;
     switch (slot.out.status) {
       case TrackStatus::Tentative:
         if (since > config_.maxTentativeGap_s) {
@@ -407,14 +407,14 @@ Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestampNs,
       ++report.droppedBirths;
       continue;
     }
-    birth(slots_[freeSearch], det, timestampNs);
+    birth(slots_[freeSearch], det, timestamp_ns);
     ++report.births;
   }
 
   publishedCount_ = 0;
   for (Slot& slot : slots_) {
     if (slot.live) {
-      publish(slot, timestampNs);
+      publish(slot, timestamp_ns);
       published_[static_cast<std::size_t>(publishedCount_++)] = slot.out;
     }
   }

@@ -115,29 +115,29 @@ struct TrackState {
   std::uint32_t id = 0;
   TrackStatus status = TrackStatus::Tentative;
   bool updated = false;                   // a detection was fused in this step
-  std::int64_t timestampNs = 0;           // time of the state (this step)
+  std::int64_t timestamp_ns = 0;          // time of the state (this step)
   int hits = 0;                           // matched frames over the track's life
-  std::int64_t birthNs = 0;               // time of the track's first detection
-  std::int64_t lastUpdateNs = 0;          // time of the last fused detection
+  std::int64_t birth_ns = 0;              // time of the track's first detection
+  std::int64_t lastUpdate_ns = 0;         // time of the last fused detection
   Eigen::Vector2d centreEnu{0.0, 0.0};    // footprint centre, m
   Eigen::Vector2d rearAxleEnu{0.0, 0.0};  // rear-axle centre (seed 002's reference), m
-  double headingEnuRad = 0.0;
-  double speedMps = 0.0;
-  double speedSigmaMps = 0.0;
+  double headingEnu_rad = 0.0;
+  double speed_mps = 0.0;
+  double speedSigma_mps = 0.0;
   double accelerationMps2 = 0.0;
   double accelerationSigmaMps2 = 0.0;
   double yawRateRadps = 0.0;
   double yawRateSigmaRadps = 0.0;
-  double steeringRad = 0.0;
-  double positionSigmaM = 0.0;  // sqrt of the larger eigenvalue of the centre covariance
+  double steering_rad = 0.0;
+  double positionSigma_m = 0.0;  // sqrt of the larger eigenvalue of the centre covariance
   // Covariance of (centre east, centre north, heading), m^2, m rad, rad^2.
   Eigen::Matrix3d poseCovariance{Eigen::Matrix3d::Zero()};
   // The detector's score fused over the track: mean of the matched detections' scores over
   // the last ~scoreMemory frames (a running mean while younger), [0, 1].
   double score = 0.0;
-  double lengthM = 0.0;
-  double widthM = 0.0;
-  double wheelbaseM = 0.0;
+  double length_m = 0.0;
+  double width_m = 0.0;
+  double wheelbase_m = 0.0;
   std::array<float, shape::kVehicleTypeCount> typeProbabilities{};
   shape::VehicleType type = shape::VehicleType::Sedan;  // argmax of typeProbabilities
   shape::ShapeParams shape{};
@@ -163,7 +163,7 @@ class TrackManager {
   TrackManager& operator=(const TrackManager&) = delete;
 
   bool init(const TrackerConfig& config, std::string* why = nullptr);
-  Expected<StepReport, TrackError> step(std::int64_t timestampNs,
+  Expected<StepReport, TrackError> step(std::int64_t timestamp_ns,
                                         std::span<const WorldDetection> detections);
 
   // Every live track (tentative, confirmed, lost), in slot order.
@@ -183,12 +183,12 @@ class TrackManager {
     double sizeWeight = 0.0;
     int wholeHits = 0;             // matched detections that were not partial
     bool lastAtFrameEdge = false;  // the last matched detection touched the frame's border
-    std::int64_t lastUpdateNs = 0;
+    std::int64_t lastUpdate_ns = 0;
     int disagreeRun = 0;
   };
 
-  void birth(Slot& slot, const WorldDetection& detection, std::int64_t timestampNs);
-  void fuse(Slot& slot, const WorldDetection& detection, std::int64_t timestampNs,
+  void birth(Slot& slot, const WorldDetection& detection, std::int64_t timestamp_ns);
+  void fuse(Slot& slot, const WorldDetection& detection, std::int64_t timestamp_ns,
             StepReport& report);
   void updateGeometry(Slot& slot);
   bool partial(const WorldDetection& detection) const {
@@ -197,7 +197,7 @@ class TrackManager {
   double alongAxisFactor(const WorldDetection& detection) const {
     return partial(detection) ? config_.partialAlongNoiseFactor : 1.0;
   }
-  void publish(Slot& slot, std::int64_t timestampNs);
+  void publish(Slot& slot, std::int64_t timestamp_ns);
 
   TrackerConfig config_{};
   bool initialised_ = false;

@@ -70,18 +70,18 @@ int trajectoryCsvRow(std::span<char> out, std::int64_t frameId, const TrackState
   constexpr double kDeg = 180.0 / geometry::kPi;
   LineWriter w(out);
   w.add("%lld,%d,%u,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%s", static_cast<long long>(frameId),
-        static_cast<int>(t.type), static_cast<unsigned>(t.id), t.speedMps, t.rearAxleEnu.x(),
+        static_cast<int>(t.type), static_cast<unsigned>(t.id), t.speed_mps, t.rearAxleEnu.x(),
         t.rearAxleEnu.y(), t.centreEnu.x(), t.centreEnu.y(),
-        static_cast<double>(t.timestampNs) * 1e-9, toString(t.status));
+        static_cast<double>(t.timestamp_ns) * 1e-9, toString(t.status));
   if (centreWgs84 != nullptr) {
-    w.add(",%.8f,%.8f,%.3f", centreWgs84->latitudeDeg, centreWgs84->longitudeDeg,
-          centreWgs84->heightM);
+    w.add(",%.8f,%.8f,%.3f", centreWgs84->latitude_deg, centreWgs84->longitude_deg,
+          centreWgs84->height_m);
   } else {
     w.add("%s", ",,,");
   }
-  w.add(",%.2f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f", t.headingEnuRad * kDeg, t.speedSigmaMps,
-        t.accelerationMps2, t.accelerationSigmaMps2, t.yawRateRadps * kDeg, t.lengthM, t.widthM,
-        t.wheelbaseM);
+  w.add(",%.2f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f", t.headingEnu_rad * kDeg, t.speedSigma_mps,
+        t.accelerationMps2, t.accelerationSigmaMps2, t.yawRateRadps * kDeg, t.length_m, t.width_m,
+        t.wheelbase_m);
   for (float p : t.typeProbabilities) {
     w.add(",%.4f", static_cast<double>(p));
   }

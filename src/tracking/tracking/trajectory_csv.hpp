@@ -22,9 +22,9 @@ namespace vp::tracking {
 constexpr int kTrajectoryCsvMaxLine = 1024;
 
 struct Wgs84Position {
-  double latitudeDeg = 0.0;
-  double longitudeDeg = 0.0;
-  double heightM = 0.0;  // ellipsoidal
+  double latitude_deg = 0.0;
+  double longitude_deg = 0.0;
+  double height_m = 0.0;  // ellipsoidal
 };
 
 // shapeComponents: how many gamma columns (n_s of the ASM, <= shape::kMaxShapeComponents).

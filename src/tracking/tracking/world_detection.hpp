@@ -21,12 +21,12 @@
 namespace vp::tracking {
 
 struct WorldDetection {
-  std::int64_t timestampNs = 0;         // frame capture time (the loop's clock)
+  std::int64_t timestamp_ns = 0;        // frame capture time (the loop's clock)
   Eigen::Vector2d centreEnu{0.0, 0.0};  // footprint centre, m
-  double headingEnuRad = 0.0;           // driving direction, [0, 2 pi)
+  double headingEnu_rad = 0.0;          // driving direction, [0, 2 pi)
   bool headingKnown = true;             // false: front/back undecided
-  double lengthM = 0.0;                 // footprint along the heading
-  double widthM = 0.0;                  // footprint across it
+  double length_m = 0.0;                // footprint along the heading
+  double width_m = 0.0;                 // footprint across it
   float score = 0.0f;                   // detector confidence, [0, 1]
   std::array<float, shape::kVehicleTypeCount> typeProbabilities{};  // sum 1
   shape::ShapeParams shape{};                                       // ASM gamma

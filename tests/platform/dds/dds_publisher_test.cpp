@@ -319,7 +319,7 @@ TEST(RsuSubscriberProcess, AllocationsPerWriteWithRemoteReader) {
     const auto frame = [&](bool count, std::size_t* allocations) {
       const std::int64_t now = dds_time();
       for (auto& s : states) {
-        s.measurementTimeNs = now;
+        s.measurementTime_ns = now;
       }
       const auto t0 = std::chrono::steady_clock::now();
       test::AllocationCounter counter;

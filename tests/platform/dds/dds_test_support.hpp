@@ -41,7 +41,7 @@ inline messages::VehicleState makeState(std::uint32_t trackId, std::int64_t time
   const float t = static_cast<float>(trackId);
   s.droneId = 7;
   s.trackId = trackId;
-  s.measurementTimeNs = time_ns;
+  s.measurementTime_ns = time_ns;
   s.trackAge_s = 1.5F + t;
   s.position = {43.0731 + 1e-6 * trackId, -89.4012 - 1e-6 * trackId, 250.125 + trackId};
   s.enu_m = {1.25 * trackId, -2.5 * trackId, 0.1};

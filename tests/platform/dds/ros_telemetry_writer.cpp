@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
   }
   const bool px4 = std::string(argv[1]) == "px4";
   const auto domainId = static_cast<std::uint32_t>(std::strtoul(argv[2], nullptr, 10));
-  const int periodMs = argc > 3 ? std::atoi(argv[3]) : 20;
+  const int period_ms = argc > 3 ? std::atoi(argv[3]) : 20;
   vp::test::useLoopbackDds();
 
   const vp::config::TelemetryConfig names;  // the default ROS 2 topic names
@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
       const auto geoPose = vp::test::makeGeoPose(i, frameId);
       status = write(firstWriter.get(), &geoPose);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(periodMs));
+    std::this_thread::sleep_for(std::chrono::milliseconds(period_ms));
   }
   if (px4) {
     auto broken = vp::test::makePx4Attitude(0);

@@ -19,12 +19,12 @@
 namespace vp::test {
 
 struct AttitudeCase {
-  double rollDeg;
-  double pitchDeg;
-  double yawDeg;
-  double latitudeDeg;
-  double longitudeDeg;
-  double heightM;  // ellipsoidal
+  double roll_deg;
+  double pitch_deg;
+  double yaw_deg;
+  double latitude_deg;
+  double longitude_deg;
+  double height_m;  // ellipsoidal
 };
 
 // Level north, level east, banked, pitched, and general attitudes, including |yaw| > 90 and a
@@ -41,7 +41,7 @@ inline constexpr std::array<AttitudeCase, 8> kAttitudeCases = {{
 }};
 
 inline Eigen::Quaterniond expectedBodyToNed(const AttitudeCase& c) {
-  Eigen::Quaterniond q(geodesy::rotationFromEuler({c.rollDeg, c.pitchDeg, c.yawDeg}));
+  Eigen::Quaterniond q(geodesy::rotationFromEuler({c.roll_deg, c.pitch_deg, c.yaw_deg}));
   q.normalize();
   return q.w() < 0.0 ? Eigen::Quaterniond(-q.coeffs()) : q;
 }
@@ -65,9 +65,9 @@ inline geographic_msgs_msg_dds__GeoPoseStamped_ makeGeoPose(std::size_t i, char*
   m.header.stamp.sec = kStampBase_s + static_cast<std::int32_t>(i);
   m.header.stamp.nanosec = kStampNanosec;
   m.header.frame_id = frameId;
-  m.pose.position.latitude = c.latitudeDeg;
-  m.pose.position.longitude = c.longitudeDeg;
-  m.pose.position.altitude = c.heightM;
+  m.pose.position.latitude = c.latitude_deg;
+  m.pose.position.longitude = c.longitude_deg;
+  m.pose.position.altitude = c.height_m;
   const Eigen::Quaterniond o = ardupilotGeoPoseOrientation(expectedBodyToNed(c));
   m.pose.orientation.x = o.x();
   m.pose.orientation.y = o.y();
@@ -93,10 +93,10 @@ inline px4_msgs_msg_dds__VehicleGlobalPosition_ makePx4GlobalPosition(std::size_
   px4_msgs_msg_dds__VehicleGlobalPosition_ m{};
   m.timestamp_sample = kPx4SampleBase_us * (i + 1) + 5;
   m.timestamp = m.timestamp_sample + 100;
-  m.lat = c.latitudeDeg;
-  m.lon = c.longitudeDeg;
-  m.alt = static_cast<float>(c.heightM - 30.0);  // AMSL: must not be used
-  m.alt_ellipsoid = static_cast<float>(c.heightM);
+  m.lat = c.latitude_deg;
+  m.lon = c.longitude_deg;
+  m.alt = static_cast<float>(c.height_m - 30.0);  // AMSL: must not be used
+  m.alt_ellipsoid = static_cast<float>(c.height_m);
   m.eph = 0.8F;
   m.epv = 1.5F;
   return m;

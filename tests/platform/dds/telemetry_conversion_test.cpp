@@ -13,9 +13,9 @@
 namespace vp::platform::dds {
 namespace {
 
-constexpr double kDoubleAngleTolRad = 1e-9;
+constexpr double kDoubleAngleTol_rad = 1e-9;
 // float32 quaternion components carry ~6e-8 relative error: ~1e-7 rad of rotation.
-constexpr double kFloatAngleTolRad = 1e-6;
+constexpr double kFloatAngleTol_rad = 1e-6;
 constexpr double kDegToRad = M_PI / 180.0;
 
 Eigen::Vector3d inNed(const Eigen::Quaterniond& bodyToNed, const Eigen::Vector3d& bodyFrd) {
@@ -32,16 +32,16 @@ TEST(TelemetryConversion, Rep103FrameChangeByHandForSimpleAttitudes) {
   const double h = std::sqrt(0.5);
   EXPECT_LT(nedFrdFromEnuFlu(Eigen::Quaterniond(h, 0, 0, h))
                 .angularDistance(Eigen::Quaterniond::Identity()),
-            kDoubleAngleTolRad);
+            kDoubleAngleTol_rad);
   // Level, nose east: FLU coincides with ENU; in NED that is a yaw of +90 degrees.
   const Eigen::Quaterniond east = nedFrdFromEnuFlu(Eigen::Quaterniond::Identity());
-  EXPECT_LT(east.angularDistance(Eigen::Quaterniond(h, 0, 0, h)), kDoubleAngleTolRad);
+  EXPECT_LT(east.angularDistance(Eigen::Quaterniond(h, 0, 0, h)), kDoubleAngleTol_rad);
   EXPECT_TRUE(inNed(east, Eigen::Vector3d::UnitX())
                   .isApprox(Eigen::Vector3d(0, 1, 0), 1e-12));  // nose -> east
   // The two directions are inverse.
   for (const test::AttitudeCase& c : test::kAttitudeCases) {
     const Eigen::Quaterniond q = test::expectedBodyToNed(c);
-    EXPECT_LT(nedFrdFromEnuFlu(enuFluFromNedFrd(q)).angularDistance(q), kDoubleAngleTolRad);
+    EXPECT_LT(nedFrdFromEnuFlu(enuFluFromNedFrd(q)).angularDistance(q), kDoubleAngleTol_rad);
   }
 }
 
@@ -54,11 +54,11 @@ TEST(TelemetryConversion, ArduPilotGeoPoseGivesOurAttitudeAndPosition) {
     EXPECT_EQ(pose.source, PoseSource::ArduPilotGeoPose);
     EXPECT_TRUE(pose.hasAttitude);
     EXPECT_TRUE(pose.hasPosition);
-    EXPECT_LT(test::angleBetween(pose.bodyToNed, test::expectedBodyToNed(c)), kDoubleAngleTolRad);
+    EXPECT_LT(test::angleBetween(pose.bodyToNed, test::expectedBodyToNed(c)), kDoubleAngleTol_rad);
     EXPECT_GE(pose.bodyToNed.w(), 0.0);
-    EXPECT_EQ(pose.position.latitudeDeg, c.latitudeDeg);
-    EXPECT_EQ(pose.position.longitudeDeg, c.longitudeDeg);
-    EXPECT_EQ(pose.position.heightM, c.heightM);
+    EXPECT_EQ(pose.position.latitude_deg, c.latitude_deg);
+    EXPECT_EQ(pose.position.longitude_deg, c.longitude_deg);
+    EXPECT_EQ(pose.position.height_m, c.height_m);
     EXPECT_EQ(pose.timeBase, TelemetryTimeBase::Utc);
     EXPECT_EQ(pose.time_ns, (test::kStampBase_s + static_cast<std::int64_t>(i)) * 1'000'000'000 +
                                 test::kStampNanosec);
@@ -87,7 +87,7 @@ TEST(TelemetryConversion, ArduPilotAltitudeOffsetAndBootTimeStamps) {
   message.header.stamp.sec = 1234;  // no GNSS time yet: seconds since boot
   PoseSample pose;
   ASSERT_EQ(fromGeoPose(message, -33.5, pose), TelemetryRejection::None);
-  EXPECT_EQ(pose.position.heightM, test::kAttitudeCases[0].heightM - 33.5);
+  EXPECT_EQ(pose.position.height_m, test::kAttitudeCases[0].height_m - 33.5);
   EXPECT_EQ(pose.timeBase, TelemetryTimeBase::AutopilotBoot);
   EXPECT_EQ(pose.time_ns, 1234 * 1'000'000'000LL + test::kStampNanosec);
 }
@@ -102,7 +102,7 @@ TEST(TelemetryConversion, Px4AttitudeAndGlobalPosition) {
     EXPECT_TRUE(attitude.hasAttitude);
     EXPECT_FALSE(attitude.hasPosition);
     EXPECT_LT(test::angleBetween(attitude.bodyToNed, test::expectedBodyToNed(c)),
-              kFloatAngleTolRad);
+              kFloatAngleTol_rad);
     EXPECT_NEAR(attitude.bodyToNed.norm(), 1.0, 1e-15);
     EXPECT_EQ(attitude.timeBase, TelemetryTimeBase::AutopilotBoot);
     EXPECT_EQ(attitude.time_ns, static_cast<std::int64_t>(test::kPx4SampleBase_us * (i + 1) + 5) *
@@ -114,9 +114,9 @@ TEST(TelemetryConversion, Px4AttitudeAndGlobalPosition) {
     EXPECT_EQ(position.source, PoseSource::Px4GlobalPosition);
     EXPECT_TRUE(position.hasPosition);
     EXPECT_FALSE(position.hasAttitude);
-    EXPECT_EQ(position.position.latitudeDeg, c.latitudeDeg);
-    EXPECT_EQ(position.position.longitudeDeg, c.longitudeDeg);
-    EXPECT_EQ(position.position.heightM, static_cast<double>(static_cast<float>(c.heightM)));
+    EXPECT_EQ(position.position.latitude_deg, c.latitude_deg);
+    EXPECT_EQ(position.position.longitude_deg, c.longitude_deg);
+    EXPECT_EQ(position.position.height_m, static_cast<double>(static_cast<float>(c.height_m)));
     EXPECT_EQ(position.horizontalStd_m, 0.8F);
     EXPECT_EQ(position.verticalStd_m, 1.5F);
   }

@@ -82,9 +82,9 @@ TEST(TelemetrySubscriber, ArduPilotGeoPoseOverLoopback) {
     const test::AttitudeCase& c = test::kAttitudeCases[i];
     EXPECT_TRUE(pose.hasAttitude && pose.hasPosition);
     EXPECT_LT(test::angleBetween(pose.bodyToNed, test::expectedBodyToNed(c)), 1e-9) << i;
-    EXPECT_EQ(pose.position.latitudeDeg, c.latitudeDeg);
-    EXPECT_EQ(pose.position.longitudeDeg, c.longitudeDeg);
-    EXPECT_EQ(pose.position.heightM, c.heightM - 33.5);
+    EXPECT_EQ(pose.position.latitude_deg, c.latitude_deg);
+    EXPECT_EQ(pose.position.longitude_deg, c.longitude_deg);
+    EXPECT_EQ(pose.position.height_m, c.height_m - 33.5);
     EXPECT_EQ(pose.timeBase, TelemetryTimeBase::Utc);
     EXPECT_GT(pose.sourceTimestamp_ns, 0);  // the writer's DDS source timestamp
   }
@@ -116,8 +116,8 @@ TEST(TelemetrySubscriber, Px4AttitudeAndGlobalPositionOverLoopback) {
     } else {
       ++positions;
       ASSERT_EQ(pose.source, PoseSource::Px4GlobalPosition);
-      EXPECT_EQ(pose.position.latitudeDeg, c.latitudeDeg);
-      EXPECT_EQ(pose.position.heightM, static_cast<double>(static_cast<float>(c.heightM)));
+      EXPECT_EQ(pose.position.latitude_deg, c.latitude_deg);
+      EXPECT_EQ(pose.position.height_m, static_cast<double>(static_cast<float>(c.height_m)));
       EXPECT_EQ(pose.horizontalStd_m, 0.8F);
     }
   }

@@ -24,9 +24,9 @@ namespace {
 namespace mv = vp::mavlink;
 using Bytes = std::vector<std::uint8_t>;
 
-Bytes frameOf(std::uint32_t timeBootMs, std::uint8_t sequence) {
+Bytes frameOf(std::uint32_t timeBoot_ms, std::uint8_t sequence) {
   mv::AttitudeQuaternion m;
-  m.timeBootMs = timeBootMs;
+  m.timeBoot_ms = timeBoot_ms;
   m.q = {0.9f, 0.1f, 0.2f, 0.37416574f};
   std::array<std::uint8_t, mv::kMaxFrameBytes> buffer{};
   const std::size_t n = mv::encode(mv::Message{m}, {sequence, 1, 1}, buffer);
@@ -46,7 +46,7 @@ TEST(UdpSocket, LoopbackDatagramsWithCorruptionsAreCounted) {
   mv::MavlinkParser parser;
   std::vector<std::uint32_t> times;
   auto onFrame = [&times](const mv::MavlinkFrame& frame) {
-    times.push_back(std::get<mv::AttitudeQuaternion>(*mv::decode(frame)).timeBootMs);
+    times.push_back(std::get<mv::AttitudeQuaternion>(*mv::decode(frame)).timeBoot_ms);
   };
   EXPECT_EQ(drainUdp(receiver, parser, scratch, onFrame), 0);  // nothing yet, no blocking
 
@@ -190,7 +190,7 @@ TEST(SerialPort, StreamWithACutFrameKeepsTheFollowingFrame) {
       ASSERT_GE(drainSerial(port, parser, scratch,
                             [&times](const mv::MavlinkFrame& frame) {
                               times.push_back(
-                                  std::get<mv::AttitudeQuaternion>(*mv::decode(frame)).timeBootMs);
+                                  std::get<mv::AttitudeQuaternion>(*mv::decode(frame)).timeBoot_ms);
                             }),
                 0);
     }

@@ -19,8 +19,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr std::int64_t kFirstFrameNs = 1700000000000000000;
-constexpr std::int64_t kFrameIntervalNs = 100'000'000;
+constexpr std::int64_t kFirstFrame_ns = 1700000000000000000;
+constexpr std::int64_t kFrameInterval_ns = 100'000'000;
 
 // A private copy of tests/fixtures/sequence_min (and the DTM its rig.yaml points at, ../dtm),
 // so a test can damage frame files.
@@ -58,7 +58,7 @@ TEST_F(ReplayTest, FramesComeInOrderWithRecordedIdsTimesAndPixels) {
   for (int i = 0; i < 2; ++i) {
     ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
     EXPECT_EQ(frame().frameId, i);
-    EXPECT_EQ(frame().timestampNs, kFirstFrameNs + i * kFrameIntervalNs);
+    EXPECT_EQ(frame().timestamp_ns, kFirstFrame_ns + i * kFrameInterval_ns);
     EXPECT_EQ(frame().status, FrameStatus::Ok);
     EXPECT_EQ(frame().image.data, buffer);  // filled in place
     const cv::Mat expected = cv::imread(framePath(i), cv::IMREAD_COLOR);
@@ -73,28 +73,28 @@ TEST_F(ReplayTest, PacedReplayWaitsUntilEachFrameIsDue) {
   SequenceReplay replay(clock);
   std::string why;
   ASSERT_TRUE(replay.open(sequence(), {true, true}, &why)) << why;
-  const std::int64_t startNs = clock.nowNs();
+  const std::int64_t start_ns = clock.now_ns();
   for (int i = 0; i < 6; ++i) {
     ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
     // Due at start + (t_i - t_first): the loop period here is 2 frames of 100 ms.
-    EXPECT_EQ(clock.nowNs(), startNs + i * kFrameIntervalNs);
+    EXPECT_EQ(clock.now_ns(), start_ns + i * kFrameInterval_ns);
   }
   // A pipeline that fell behind gets the next frame at once (no sleep into the past).
-  clock.advanceNs(10 * kFrameIntervalNs);
-  const std::int64_t lateNs = clock.nowNs();
+  clock.advance_ns(10 * kFrameInterval_ns);
+  const std::int64_t late_ns = clock.now_ns();
   ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame);
-  EXPECT_EQ(clock.nowNs(), lateNs);
+  EXPECT_EQ(clock.now_ns(), late_ns);
 }
 
 TEST_F(ReplayTest, LoopingKeepsTimestampsAndIdsIncreasing) {
   SequenceReplay replay(clock);
   std::string why;
   ASSERT_TRUE(replay.open(sequence(), {false, true}, &why)) << why;
-  EXPECT_EQ(replay.loopPeriodNs(), 2 * kFrameIntervalNs);
+  EXPECT_EQ(replay.loopPeriod_ns(), 2 * kFrameInterval_ns);
   for (int i = 0; i < 7; ++i) {
     ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
     EXPECT_EQ(frame().frameId, i);
-    EXPECT_EQ(frame().timestampNs, kFirstFrameNs + i * kFrameIntervalNs);
+    EXPECT_EQ(frame().timestamp_ns, kFirstFrame_ns + i * kFrameInterval_ns);
   }
   EXPECT_EQ(replay.counters().loops, 3u);
 }
@@ -155,20 +155,20 @@ TEST_F(ReplayTest, TelemetryComesOutAsItFallsDue) {
   const auto& records = replay.reader().telemetry();
   ASSERT_EQ(records.size(), 4u);  // at -50, 0, +50, +100 ms around the first frame
   TelemetryReplay telemetry;
-  telemetry.open(records, false, replay.loopPeriodNs());
+  telemetry.open(records, false, replay.loopPeriod_ns());
   std::vector<std::int64_t> due;
-  while (const auto* record = telemetry.nextDue(kFirstFrameNs)) {
-    due.push_back(record->timestampNs);
+  while (const auto* record = telemetry.nextDue(kFirstFrame_ns)) {
+    due.push_back(record->timestamp_ns);
   }
-  EXPECT_EQ(due, (std::vector<std::int64_t>{kFirstFrameNs - 50'000'000, kFirstFrameNs}));
-  const auto* next = telemetry.nextDue(kFirstFrameNs + 60'000'000);
+  EXPECT_EQ(due, (std::vector<std::int64_t>{kFirstFrame_ns - 50'000'000, kFirstFrame_ns}));
+  const auto* next = telemetry.nextDue(kFirstFrame_ns + 60'000'000);
   ASSERT_NE(next, nullptr);
-  EXPECT_EQ(next->timestampNs, kFirstFrameNs + 50'000'000);
+  EXPECT_EQ(next->timestamp_ns, kFirstFrame_ns + 50'000'000);
   EXPECT_EQ(next->gimbal.reference, records[2].gimbal.reference);
-  EXPECT_EQ(telemetry.nextDue(kFirstFrameNs + 60'000'000), nullptr);
-  EXPECT_NE(telemetry.nextDue(kFirstFrameNs + kFrameIntervalNs), nullptr);
+  EXPECT_EQ(telemetry.nextDue(kFirstFrame_ns + 60'000'000), nullptr);
+  EXPECT_NE(telemetry.nextDue(kFirstFrame_ns + kFrameInterval_ns), nullptr);
   EXPECT_TRUE(telemetry.finished());
-  EXPECT_EQ(telemetry.nextDue(kFirstFrameNs * 2), nullptr);
+  EXPECT_EQ(telemetry.nextDue(kFirstFrame_ns * 2), nullptr);
 }
 
 TEST_F(ReplayTest, LoopedTelemetryFollowsTheFramesClock) {
@@ -176,20 +176,20 @@ TEST_F(ReplayTest, LoopedTelemetryFollowsTheFramesClock) {
   std::string why;
   ASSERT_TRUE(replay.open(sequence(), {false, true}, &why)) << why;
   TelemetryReplay telemetry;
-  telemetry.open(replay.reader().telemetry(), true, replay.loopPeriodNs());
+  telemetry.open(replay.reader().telemetry(), true, replay.loopPeriod_ns());
   std::vector<std::int64_t> times;
-  const std::int64_t untilNs = kFirstFrameNs + 3 * replay.loopPeriodNs();
-  while (const auto* record = telemetry.nextDue(untilNs)) {
-    times.push_back(record->timestampNs);
+  const std::int64_t until_ns = kFirstFrame_ns + 3 * replay.loopPeriod_ns();
+  while (const auto* record = telemetry.nextDue(until_ns)) {
+    times.push_back(record->timestamp_ns);
   }
   ASSERT_FALSE(telemetry.finished());
   ASSERT_GE(times.size(), 12u);
   for (std::size_t i = 1; i < times.size(); ++i) {
     EXPECT_GE(times[i], times[i - 1]) << i;
   }
-  EXPECT_LE(times.back(), untilNs);
+  EXPECT_LE(times.back(), until_ns);
   // The first record of the second pass: the first record shifted by one loop period.
-  EXPECT_EQ(times[4], times[0] + replay.loopPeriodNs());
+  EXPECT_EQ(times[4], times[0] + replay.loopPeriod_ns());
 }
 
 }  // namespace

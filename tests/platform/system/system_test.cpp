@@ -58,7 +58,7 @@ TEST(SystemdNotifier, DisabledWithoutNotifySocket) {
   ASSERT_TRUE(notifier.open(&why)) << why;
   EXPECT_FALSE(notifier.enabled());
   EXPECT_TRUE(notifier.ready());
-  EXPECT_EQ(notifier.watchdogIntervalNs(), 0);
+  EXPECT_EQ(notifier.watchdogInterval_ns(), 0);
 }
 
 TEST(SystemdNotifier, SendsTheProtocolMessagesAndHalvesTheWatchdogInterval) {
@@ -71,7 +71,7 @@ TEST(SystemdNotifier, SendsTheProtocolMessagesAndHalvesTheWatchdogInterval) {
   std::string why;
   ASSERT_TRUE(notifier.open(&why)) << why;
   ASSERT_TRUE(notifier.enabled());
-  EXPECT_EQ(notifier.watchdogIntervalNs(), 2'000'000'000);
+  EXPECT_EQ(notifier.watchdogInterval_ns(), 2'000'000'000);
 
   {
     vp::test::AllocationCounter allocations;
@@ -89,7 +89,7 @@ TEST(SystemdNotifier, SendsTheProtocolMessagesAndHalvesTheWatchdogInterval) {
   // A watchdog meant for another process is not ours to feed.
   ::setenv("WATCHDOG_PID", "1", 1);
   ASSERT_TRUE(notifier.open(&why));
-  EXPECT_EQ(notifier.watchdogIntervalNs(), 0);
+  EXPECT_EQ(notifier.watchdogInterval_ns(), 0);
   ::unsetenv("NOTIFY_SOCKET");
   ::unsetenv("WATCHDOG_USEC");
   ::unsetenv("WATCHDOG_PID");

@@ -81,8 +81,8 @@ void FakeV4l2Device::replug(const std::string& path) {
 }
 
 void FakeV4l2Device::setFormat(Node& node, std::uint32_t fourcc) {
-  const auto w = static_cast<std::uint32_t>(node.spec.widthPx);
-  const auto h = static_cast<std::uint32_t>(node.spec.heightPx);
+  const auto w = static_cast<std::uint32_t>(node.spec.width_px);
+  const auto h = static_cast<std::uint32_t>(node.spec.height_px);
   node.pixelFormat = fourcc;
   if (fourcc == V4L2_PIX_FMT_YUYV) {
     node.bytesPerLine = 2 * w + node.spec.linePaddingBytes;
@@ -175,7 +175,7 @@ bool FakeV4l2Device::captureOne(Node& node) {
     const std::size_t n = std::min(frame.bytes.size(), buffer.memory.size());
     std::memcpy(buffer.memory.data(), frame.bytes.data(), n);
     buffer.bytesUsed = static_cast<std::uint32_t>(n);
-    buffer.timestampNs = frame.timestampNs;
+    buffer.timestamp_ns = frame.timestamp_ns;
     buffer.error = frame.error;
     buffer.sequence = node.sequence++;
     buffer.state = BufferState::Done;
@@ -225,8 +225,8 @@ int FakeV4l2Device::ioctl(int fd, unsigned long request, void* argument) {
         setFormat(node, supported ? wanted : node.spec.formats.front());
       }
       format->fmt.pix = v4l2_pix_format{};
-      format->fmt.pix.width = static_cast<__u32>(node.spec.widthPx);
-      format->fmt.pix.height = static_cast<__u32>(node.spec.heightPx);
+      format->fmt.pix.width = static_cast<__u32>(node.spec.width_px);
+      format->fmt.pix.height = static_cast<__u32>(node.spec.height_px);
       format->fmt.pix.pixelformat = node.pixelFormat;
       format->fmt.pix.field = V4L2_FIELD_NONE;
       format->fmt.pix.bytesperline = node.bytesPerLine;
@@ -304,8 +304,8 @@ int FakeV4l2Device::ioctl(int fd, unsigned long request, void* argument) {
       buffer->flags = (node.spec.monotonicTimestamps ? V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
                                                      : V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN) |
                       (b.error ? V4L2_BUF_FLAG_ERROR : 0u);
-      buffer->timestamp.tv_sec = static_cast<time_t>(b.timestampNs / 1'000'000'000);
-      buffer->timestamp.tv_usec = static_cast<suseconds_t>((b.timestampNs % 1'000'000'000) / 1000);
+      buffer->timestamp.tv_sec = static_cast<time_t>(b.timestamp_ns / 1'000'000'000);
+      buffer->timestamp.tv_usec = static_cast<suseconds_t>((b.timestamp_ns % 1'000'000'000) / 1000);
       dequeued_.push_back(index);
       return 0;
     }
@@ -368,7 +368,7 @@ int FakeV4l2Device::munmap(void* address, std::size_t length) {
   return -EINVAL;
 }
 
-int FakeV4l2Device::poll(int fd, int timeoutMs, short* revents) {
+int FakeV4l2Device::poll(int fd, int timeout_ms, short* revents) {
   const auto it = fds_.find(fd);
   if (it == fds_.end()) {
     *revents = POLLNVAL;
@@ -387,7 +387,7 @@ int FakeV4l2Device::poll(int fd, int timeoutMs, short* revents) {
     return 1;
   }
   if (clock_ != nullptr) {
-    clock_->advanceNs(static_cast<std::int64_t>(timeoutMs) * 1'000'000);
+    clock_->advance_ns(static_cast<std::int64_t>(timeout_ms) * 1'000'000);
   }
   *revents = 0;
   return 0;

@@ -28,8 +28,8 @@ struct FakeNodeSpec {
   std::string busInfo = "usb-0000:00:14.0-1";
   bool capture = true;                 // false: a metadata node (UVC cameras have one)
   std::vector<std::uint32_t> formats;  // supported fourccs; the first is the driver's default
-  int widthPx = 64;                    // the one size it supports
-  int heightPx = 48;
+  int width_px = 64;                   // the one size it supports
+  int height_px = 48;
   std::uint32_t linePaddingBytes = 0;  // bytesperline = minimum + this
   bool monotonicTimestamps = true;
   unsigned minBuffers = 2;
@@ -38,7 +38,7 @@ struct FakeNodeSpec {
 
 struct FakeFrame {
   std::vector<std::uint8_t> bytes;
-  std::int64_t timestampNs = 0;
+  std::int64_t timestamp_ns = 0;
   bool error = false;  // V4L2_BUF_FLAG_ERROR
 };
 
@@ -73,7 +73,7 @@ class FakeV4l2Device final : public platform::v4l2::V4l2Device {
   int ioctl(int fd, unsigned long request, void* argument) override;
   void* mmap(int fd, std::size_t length, std::int64_t offset, int* error) override;
   int munmap(void* address, std::size_t length) override;
-  int poll(int fd, int timeoutMs, short* revents) override;
+  int poll(int fd, int timeout_ms, short* revents) override;
   std::vector<std::string> listVideoNodes() override;
 
  private:
@@ -83,7 +83,7 @@ class FakeV4l2Device final : public platform::v4l2::V4l2Device {
     BufferState state = BufferState::User;
     int mappings = 0;
     std::uint32_t bytesUsed = 0;
-    std::int64_t timestampNs = 0;
+    std::int64_t timestamp_ns = 0;
     std::uint32_t sequence = 0;
     bool error = false;
   };

@@ -27,22 +27,22 @@ using test::FakeV4l2Device;
 
 constexpr int kWidth = 64;
 constexpr int kHeight = 48;
-constexpr std::int64_t kStartNs = 5'000'000'000;
+constexpr std::int64_t kStart_ns = 5'000'000'000;
 
 FakeNodeSpec node(std::vector<std::uint32_t> formats, std::string path = "/dev/video0") {
   FakeNodeSpec spec;
   spec.path = std::move(path);
   spec.formats = std::move(formats);
-  spec.widthPx = kWidth;
-  spec.heightPx = kHeight;
+  spec.width_px = kWidth;
+  spec.height_px = kHeight;
   return spec;
 }
 
 V4l2CameraConfig config(std::string path = "/dev/video0") {
   V4l2CameraConfig c;
   c.devicePath = std::move(path);
-  c.widthPx = kWidth;
-  c.heightPx = kHeight;
+  c.width_px = kWidth;
+  c.height_px = kHeight;
   return c;
 }
 
@@ -75,7 +75,7 @@ class V4l2CameraTest : public ::testing::Test {
   void SetUp() override { ASSERT_TRUE(pool.init(2, kWidth, kHeight)); }
   Frame& frame() { return pool.frame(0); }
 
-  ManualClock clock{kStartNs};
+  ManualClock clock{kStart_ns};
   FakeV4l2Device device{&clock};
   FramePool pool;
 };
@@ -86,8 +86,8 @@ TEST_F(V4l2CameraTest, OpenNegotiatesMapsAndQueuesEveryBuffer) {
   std::string why;
   ASSERT_TRUE(camera.open(config(), &why)) << why;
   EXPECT_EQ(camera.format().format, PixelFormat::Yuyv);
-  EXPECT_EQ(camera.format().widthPx, kWidth);
-  EXPECT_EQ(camera.format().heightPx, kHeight);
+  EXPECT_EQ(camera.format().width_px, kWidth);
+  EXPECT_EQ(camera.format().height_px, kHeight);
   EXPECT_EQ(camera.format().bytesPerLine, kWidth * 2u);
   EXPECT_EQ(camera.format().bufferCount, 4u);
   EXPECT_EQ(camera.format().driver, "fakecam");
@@ -123,8 +123,8 @@ TEST_F(V4l2CameraTest, NoAcceptableFormatOrSizeIsAClearError) {
   EXPECT_NE(why.find("NV12: driver set MJPG 64x48"), std::string::npos) << why;
 
   c.preferredFormats = {PixelFormat::Mjpeg};
-  c.widthPx = 1920;
-  c.heightPx = 1080;
+  c.width_px = 1920;
+  c.height_px = 1080;
   EXPECT_FALSE(camera.open(c, &why));
   EXPECT_NE(why.find("no preferred format at 1920x1080"), std::string::npos) << why;
   EXPECT_NE(why.find("64x48"), std::string::npos) << why;
@@ -189,12 +189,12 @@ TEST_F(V4l2CameraTest, DequeueRequeueCycleDeliversConvertedStampedFrames) {
   std::vector<std::vector<std::uint8_t>> images;
   for (int i = 0; i < 10; ++i) {
     images.push_back(yuyvBytes(i, stride));
-    device.pushFrame("/dev/video0", FakeFrame{images.back(), kStartNs + i * 100'000'000, false});
+    device.pushFrame("/dev/video0", FakeFrame{images.back(), kStart_ns + i * 100'000'000, false});
   }
   for (int i = 0; i < 10; ++i) {
     ASSERT_EQ(camera.capture(frame()), CaptureStatus::Frame) << camera.lastError();
     EXPECT_EQ(frame().frameId, i);
-    EXPECT_EQ(frame().timestampNs, kStartNs + i * 100'000'000);
+    EXPECT_EQ(frame().timestamp_ns, kStart_ns + i * 100'000'000);
     EXPECT_EQ(frame().status, FrameStatus::Ok);
     EXPECT_LE(maxDifference(frame().image, expectedFromYuyv(images[i], stride)), 1.0);
     EXPECT_EQ(device.queuedBuffers("/dev/video0"), 4u);  // handed straight back
@@ -234,7 +234,7 @@ TEST_F(V4l2CameraTest, DriverFlagsAndClocksAreHonoured) {
   device.pushFrame("/dev/video0", FakeFrame{yuyvBytes(1), 42, true});
   ASSERT_EQ(camera.capture(frame()), CaptureStatus::Frame);
   EXPECT_EQ(frame().status, FrameStatus::Damaged);
-  EXPECT_EQ(frame().timestampNs, clock.nowNs());  // stamped at dequeue, not 42
+  EXPECT_EQ(frame().timestamp_ns, clock.now_ns());  // stamped at dequeue, not 42
   EXPECT_EQ(camera.counters().damagedFrames, 1u);
   EXPECT_EQ(camera.counters().stampedAtDequeue, 1u);
 }
@@ -316,9 +316,9 @@ TEST_F(V4l2CameraTest, UnpluggedDeviceIsReleasedAndReopenedWithBackoff) {
   device.addNode(node({V4L2_PIX_FMT_YUYV}));
   V4l2Camera camera(device, clock);
   V4l2CameraConfig c = config();
-  c.reopenInitialBackoffMs = 100;
-  c.reopenMaxBackoffMs = 400;
-  c.dequeueTimeoutMs = 1000;
+  c.reopenInitialBackoff_ms = 100;
+  c.reopenMaxBackoff_ms = 400;
+  c.dequeueTimeout_ms = 1000;
   std::string why;
   ASSERT_TRUE(camera.open(c, &why)) << why;
   for (int i = 0; i < 5; ++i) {
@@ -328,7 +328,7 @@ TEST_F(V4l2CameraTest, UnpluggedDeviceIsReleasedAndReopenedWithBackoff) {
   EXPECT_EQ(frame().frameId, 4);
 
   device.unplug("/dev/video0");
-  const std::int64_t lostAt = clock.nowNs();
+  const std::int64_t lostAt = clock.now_ns();
   EXPECT_EQ(camera.capture(frame()), CaptureStatus::DeviceLost);
   EXPECT_NE(std::string(camera.lastError()).find("device lost"), std::string::npos);
   EXPECT_EQ(camera.counters().deviceLosses, 1u);
@@ -336,15 +336,15 @@ TEST_F(V4l2CameraTest, UnpluggedDeviceIsReleasedAndReopenedWithBackoff) {
   EXPECT_EQ(device.mappedBuffers(), 0);
 
   // Attempts at +100 ms, then 200, 400, 400 ms apart (doubling, capped).
-  std::vector<std::int64_t> attemptsMs;
-  for (int call = 0; call < 12 && attemptsMs.size() < 4; ++call) {
+  std::vector<std::int64_t> attempts_ms;
+  for (int call = 0; call < 12 && attempts_ms.size() < 4; ++call) {
     const std::uint64_t before = camera.counters().reopenAttempts;
     EXPECT_EQ(camera.capture(frame()), CaptureStatus::DeviceLost);
     if (camera.counters().reopenAttempts > before) {
-      attemptsMs.push_back((clock.nowNs() - lostAt) / 1'000'000);
+      attempts_ms.push_back((clock.now_ns() - lostAt) / 1'000'000);
     }
   }
-  EXPECT_EQ(attemptsMs, (std::vector<std::int64_t>{100, 300, 700, 1100}));
+  EXPECT_EQ(attempts_ms, (std::vector<std::int64_t>{100, 300, 700, 1100}));
 
   device.replug("/dev/video0");
   CaptureStatus status = CaptureStatus::DeviceLost;
