@@ -6,8 +6,9 @@ Reads a folder of real images whose labels are rotated boxes with the driving di
 the project's image convention: heading of the forward axis from +u towards +v in [0, 2pi);
 ``../shared/data/real/bev-intersection-de``) and the detections ``vp_detect_images --images
 ROOT`` wrote for it (docs/detections_file.md, the ``image`` variant). Per image, detections
-are matched to labels greedily by descending score when their rotated IoU exceeds --iou (0.5,
-seed 000's rule); every label and detection is used at most once.
+are matched to labels greedily by descending score when their rotated IoU reaches --iou (0.5,
+seed 000's rule; ``evaluate.match``, as for the simulated sets); every label and detection is
+used at most once.
 
 Prints and writes (--out, JSON) precision, recall, F1, the median and MAD (x1.4826) of the
 absolute heading error of matched vehicles, the share reversed (error > 90 degrees) and the
@@ -36,7 +37,8 @@ if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from detector.datasets import DatasetError  # noqa: E402
-from detector.geometry import abs_angle_difference, rotated_iou_matrix  # noqa: E402
+from detector.evaluate import match  # noqa: E402
+from detector.geometry import abs_angle_difference  # noqa: E402
 from detector.mine_negatives import read_detections  # noqa: E402
 
 
@@ -70,24 +72,6 @@ def read_rotated_labels(root: str) -> Dict[str, np.ndarray]:
     return out
 
 
-def match(labels: np.ndarray, dets: List[Tuple[float, np.ndarray]], iou: float):
-    """Greedy matching by descending score: list of (label index, detection index)."""
-    if not len(labels) or not dets:
-        return []
-    order = sorted(range(len(dets)), key=lambda k: -dets[k][0])
-    ious = rotated_iou_matrix(np.stack([dets[k][1] for k in order]), labels)
-    used, pairs = set(), []
-    for row, k in enumerate(order):
-        best, best_j = iou, -1
-        for j in range(len(labels)):
-            if j not in used and ious[row, j] > best:
-                best, best_j = ious[row, j], j
-        if best_j >= 0:
-            used.add(best_j)
-            pairs.append((best_j, k))
-    return pairs
-
-
 def evaluate(labels: Dict[str, np.ndarray], dets: Dict, iou: float = 0.5, min_score: float = 0.0):
     tp = n_det = n_lab = 0
     errors, reversed_rows = [], []
@@ -95,7 +79,10 @@ def evaluate(labels: Dict[str, np.ndarray], dets: Dict, iou: float = 0.5, min_sc
         found = [(s, b) for s, b in dets.get(stem, []) if s >= min_score]
         n_det += len(found)
         n_lab += len(boxes)
-        for j, k in match(boxes, found, iou):
+        pairs, _, _ = match(np.array([b for _, b in found]).reshape(-1, 5),
+                            np.array([sc for sc, _ in found]), boxes.reshape(-1, 5),
+                            np.zeros(len(boxes), bool), iou)
+        for k, j in pairs:
             tp += 1
             err = math.degrees(float(abs_angle_difference(found[k][1][4], boxes[j][4])))
             errors.append(err)
@@ -122,7 +109,7 @@ def main(argv=None) -> int:
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--root", required=True, help="folder with images/ and labels/ (rotated)")
     p.add_argument("--detections", required=True, help="vp_detect_images --images CSV")
-    p.add_argument("--iou", type=float, default=0.5, help="rotated IoU above which a match counts")
+    p.add_argument("--iou", type=float, default=0.5, help="rotated IoU from which a match counts")
     p.add_argument("--min-score", type=float, default=0.0, help="ignore detections below")
     p.add_argument("--out", default=None, help="write the report as JSON")
     p.add_argument("--list-reversed", default=None, help="write the reversed vehicles as CSV")

@@ -78,6 +78,13 @@ def enclosing_box(box: np.ndarray, width: int, height: int) -> np.ndarray:
                      min(box[0] + hw, width - 0.5), min(box[1] + hh, height - 0.5)])
 
 
+def yolo_pixel_boxes(boxes: np.ndarray, width: int, height: int) -> np.ndarray:
+    """[N, 4] pixel boxes [x0, y0, x1, y1] of read_yolo's normalised (cx, cy, w, h, ...) rows."""
+    return np.array([[(cx - bw / 2) * width - 0.5, (cy - bh / 2) * height - 0.5,
+                      (cx + bw / 2) * width - 0.5, (cy + bh / 2) * height - 0.5]
+                     for cx, cy, bw, bh, *_ in boxes]).reshape(-1, 4)
+
+
 def aa_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """IoU of one box [x0, y0, x1, y1] with each row of ``b``."""
     if not len(b):
@@ -103,9 +110,7 @@ def mine_images(root: str, det_path: str, stems, gsd_m: float, min_score: float,
         if not found:
             continue
         h, w = s.loaded().image.shape[:2]
-        labels = np.array([[(cx - bw / 2) * w - 0.5, (cy - bh / 2) * h - 0.5,
-                            (cx + bw / 2) * w - 0.5, (cy + bh / 2) * h - 0.5]
-                           for cx, cy, bw, bh, _ in s.boxes]).reshape(-1, 4)
+        labels = yolo_pixel_boxes(s.boxes, w, h)
         n = 0
         for sc, b in found:
             best = aa_iou(enclosing_box(b, w, h), labels).max(initial=0.0)

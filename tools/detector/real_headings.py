@@ -57,7 +57,8 @@ if __package__ in (None, ""):
 
 from detector.datasets import DatasetError, clip_and_index, file_stem, read_yolo  # noqa: E402
 from detector.geometry import axis_angle_difference  # noqa: E402
-from detector.mine_negatives import aa_iou, enclosing_box, read_detections  # noqa: E402
+from detector.mine_negatives import (aa_iou, enclosing_box, read_detections,  # noqa: E402
+                                     yolo_pixel_boxes)
 
 COLUMNS = ["image", "cx_px", "cy_px", "score", "length_px", "width_px", "angle_rad", "gsd_m",
            "label", "det_reversed"]
@@ -104,9 +105,7 @@ def vehicles_of(stem: str, image_shape, dets: Dict, yolo_boxes: np.ndarray) -> n
     """[N, 6] (cx, cy, length, width, angle, score): the detections of one image that match an
     axis-aligned label (enclosing-box IoU >= 0.5; each label once, best score first)."""
     h, w = image_shape[:2]
-    labels = np.array([[(cx - bw / 2) * w - 0.5, (cy - bh / 2) * h - 0.5,
-                        (cx + bw / 2) * w - 0.5, (cy + bh / 2) * h - 0.5]
-                       for cx, cy, bw, bh, _ in yolo_boxes]).reshape(-1, 4)
+    labels = yolo_pixel_boxes(yolo_boxes, w, h)
     out, used = [], set()
     for score, b in sorted(dets.get(stem, []), key=lambda x: -x[0]):
         iou = aa_iou(enclosing_box(b, w, h), labels)
