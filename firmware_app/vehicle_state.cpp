@@ -57,10 +57,10 @@ messages::VehicleState toVehicleState(const tracking::TrackState& track, std::ui
   state.speed_mps = static_cast<float>(track.speed_mps);
   state.velocityEnu_mps = {static_cast<float>(track.speed_mps * std::cos(heading)),
                            static_cast<float>(track.speed_mps * std::sin(heading))};
-  state.yawRate_radps = static_cast<float>(track.yawRateRadps);
+  state.yawRate_radps = static_cast<float>(track.yawRate_radps);
   state.yawRateVariance_rad2ps2 =
-      static_cast<float>(track.yawRateSigmaRadps * track.yawRateSigmaRadps);
-  state.acceleration_mps2 = static_cast<float>(track.accelerationMps2);
+      static_cast<float>(track.yawRateSigma_radps * track.yawRateSigma_radps);
+  state.acceleration_mps2 = static_cast<float>(track.acceleration_mps2);
   state.length_m = static_cast<float>(track.length_m);
   state.width_m = static_cast<float>(track.width_m);
   state.type = track.type;

@@ -22,8 +22,8 @@ TEST(VehicleState, CarriesTheTrackersCovarianceScoreAndAge) {
   track.headingEnu_rad = 0.5 * geometry::kPi;  // north
   track.speed_mps = 8.0;
   track.speedSigma_mps = 0.5;
-  track.yawRateRadps = 0.1;
-  track.yawRateSigmaRadps = 0.02;
+  track.yawRate_radps = 0.1;
+  track.yawRateSigma_radps = 0.02;
   track.poseCovariance << 0.04, 0.01, 0.002, 0.01, 0.09, -0.003, 0.002, -0.003, 0.0025;
   track.score = 0.73;
   track.type = shape::VehicleType::Large;  // no ASM needed

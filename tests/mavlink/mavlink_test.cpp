@@ -52,23 +52,23 @@ AttitudeQuaternion sampleAttitudeQuaternion() {
   const Eigen::Quaterniond q(geodesy::rotationFromEuler({3.0, -4.0, 75.0}));
   m.q = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
          static_cast<float>(q.z())};
-  m.rollSpeedRadps = 0.01f;
-  m.pitchSpeedRadps = -0.02f;
-  m.yawSpeedRadps = 0.03f;
+  m.rollSpeed_radps = 0.01f;
+  m.pitchSpeed_radps = -0.02f;
+  m.yawSpeed_radps = 0.03f;
   return m;
 }
 
 GlobalPositionInt samplePosition() {
   GlobalPositionInt m;
   m.timeBoot_ms = 123400;
-  m.latitudeDegE7 = 430731000;
-  m.longitudeDegE7 = -894012000;
-  m.altitudeMslMm = 292500;
-  m.relativeAltitudeMm = 32500;
-  m.vxCmps = 120;
-  m.vyCmps = -40;
-  m.vzCmps = 0;
-  m.headingCdeg = 0;  // trailing zeros: this frame gets truncated on the wire
+  m.latitude_degE7 = 430731000;
+  m.longitude_degE7 = -894012000;
+  m.altitudeMsl_mm = 292500;
+  m.relativeAltitude_mm = 32500;
+  m.vx_cmps = 120;
+  m.vy_cmps = -40;
+  m.vz_cmps = 0;
+  m.heading_cdeg = 0;  // trailing zeros: this frame gets truncated on the wire
   return m;
 }
 
@@ -109,12 +109,12 @@ TEST(MavlinkParser, ReadsAHandBuiltGlobalPositionIntFrame) {
   ASSERT_TRUE(message.has_value());
   const auto& position = std::get<GlobalPositionInt>(*message);
   EXPECT_EQ(position.timeBoot_ms, 5000u);
-  EXPECT_EQ(position.latitudeDegE7, 473977420);
-  EXPECT_EQ(position.longitudeDegE7, 85455940);
-  EXPECT_EQ(position.altitudeMslMm, 488000);
-  EXPECT_EQ(position.relativeAltitudeMm, -1000);
-  EXPECT_EQ(position.vxCmps, 16);
-  EXPECT_EQ(position.headingCdeg, 9000);
+  EXPECT_EQ(position.latitude_degE7, 473977420);
+  EXPECT_EQ(position.longitude_degE7, 85455940);
+  EXPECT_EQ(position.altitudeMsl_mm, 488000);
+  EXPECT_EQ(position.relativeAltitude_mm, -1000);
+  EXPECT_EQ(position.vx_cmps, 16);
+  EXPECT_EQ(position.heading_cdeg, 9000);
 }
 
 TEST(MavlinkCodec, EveryMessageRoundTrips) {
@@ -158,9 +158,9 @@ TEST(MavlinkCodec, TrailingZerosAreTruncatedAndReadBackAsZero) {
   ASSERT_EQ(got.frames.size(), 1u);
   EXPECT_EQ(got.frames[0].payloadLength, 24);
   const auto decoded = std::get<GlobalPositionInt>(*decode(got.frames[0]));
-  EXPECT_EQ(decoded.vyCmps, -40);
-  EXPECT_EQ(decoded.vzCmps, 0);
-  EXPECT_EQ(decoded.headingCdeg, 0);
+  EXPECT_EQ(decoded.vy_cmps, -40);
+  EXPECT_EQ(decoded.vz_cmps, 0);
+  EXPECT_EQ(decoded.heading_cdeg, 0);
 
   // An all-zero payload keeps one byte.
   const Bytes zero = encodeToBytes(Message{Attitude{}});
@@ -354,7 +354,7 @@ TEST(MavlinkPoseAssembler, RejectsBadValuesAndOtherSystems) {
   EXPECT_FALSE(assembler.add(Message{samplePosition()}, 2, kMs));
   EXPECT_EQ(assembler.counters().otherSystem, 1u);
   GlobalPositionInt badPosition = samplePosition();
-  badPosition.latitudeDegE7 = 950000000;  // 95 deg
+  badPosition.latitude_degE7 = 950000000;  // 95 deg
   EXPECT_FALSE(assembler.add(Message{badPosition}, 1, kMs));
   AttitudeQuaternion nanAttitude = sampleAttitudeQuaternion();
   nanAttitude.q[2] = std::numeric_limits<float>::quiet_NaN();

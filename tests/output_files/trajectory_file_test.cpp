@@ -71,9 +71,9 @@ TrackState makeTrack(std::mt19937_64& rng, std::uint32_t id, bool onGrid) {
   t.headingEnu_rad = std::abs(value(700.0, 0.25)) / kDegPerRad;
   t.speed_mps = value(40.0, 0.125);
   t.speedSigma_mps = std::abs(value(2.0, 0.125));
-  t.accelerationMps2 = value(6.0, 0.125);
-  t.accelerationSigmaMps2 = std::abs(value(2.0, 0.125));
-  t.yawRateRadps = value(60.0, 0.125) / kDegPerRad;
+  t.acceleration_mps2 = value(6.0, 0.125);
+  t.accelerationSigma_mps2 = std::abs(value(2.0, 0.125));
+  t.yawRate_radps = value(60.0, 0.125) / kDegPerRad;
   t.length_m = 3.0 + std::abs(value(4.0, 0.125));
   t.width_m = 1.5 + std::abs(value(1.0, 0.125));
   t.wheelbase_m = 0.6 * t.length_m;
@@ -157,10 +157,10 @@ TEST_F(TrajectoryFileTest, RoundTripIsExact) {
     EXPECT_EQ(r.centreEnu, t.centreEnu);
     EXPECT_EQ(r.rearAxleEnu, t.rearAxleEnu);
     EXPECT_EQ(r.headingEnu_deg, std::round(t.headingEnu_rad * kDegPerRad * 4.0) / 4.0);
-    EXPECT_EQ(r.yawRateDps, std::round(t.yawRateRadps * kDegPerRad * 8.0) / 8.0);
+    EXPECT_EQ(r.yawRateDps, std::round(t.yawRate_radps * kDegPerRad * 8.0) / 8.0);
     EXPECT_EQ(r.speedSigma_mps, t.speedSigma_mps);
-    EXPECT_EQ(r.accelerationMps2, t.accelerationMps2);
-    EXPECT_EQ(r.accelerationSigmaMps2, t.accelerationSigmaMps2);
+    EXPECT_EQ(r.acceleration_mps2, t.acceleration_mps2);
+    EXPECT_EQ(r.accelerationSigma_mps2, t.accelerationSigma_mps2);
     EXPECT_EQ(r.length_m, t.length_m);
     EXPECT_EQ(r.width_m, t.width_m);
     EXPECT_EQ(r.typeProbabilities, t.typeProbabilities);

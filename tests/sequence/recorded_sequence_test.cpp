@@ -178,7 +178,7 @@ Sample makeSample() {
     car.positionEnu = {12.5 + f * (0.1 + 0.2), -30.0 / 7.0, 261.125};
     car.headingEnu_rad = std::numbers::pi / 3.0;
     car.speed_mps = 8.333333333333334;
-    car.yawRateRadps = -0.0123;
+    car.yawRate_radps = -0.0123;
     car.imageBox = {16.1, 12.9, 3.7, 1.4, 2.0 * std::numbers::pi - 1e-9};
     car.truncation = 0.0;
     car.occlusion = 0.3;
@@ -262,7 +262,7 @@ void expectSameObject(const ObjectTruth& got, const ObjectTruth& want) {
   EXPECT_EQ(got.positionEnu, want.positionEnu);
   EXPECT_EQ(got.headingEnu_rad, want.headingEnu_rad);
   EXPECT_EQ(got.speed_mps, want.speed_mps);
-  EXPECT_EQ(got.yawRateRadps, want.yawRateRadps);
+  EXPECT_EQ(got.yawRate_radps, want.yawRate_radps);
   EXPECT_EQ(got.imageBox.cx, want.imageBox.cx);
   EXPECT_EQ(got.imageBox.cy, want.imageBox.cy);
   EXPECT_EQ(got.imageBox.length, want.imageBox.length);

@@ -96,7 +96,7 @@ void advance(Vehicle& v, double dt) {
   const double mid = t.heading_rad + 0.5 * dPsi;
   t.rearAxle += t.speed_mps * dt * Eigen::Vector2d(std::cos(mid), std::sin(mid));
   t.heading_rad += dPsi;
-  t.yawRateRadps = yawRate;
+  t.yawRate_radps = yawRate;
   if (v.turning) {
     v.turned += std::abs(dPsi);
     if (v.turned >= 0.5 * geometry::kPi) {
@@ -105,7 +105,7 @@ void advance(Vehicle& v, double dt) {
       t.heading_rad =
           v.approachHeading + (v.manoeuvre == Manoeuvre::Left ? 0.5 : -0.5) * geometry::kPi;
       v.approachHeading = t.heading_rad;
-      t.yawRateRadps = 0.0;
+      t.yawRate_radps = 0.0;
     }
   }
   t.heading_rad = geometry::wrapTwoPi(t.heading_rad);

@@ -49,7 +49,7 @@ struct TruthObject {
   Eigen::Vector2d rearAxle{0.0, 0.0};
   double heading_rad = 0.0;
   double speed_mps = 0.0;
-  double yawRateRadps = 0.0;
+  double yawRate_radps = 0.0;
   double length_m = 4.5;
   double width_m = 1.8;
   bool parked = false;

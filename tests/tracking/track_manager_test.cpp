@@ -358,7 +358,7 @@ TEST(TrackManager, TrackKeepsItsBirthTimeFusedScoreAndPoseCovariance) {
   EXPECT_NEAR(std::sqrt(eig.eigenvalues().maxCoeff()), s.positionSigma_m, 1e-9);
   EXPECT_GT(s.poseCovariance(2, 2), 0.0);
   EXPECT_LT(std::sqrt(s.poseCovariance(2, 2)), config.noise.measurementHeading_rad);
-  EXPECT_GE(s.yawRateSigmaRadps, 0.0);
+  EXPECT_GE(s.yawRateSigma_radps, 0.0);
 
   config.scoreMemory = 0;
   TrackManager bad;

@@ -72,7 +72,7 @@ void computeGroundTruth(std::int64_t frameId, const std::vector<SimVehicle>& veh
     o.positionEnu = pose.originEnu;
     o.headingEnu_rad = geometry::wrapTwoPi(v.rear.psi);
     o.speed_mps = v.speed_mps;
-    o.yawRateRadps = v.yawRateRadps;
+    o.yawRate_radps = v.yawRate_radps;
     o.truncation = 1.0 - static_cast<double>(inside) / static_cast<double>(total);
     o.occlusion = 1.0 - static_cast<double>(visible) / static_cast<double>(inside);
     o.parked = v.parked;

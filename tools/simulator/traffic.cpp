@@ -13,7 +13,7 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kPathStep_m = 0.25;
 constexpr int kSubSteps = 5;
 constexpr double kMaxSteer_rad = 0.6;
-constexpr double kLateralAccelMps2 = 2.5;
+constexpr double kLateralAccel_mps2 = 2.5;
 constexpr double kAllRedS = 2.0;
 
 Eigen::Vector2d unit(double a) {
@@ -148,7 +148,7 @@ double LanePath::curveSpeedLimit(double s, double ahead) const {
   for (std::size_t i = i0; i <= i1; ++i) {
     r = std::min(r, radius_[i]);
   }
-  return std::sqrt(kLateralAccelMps2 * r);
+  return std::sqrt(kLateralAccel_mps2 * r);
 }
 
 Eigen::Vector2d SimVehicle::centre() const {
@@ -484,7 +484,7 @@ void Traffic::step(Rng& rng) {
       v.steer_rad = std::clamp(steer, v.steer_rad - maxChange, v.steer_rad + maxChange);
       v.speed_mps = std::clamp(v.speed_mps + accel[i] * dt, 0.0, 15.0);
       v.rear = stepBicycle(v.rear, v.speed_mps, v.steer_rad, wheelbase, dt);
-      v.yawRateRadps = v.speed_mps * std::tan(v.steer_rad) / wheelbase;
+      v.yawRate_radps = v.speed_mps * std::tan(v.steer_rad) / wheelbase;
     }
   }
   // Vehicles past the end of their path have left the scene.

@@ -64,7 +64,7 @@ struct SimVehicle {
   BicycleState rear{};
   double speed_mps = 0.0;
   double steer_rad = 0.0;
-  double yawRateRadps = 0.0;
+  double yawRate_radps = 0.0;
   bool parked = false;
   int path = -1;   // index into Traffic::paths(), -1 for parked vehicles
   double s = 0.0;  // arc length of the rear axle along the path

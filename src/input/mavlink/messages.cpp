@@ -45,9 +45,9 @@ Attitude decodeAttitude(const Payload& p) {
   m.roll_rad = get<float>(p, 4);
   m.pitch_rad = get<float>(p, 8);
   m.yaw_rad = get<float>(p, 12);
-  m.rollSpeedRadps = get<float>(p, 16);
-  m.pitchSpeedRadps = get<float>(p, 20);
-  m.yawSpeedRadps = get<float>(p, 24);
+  m.rollSpeed_radps = get<float>(p, 16);
+  m.pitchSpeed_radps = get<float>(p, 20);
+  m.yawSpeed_radps = get<float>(p, 24);
   return m;
 }
 
@@ -56,9 +56,9 @@ std::size_t encodePayload(const Attitude& m, Payload& p) {
   put(p, 4, m.roll_rad);
   put(p, 8, m.pitch_rad);
   put(p, 12, m.yaw_rad);
-  put(p, 16, m.rollSpeedRadps);
-  put(p, 20, m.pitchSpeedRadps);
-  put(p, 24, m.yawSpeedRadps);
+  put(p, 16, m.rollSpeed_radps);
+  put(p, 20, m.pitchSpeed_radps);
+  put(p, 24, m.yawSpeed_radps);
   return 28;
 }
 
@@ -69,9 +69,9 @@ AttitudeQuaternion decodeAttitudeQuaternion(const Payload& p) {
     m.q[i] = get<float>(p, 4 + 4 * i);
     m.reprOffsetQ[i] = get<float>(p, 32 + 4 * i);
   }
-  m.rollSpeedRadps = get<float>(p, 20);
-  m.pitchSpeedRadps = get<float>(p, 24);
-  m.yawSpeedRadps = get<float>(p, 28);
+  m.rollSpeed_radps = get<float>(p, 20);
+  m.pitchSpeed_radps = get<float>(p, 24);
+  m.yawSpeed_radps = get<float>(p, 28);
   return m;
 }
 
@@ -81,36 +81,36 @@ std::size_t encodePayload(const AttitudeQuaternion& m, Payload& p) {
     put(p, 4 + 4 * i, m.q[i]);
     put(p, 32 + 4 * i, m.reprOffsetQ[i]);
   }
-  put(p, 20, m.rollSpeedRadps);
-  put(p, 24, m.pitchSpeedRadps);
-  put(p, 28, m.yawSpeedRadps);
+  put(p, 20, m.rollSpeed_radps);
+  put(p, 24, m.pitchSpeed_radps);
+  put(p, 28, m.yawSpeed_radps);
   return 48;
 }
 
 GlobalPositionInt decodeGlobalPositionInt(const Payload& p) {
   GlobalPositionInt m;
   m.timeBoot_ms = get<std::uint32_t>(p, 0);
-  m.latitudeDegE7 = get<std::int32_t>(p, 4);
-  m.longitudeDegE7 = get<std::int32_t>(p, 8);
-  m.altitudeMslMm = get<std::int32_t>(p, 12);
-  m.relativeAltitudeMm = get<std::int32_t>(p, 16);
-  m.vxCmps = get<std::int16_t>(p, 20);
-  m.vyCmps = get<std::int16_t>(p, 22);
-  m.vzCmps = get<std::int16_t>(p, 24);
-  m.headingCdeg = get<std::uint16_t>(p, 26);
+  m.latitude_degE7 = get<std::int32_t>(p, 4);
+  m.longitude_degE7 = get<std::int32_t>(p, 8);
+  m.altitudeMsl_mm = get<std::int32_t>(p, 12);
+  m.relativeAltitude_mm = get<std::int32_t>(p, 16);
+  m.vx_cmps = get<std::int16_t>(p, 20);
+  m.vy_cmps = get<std::int16_t>(p, 22);
+  m.vz_cmps = get<std::int16_t>(p, 24);
+  m.heading_cdeg = get<std::uint16_t>(p, 26);
   return m;
 }
 
 std::size_t encodePayload(const GlobalPositionInt& m, Payload& p) {
   put(p, 0, m.timeBoot_ms);
-  put(p, 4, m.latitudeDegE7);
-  put(p, 8, m.longitudeDegE7);
-  put(p, 12, m.altitudeMslMm);
-  put(p, 16, m.relativeAltitudeMm);
-  put(p, 20, m.vxCmps);
-  put(p, 22, m.vyCmps);
-  put(p, 24, m.vzCmps);
-  put(p, 26, m.headingCdeg);
+  put(p, 4, m.latitude_degE7);
+  put(p, 8, m.longitude_degE7);
+  put(p, 12, m.altitudeMsl_mm);
+  put(p, 16, m.relativeAltitude_mm);
+  put(p, 20, m.vx_cmps);
+  put(p, 22, m.vy_cmps);
+  put(p, 24, m.vz_cmps);
+  put(p, 26, m.heading_cdeg);
   return 28;
 }
 
@@ -130,7 +130,7 @@ GimbalDeviceAttitudeStatus decodeGimbal(const Payload& p, std::size_t payloadLen
   m.targetSystem = get<std::uint8_t>(p, 38);
   m.targetComponent = get<std::uint8_t>(p, 39);
   m.deltaYaw_rad = get<float>(p, 40);
-  m.deltaYawVelocityRadps = get<float>(p, 44);
+  m.deltaYawVelocity_radps = get<float>(p, 44);
   m.gimbalDeviceId = get<std::uint8_t>(p, 48);
   m.hasExtensions = payloadLength > kGimbalBaseLength;
   return m;
@@ -152,7 +152,7 @@ std::size_t encodePayload(const GimbalDeviceAttitudeStatus& m, Payload& p) {
     return kGimbalBaseLength;
   }
   put(p, 40, m.deltaYaw_rad);
-  put(p, 44, m.deltaYawVelocityRadps);
+  put(p, 44, m.deltaYawVelocity_radps);
   put(p, 48, m.gimbalDeviceId);
   return 49;
 }

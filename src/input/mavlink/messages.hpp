@@ -72,24 +72,24 @@ constexpr std::uint16_t kGimbalFlagYawInEarthFrame = 64;
 struct Attitude {
   std::uint32_t timeBoot_ms = 0;
   float roll_rad = 0, pitch_rad = 0, yaw_rad = 0;
-  float rollSpeedRadps = 0, pitchSpeedRadps = 0, yawSpeedRadps = 0;
+  float rollSpeed_radps = 0, pitchSpeed_radps = 0, yawSpeed_radps = 0;
 };
 
 // #31: q = (w, x, y, z) rotating body FRD vectors into NED (q_nb of docs/conventions.md).
 struct AttitudeQuaternion {
   std::uint32_t timeBoot_ms = 0;
   std::array<float, 4> q{1, 0, 0, 0};
-  float rollSpeedRadps = 0, pitchSpeedRadps = 0, yawSpeedRadps = 0;
+  float rollSpeed_radps = 0, pitchSpeed_radps = 0, yawSpeed_radps = 0;
   std::array<float, 4> reprOffsetQ{0, 0, 0, 0};  // extension; all zero when not sent
 };
 
 // #33: fused global position. Altitude is above mean sea level, not ellipsoidal.
 struct GlobalPositionInt {
   std::uint32_t timeBoot_ms = 0;
-  std::int32_t latitudeDegE7 = 0, longitudeDegE7 = 0;
-  std::int32_t altitudeMslMm = 0, relativeAltitudeMm = 0;
-  std::int16_t vxCmps = 0, vyCmps = 0, vzCmps = 0;  // NED ground speed
-  std::uint16_t headingCdeg = 0;                    // 0..35999, UINT16_MAX when unknown
+  std::int32_t latitude_degE7 = 0, longitude_degE7 = 0;
+  std::int32_t altitudeMsl_mm = 0, relativeAltitude_mm = 0;
+  std::int16_t vx_cmps = 0, vy_cmps = 0, vz_cmps = 0;  // NED ground speed
+  std::uint16_t heading_cdeg = 0;                      // 0..35999, UINT16_MAX when unknown
 };
 
 // #285: the gimbal head's attitude; its frame depends on `flags` (see the pose assembler).
@@ -101,7 +101,7 @@ struct GimbalDeviceAttitudeStatus {
   std::uint16_t flags = 0;
   std::uint8_t targetSystem = 0, targetComponent = 0;
   float deltaYaw_rad = 0;  // extension: NaN or absent (0) when unknown
-  float deltaYawVelocityRadps = 0;
+  float deltaYawVelocity_radps = 0;
   std::uint8_t gimbalDeviceId = 0;
   bool hasExtensions = false;  // the sender's payload reached the extension fields
 };

@@ -101,9 +101,9 @@ bool MavlinkPoseAssembler::addAttitude(std::uint32_t timeBoot_ms,
 
 bool MavlinkPoseAssembler::addPosition(const GlobalPositionInt& m, std::int64_t receive_ns) {
   geodesy::GeodeticPoint point;
-  point.latitude_deg = m.latitudeDegE7 * kDegE7;
-  point.longitude_deg = m.longitudeDegE7 * kDegE7;
-  point.height_m = m.altitudeMslMm * kMmToM + config_.geoidSeparation_m;
+  point.latitude_deg = m.latitude_degE7 * kDegE7;
+  point.longitude_deg = m.longitude_degE7 * kDegE7;
+  point.height_m = m.altitudeMsl_mm * kMmToM + config_.geoidSeparation_m;
   if (!geodesy::isValid(point)) {
     ++counters_.rejected;
     return false;

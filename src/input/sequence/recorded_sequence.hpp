@@ -82,7 +82,7 @@ struct ObjectTruth {
   Eigen::Vector3d positionEnu{0, 0, 0};   // vehicle-frame origin in the world (ENU), m
   double headingEnu_rad = 0.0;            // driving direction, counter-clockwise from east
   double speed_mps = 0.0;
-  double yawRateRadps = 0.0;
+  double yawRate_radps = 0.0;
   geometry::RotatedBox imageBox{};  // image rotated box (angle = driving direction)
   double truncation = 0.0;          // share of the vehicle outside the image, [0, 1]
   double occlusion = 0.0;           // share of the visible silhouette hidden, [0, 1]

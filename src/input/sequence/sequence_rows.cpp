@@ -227,7 +227,7 @@ ObjectTruth parseObjectRow(Fields f, int gammaCount, const std::vector<std::stri
   object.positionEnu = {real(3), real(4), real(5)};
   object.headingEnu_rad = real(6);
   object.speed_mps = real(7);
-  object.yawRateRadps = real(8);
+  object.yawRate_radps = real(8);
   object.imageBox.cx = real(9);
   object.imageBox.cy = real(10);
   object.imageBox.length = nonNegative(11);
@@ -256,7 +256,7 @@ std::string formatObjectRow(const ObjectTruth& object, int gammaCount) {
   for (const double value :
        {object.dimensions_m.x(), object.dimensions_m.y(), object.dimensions_m.z(),
         object.positionEnu.x(), object.positionEnu.y(), object.positionEnu.z(),
-        object.headingEnu_rad, object.speed_mps, object.yawRateRadps, object.imageBox.cx,
+        object.headingEnu_rad, object.speed_mps, object.yawRate_radps, object.imageBox.cx,
         object.imageBox.cy, object.imageBox.length, object.imageBox.width, object.imageBox.angle,
         object.truncation, object.occlusion}) {
     row += ',';

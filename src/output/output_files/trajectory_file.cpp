@@ -78,9 +78,9 @@ TrajectoryRecord recordOf(std::int64_t frameId, const tracking::TrackState& t,
   }
   r.headingEnu_deg = t.headingEnu_rad * kDegPerRad;
   r.speedSigma_mps = t.speedSigma_mps;
-  r.accelerationMps2 = t.accelerationMps2;
-  r.accelerationSigmaMps2 = t.accelerationSigmaMps2;
-  r.yawRateDps = t.yawRateRadps * kDegPerRad;
+  r.acceleration_mps2 = t.acceleration_mps2;
+  r.accelerationSigma_mps2 = t.accelerationSigma_mps2;
+  r.yawRateDps = t.yawRate_radps * kDegPerRad;
   r.length_m = t.length_m;
   r.width_m = t.width_m;
   r.wheelbase_m = t.wheelbase_m;
@@ -129,7 +129,7 @@ std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) 
     return Problem{kHeading, "must be in [0, 360]"};
   }
   const std::array<std::pair<int, double>, 2> finiteMotion{
-      {{kAcceleration, r.accelerationMps2}, {kYawRate, r.yawRateDps}}};
+      {{kAcceleration, r.acceleration_mps2}, {kYawRate, r.yawRateDps}}};
   for (const auto& [column, value] : finiteMotion) {
     if (!std::isfinite(value)) {
       return Problem{column, "not finite"};
@@ -137,7 +137,7 @@ std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) 
   }
   const std::array<std::pair<int, double>, 5> nonNegative{
       {{kSpeedSigma, r.speedSigma_mps},
-       {kAccelerationSigma, r.accelerationSigmaMps2},
+       {kAccelerationSigma, r.accelerationSigma_mps2},
        {kLength, r.length_m},
        {kWidth, r.width_m},
        {kWheelbase, r.wheelbase_m}}};
@@ -204,8 +204,8 @@ TrajectoryRecord parseRow(const RowParser& p, int gammaColumns) {
   }
   r.headingEnu_deg = p.real<double>(kHeading);
   r.speedSigma_mps = p.real<double>(kSpeedSigma);
-  r.accelerationMps2 = p.real<double>(kAcceleration);
-  r.accelerationSigmaMps2 = p.real<double>(kAccelerationSigma);
+  r.acceleration_mps2 = p.real<double>(kAcceleration);
+  r.accelerationSigma_mps2 = p.real<double>(kAccelerationSigma);
   r.yawRateDps = p.real<double>(kYawRate);
   r.length_m = p.real<double>(kLength);
   r.width_m = p.real<double>(kWidth);
@@ -269,9 +269,9 @@ tracking::TrackState toTrackState(const TrajectoryRecord& r) {
   t.headingEnu_rad = r.headingEnu_rad();
   t.speed_mps = r.speed_mps;
   t.speedSigma_mps = r.speedSigma_mps;
-  t.accelerationMps2 = r.accelerationMps2;
-  t.accelerationSigmaMps2 = r.accelerationSigmaMps2;
-  t.yawRateRadps = r.yawRateDps / kDegPerRad;
+  t.acceleration_mps2 = r.acceleration_mps2;
+  t.accelerationSigma_mps2 = r.accelerationSigma_mps2;
+  t.yawRate_radps = r.yawRateDps / kDegPerRad;
   t.length_m = r.length_m;
   t.width_m = r.width_m;
   t.wheelbase_m = r.wheelbase_m;

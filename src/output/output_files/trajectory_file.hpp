@@ -54,8 +54,8 @@ struct TrajectoryRecord {
   std::optional<tracking::Wgs84Position> centreWgs84;  // empty fields: not given
   double headingEnu_deg = 0.0;                         // [0, 360]
   double speedSigma_mps = 0.0;                         // >= 0
-  double accelerationMps2 = 0.0;
-  double accelerationSigmaMps2 = 0.0;  // >= 0
+  double acceleration_mps2 = 0.0;
+  double accelerationSigma_mps2 = 0.0;  // >= 0
   double yawRateDps = 0.0;
   double length_m = 0.0;                                            // >= 0
   double width_m = 0.0;                                             // >= 0

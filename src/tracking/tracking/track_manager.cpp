@@ -276,10 +276,10 @@ void TrackManager::publish(Slot& slot, std::int64_t timestamp_ns) {
   out.headingEnu_rad = m.heading();
   out.speed_mps = x[kV];
   out.speedSigma_mps = std::sqrt(std::max(0.0, p(kV, kV)));
-  out.accelerationMps2 = x[kA];
-  out.accelerationSigmaMps2 = std::sqrt(std::max(0.0, p(kA, kA)));
-  out.yawRateRadps = m.yawRate();
-  out.yawRateSigmaRadps = m.yawRateSigma();
+  out.acceleration_mps2 = x[kA];
+  out.accelerationSigma_mps2 = std::sqrt(std::max(0.0, p(kA, kA)));
+  out.yawRate_radps = m.yawRate();
+  out.yawRateSigma_radps = m.yawRateSigma();
   out.steering_rad = x[kDelta];
   out.wheelbase_m = m.wheelbase();
   out.poseCovariance = m.poseCovariance();

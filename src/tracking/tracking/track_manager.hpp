@@ -124,10 +124,10 @@ struct TrackState {
   double headingEnu_rad = 0.0;
   double speed_mps = 0.0;
   double speedSigma_mps = 0.0;
-  double accelerationMps2 = 0.0;
-  double accelerationSigmaMps2 = 0.0;
-  double yawRateRadps = 0.0;
-  double yawRateSigmaRadps = 0.0;
+  double acceleration_mps2 = 0.0;
+  double accelerationSigma_mps2 = 0.0;
+  double yawRate_radps = 0.0;
+  double yawRateSigma_radps = 0.0;
   double steering_rad = 0.0;
   double positionSigma_m = 0.0;  // sqrt of the larger eigenvalue of the centre covariance
   // Covariance of (centre east, centre north, heading), m^2, m rad, rad^2.

@@ -80,8 +80,8 @@ int trajectoryCsvRow(std::span<char> out, std::int64_t frameId, const TrackState
     w.add("%s", ",,,");
   }
   w.add(",%.2f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f", t.headingEnu_rad * kDeg, t.speedSigma_mps,
-        t.accelerationMps2, t.accelerationSigmaMps2, t.yawRateRadps * kDeg, t.length_m, t.width_m,
-        t.wheelbase_m);
+        t.acceleration_mps2, t.accelerationSigma_mps2, t.yawRate_radps * kDeg, t.length_m,
+        t.width_m, t.wheelbase_m);
   for (float p : t.typeProbabilities) {
     w.add(",%.4f", static_cast<double>(p));
   }
