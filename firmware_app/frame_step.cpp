@@ -98,6 +98,7 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
             perception_->lastError());
     return {};
   }
+  logWorkingScale(frame.frameId);
   stats.record_ms(Stage::Preprocess, timings.preprocess_ms);
   stats.record_ms(Stage::Detector, timings.detector_ms);
   stats.record_ms(Stage::Decode, timings.decode_ms);
@@ -146,6 +147,16 @@ void FrameStep::countObservations() {
       ++counters.outsideDtm;
     }
   }
+}
+
+void FrameStep::logWorkingScale(std::int64_t frameId) {
+  // Once per change: the scale follows the drone's height (perception.working_gsd_m).
+  const double scale = perception_->workingScale();
+  if (scale != lastWorkingScale_ && (lastWorkingScale_ > 0.0 || perception_->frameGsd_m() > 0.0)) {
+    logLine("working scale %.3f at frame %lld (was %.3f; GSD %.4f m/px at the image centre)", scale,
+            static_cast<long long>(frameId), lastWorkingScale_, perception_->frameGsd_m());
+  }
+  lastWorkingScale_ = scale;
 }
 
 void FrameStep::logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameId,

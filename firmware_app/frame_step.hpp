@@ -90,6 +90,7 @@ class FrameStep {
   void logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameId,
                       const telemetry::PoseEstimate& pose);
   std::span<const messages::VehicleState> publish(std::int64_t timestamp_ns, std::int64_t frameId);
+  void logWorkingScale(std::int64_t frameId);
 
   FrameStepWiring wiring_{};
   std::unique_ptr<FramePerception> perception_;
@@ -108,6 +109,7 @@ class FrameStep {
   std::int64_t lastTimestampNs_ = 0;
   telemetry::PoseStatus lastPoseStatus_ = telemetry::PoseStatus::Ok;
   std::uint64_t poseEpisodeFrames_ = 0;
+  double lastWorkingScale_ = 0.0;
 };
 
 }  // namespace vp::app

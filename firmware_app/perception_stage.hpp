@@ -36,6 +36,10 @@ class FramePerception {
   virtual const cv::Mat& correctedFrame() const = 0;
   virtual const lifting::Lifter& lifter() const = 0;
   virtual const char* modelId() const = 0;  // for the drone status, e.g. "detector_int8"
+  // Working px per frame px of the last frame and the GSD (m/px) at its image centre that chose
+  // it (perception.working_gsd_m); 0 where the stage has none (the tests' injecting stages).
+  virtual double workingScale() const { return 0.0; }
+  virtual double frameGsd_m() const { return 0.0; }
 };
 
 class PipelinePerception final : public FramePerception {
@@ -62,6 +66,8 @@ class PipelinePerception final : public FramePerception {
   const cv::Mat& correctedFrame() const override { return pipeline_.correctedFrame(); }
   const lifting::Lifter& lifter() const override { return pipeline_.lifter(); }
   const char* modelId() const override { return modelId_.c_str(); }
+  double workingScale() const override { return pipeline_.workingScale(); }
+  double frameGsd_m() const override { return pipeline_.frameGsd_m(); }
 
  private:
   perception::FramePipeline pipeline_;

@@ -39,6 +39,9 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(wb.minRegionDeviation, wbCode.minRegionDeviation);
   EXPECT_EQ(wb.maxGain, wbCode.maxGain);
   EXPECT_EQ(pre.workingScale, code.preprocess.workingScale);
+  EXPECT_EQ(pre.workingGsd_m, code.preprocess.workingGsd_m);
+  EXPECT_EQ(pre.minWorkingScale, code.preprocess.minWorkingScale);
+  EXPECT_EQ(pre.maxWorkingScale, code.preprocess.maxWorkingScale);
   EXPECT_EQ(pre.networkWidth_px, code.preprocess.networkWidth_px);
   EXPECT_EQ(pre.networkHeight_px, code.preprocess.networkHeight_px);
   EXPECT_EQ(pre.tileOverlap_px, code.preprocess.tileOverlap_px);
@@ -70,6 +73,7 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(second.shapeForLargeVehicles, secondCode.shapeForLargeVehicles);
   EXPECT_EQ(second.refineLargeVehicleLength, secondCode.refineLargeVehicleLength);
   EXPECT_EQ(second.mirrorAverage, secondCode.mirrorAverage);
+  EXPECT_EQ(second.turnAverage, secondCode.turnAverage);
   EXPECT_EQ(second.mirrorRefine, secondCode.mirrorRefine);
   EXPECT_EQ(second.largeVehicleEnds, secondCode.largeVehicleEnds);
   EXPECT_EQ(second.minVehicleProbability, secondCode.minVehicleProbability);

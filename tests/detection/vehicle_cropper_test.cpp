@@ -25,6 +25,7 @@ SecondStageOptions singleCrop() {
   options.mirrorAverage = false;
   options.mirrorRefine = false;
   options.largeVehicleEnds = false;
+  options.turnAverage = false;
   options.minVehicleProbability = 0.0F;
   return options;
 }
@@ -378,6 +379,54 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
                                                     b.gamma.gamma[static_cast<std::size_t>(s)]));
   }
   EXPECT_GT(gammaDifference, 1e-3);
+}
+
+// turnAverage: front/back from a crop at the refined box and the same crop turned by 180 deg.
+// turnedFlipLogit() is half the difference of the flip logits classify() gives for a box and for
+// the box turned by 180 deg (1 crop px = 1 frame px, box centre on a pixel: the crop cut at
+// angle + pi is the turned crop); classify() with turnAverage takes its front/back from it, so a
+// box and the same box turned by 180 deg end with the same heading. Type stays the crop's.
+TEST(VehicleCropper, TurnAverageMakesFrontBackIndependentOfTheBoxDirection) {
+  cv::Mat frame = blurredNoise(240, 320, 13);
+  cv::rectangle(frame, cv::Rect(130, 110, 60, 20), cv::Scalar(40, 60, 200), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(172, 112, 12, 16), cv::Scalar(30, 30, 30), cv::FILLED);
+  constexpr double kGsd = kCropGsd_m;
+  const std::string model = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
+  SecondStageOptions single = singleCrop();
+  single.applyRefine = false;
+  SecondStageOptions turned = single;
+  turned.turnAverage = true;
+  VehicleCropper one;
+  VehicleCropper both;
+  ASSERT_TRUE(one.init(model, {}, single));
+  ASSERT_TRUE(both.init(model, {}, turned));
+  auto logit = [](float p) {
+    const double q = static_cast<double>(p);
+    return std::log(q / (1.0 - q));
+  };
+  auto box = [](double angle) {
+    Detection d;
+    d.box = {159.0, 120.0, 75.0, 30.0, angle};
+    return d;
+  };
+  Detection a = box(0.0), b = box(geometry::kPi);
+  ASSERT_EQ(one.classify(frame, kGsd, &a), SecondStageStatus::Ok);
+  ASSERT_EQ(one.classify(frame, kGsd, &b), SecondStageStatus::Ok);
+  float turnedLogit = 0.0F;
+  ASSERT_EQ(both.turnedFlipLogit(frame, kGsd, box(0.0).box, &turnedLogit), SecondStageStatus::Ok);
+  EXPECT_NEAR(turnedLogit, 0.5 * (logit(a.flipProbability) - logit(b.flipProbability)), 1e-2);
+  EXPECT_GT(std::abs(logit(a.flipProbability) + logit(b.flipProbability)), 1e-2)
+      << "the single runs are already antisymmetric: the test would show nothing";
+
+  Detection c = box(0.0), d = box(geometry::kPi);
+  ASSERT_EQ(both.classify(frame, kGsd, &c), SecondStageStatus::Ok);
+  ASSERT_EQ(both.classify(frame, kGsd, &d), SecondStageStatus::Ok);
+  EXPECT_NEAR(logit(c.flipProbability), static_cast<double>(turnedLogit), 1e-4);
+  EXPECT_NEAR(logit(d.flipProbability), -logit(c.flipProbability), 1e-2);
+  EXPECT_NEAR(std::abs(geometry::angleDifference(c.box.angle, d.box.angle)), 0.0, 1e-9);
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    EXPECT_EQ(c.typeProbabilities[t], a.typeProbabilities[t]) << "type " << t;
+  }
 }
 
 // largeVehicleEnds: a long vehicle's front/back from crops at its two ends. endsFlipLogit() is

@@ -38,6 +38,7 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   ASSERT_TRUE(shapeModel.load(defaults.asmPath, &why)) << why;
   perception::PipelineOptions options = defaults.perception;
   options.preprocess.workingScale = 1.0;
+  options.preprocess.workingGsd_m = 0.0;  // one scale with and without a pose
   // The crop scale comes from the pose when there is one, else from the boxes: the verifier's
   // vote on a doubtful box may differ between the two, and this test compares the detections
   // with and without a pose.
@@ -99,6 +100,64 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
       "frame pipeline on a 320 x 256 simulated frame: %zu detections by the shipped "
       "(in-training) detector, %zu lifted; %.1f ms\n",
       detected, lifted, pipeline.timings().total_ms);
+}
+
+// With working_gsd_m (the default) the working scale follows the GSD the pose and the DTM give
+// at the image centre: the rung nearest GSD / 0.12, which for a near-nadir camera is about
+// height above ground / focal length; without a pose the scale stays at working_scale.
+TEST(FramePipeline, WorkingScaleFollowsTheHeightAboveTheDtm) {
+  const std::string dir = test::loopSequence();
+  ASSERT_FALSE(dir.empty());
+  sequence::SequenceReader reader;
+  std::string why;
+  ASSERT_TRUE(reader.open(dir, &why)) << why;
+  const sequence::Rig& rig = reader.rig();
+  const geodesy::LocalFrame world(rig.origin);
+  terrain::TerrainGrid grid;
+  terrain::TerrainModel terrain;
+  ASSERT_TRUE(io::loadDtm(rig.dtmPath, rig.crs, grid, &why)) << why;
+  ASSERT_TRUE(terrain.init(std::move(grid), world, &why)) << why;
+  camera::CameraModel camera;
+  ASSERT_TRUE(camera.init(rig.intrinsics, rig.distortion, &why)) << why;
+  const config::AppConfig defaults = test::defaultConfigFor(dir);
+  shape::ActiveShapeModel shapeModel;
+  ASSERT_TRUE(shapeModel.load(defaults.asmPath, &why)) << why;
+  perception::PipelineOptions options = defaults.perception;
+  ASSERT_GT(options.preprocess.workingGsd_m, 0.0);
+  options.preprocess.workingScale = 0.5;
+  FramePipeline pipeline;
+  ASSERT_TRUE(pipeline.init(options, camera, rig.mount, terrain, world, shapeModel, &why)) << why;
+
+  cv::Mat frame(rig.intrinsics.height_px, rig.intrinsics.width_px, CV_8UC3);
+  ASSERT_TRUE(reader.loadFrame(0, frame, &why)) << why;
+  const std::int64_t t = reader.frames()[0].timestamp_ns;
+  ASSERT_EQ(pipeline.process(frame, t, telemetry::PoseEstimate{}), PipelineStatus::Ok);
+  EXPECT_EQ(pipeline.workingScale(), 0.5);
+  EXPECT_EQ(pipeline.frameGsd_m(), 0.0);
+
+  const sequence::TelemetryRecord& record = reader.telemetry().front();
+  telemetry::PoseBuffer poses;
+  ASSERT_TRUE(poses.init(telemetry::PoseBufferConfig{}, &why)) << why;
+  for (const sequence::TelemetryRecord& r : reader.telemetry()) {
+    telemetry::PoseSample sample;
+    sample.timestamp_ns = r.timestamp_ns;
+    sample.position = r.position;
+    sample.bodyToNed = r.bodyToNed;
+    sample.gimbal = r.gimbal;
+    poses.push(sample);
+  }
+  ASSERT_EQ(pipeline.process(frame, t, poses.poseAt(t)), PipelineStatus::Ok);
+  const auto ground = terrain.heightAt(record.position.latitude_deg, record.position.longitude_deg);
+  ASSERT_TRUE(ground.hasValue());
+  const double nadir_m = (record.position.height_m - *ground) / rig.intrinsics.fx_px;
+  EXPECT_GT(pipeline.frameGsd_m(), 0.8 * nadir_m);
+  EXPECT_LT(pipeline.frameGsd_m(), 1.5 * nadir_m);
+  const double ideal = pipeline.frameGsd_m() / preprocess::kDetectorWorkingGsd_m;
+  EXPECT_LT(std::abs(std::log(pipeline.workingScale() / std::min(ideal, 1.0))),
+            std::log(preprocess::kScaleStep))
+      << "scale " << pipeline.workingScale() << " for GSD " << pipeline.frameGsd_m();
+  std::printf("working scale %.3f for a centre GSD of %.3f m (nadir estimate %.3f m)\n",
+              pipeline.workingScale(), pipeline.frameGsd_m(), nadir_m);
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 #include "preprocess/preprocessor.hpp"
 
 #include <cstring>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -217,6 +219,86 @@ TEST(Preprocessor, NoHeapAllocationPerFrame) {
       EXPECT_EQ(counter.count(), 0U) << "threads " << threads << " scale " << scale;
     }
   }
+}
+
+// The tiles of a preprocessor, copied (they are views of its working image).
+std::vector<cv::Mat> tileImages(const Preprocessor& pre) {
+  std::vector<cv::Mat> images;
+  for (const TileView& tile : pre.output().tiles) {
+    const cv::Mat view(tile.rect.height_px, tile.rect.width_px, CV_8UC3,
+                       const_cast<std::uint8_t*>(tile.data), tile.strideBytes);
+    images.push_back(view.clone());
+  }
+  return images;
+}
+
+TEST(Preprocessor, AdaptsTheWorkingScaleToTheGsdLikeAFixedScale) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
+  const cv::Mat frame = texturedFrame(7);
+  PreprocessOptions adaptive;  // workingGsd_m 0.12, anchor 0.25, ladder [0.125, 1]
+  Preprocessor pre;
+  std::string why;
+  ASSERT_TRUE(pre.init(adaptive, camera, {kFrameWidth_px, kFrameHeight_px}, &why)) << why;
+  ASSERT_EQ(pre.workingScales().size(), 25U);
+  EXPECT_EQ(pre.workingScale(), kDefaultWorkingScale);  // until the first GSD
+  EXPECT_FALSE(pre.adaptToGsd(0.031));                  // ideal 0.258: within the hysteresis
+  ASSERT_TRUE(pre.adaptToGsd(0.06));                    // twice as high: 0.5
+  EXPECT_NEAR(pre.workingScale(), 0.5, 1e-9);
+  ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+  EXPECT_EQ(pre.output().geometry.workingWidth_px, 1296);
+  const std::vector<cv::Mat> adapted = tileImages(pre);
+  // Back down: the smaller rung's padded tile must not show what the larger one wrote.
+  ASSERT_TRUE(pre.adaptToGsd(0.03));
+  ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+  const std::vector<cv::Mat> back = tileImages(pre);
+
+  for (const auto& [scale, tiles] : {std::pair{0.5, adapted}, std::pair{0.25, back}}) {
+    PreprocessOptions fixed;
+    fixed.workingGsd_m = 0.0;
+    fixed.workingScale = scale;
+    Preprocessor reference;
+    ASSERT_TRUE(reference.init(fixed, camera, {kFrameWidth_px, kFrameHeight_px}, &why)) << why;
+    ASSERT_EQ(reference.workingScales().size(), 1U);
+    ASSERT_EQ(reference.process(frame), PreprocessStatus::Ok);
+    const std::vector<cv::Mat> expected = tileImages(reference);
+    ASSERT_EQ(tiles.size(), expected.size()) << "scale " << scale;
+    for (std::size_t i = 0; i < tiles.size(); ++i) {
+      EXPECT_EQ(cv::norm(tiles[i], expected[i], cv::NORM_INF), 0.0)
+          << "scale " << scale << " tile " << i;
+    }
+  }
+}
+
+TEST(Preprocessor, ChangingTheWorkingScaleAllocatesNothing) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
+  const cv::Mat frame = texturedFrame(8);
+  Preprocessor pre;
+  ASSERT_TRUE(pre.init(PreprocessOptions{}, camera, {kFrameWidth_px, kFrameHeight_px}));
+  ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+  test::AllocationCounter counter;
+  int changes = 0;
+  for (const double gsd_m : {0.06, 0.02, 0.045, 0.03}) {
+    changes += pre.adaptToGsd(gsd_m) ? 1 : 0;
+    ASSERT_EQ(pre.process(frame), PreprocessStatus::Ok);
+  }
+  counter.stop();
+  EXPECT_EQ(changes, 4);
+  EXPECT_EQ(counter.count(), 0U);
+}
+
+TEST(Preprocessor, FixedScaleIgnoresTheGsdAndLadderBoundsAreChecked) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
+  PreprocessOptions fixed;
+  fixed.workingGsd_m = 0.0;
+  Preprocessor pre;
+  ASSERT_TRUE(pre.init(fixed, camera, {kFrameWidth_px, kFrameHeight_px}));
+  EXPECT_FALSE(pre.adaptToGsd(0.06));
+  EXPECT_EQ(pre.workingScale(), kDefaultWorkingScale);
+  PreprocessOptions bad;
+  bad.minWorkingScale = 0.3;  // above working_scale 0.25
+  std::string why;
+  EXPECT_FALSE(pre.init(bad, camera, {kFrameWidth_px, kFrameHeight_px}, &why));
+  EXPECT_NE(why.find("min_working_scale"), std::string::npos) << why;
 }
 
 }  // namespace

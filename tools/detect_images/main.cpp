@@ -68,6 +68,8 @@ options:
                         averaged, as the app's perception.crop_mirror_average)
   --no-mirror-refine    average only the type over the crop and its mirror image, not the box
                         refinement (default: both, as the app's perception.crop_mirror_refine)
+  --no-turn             front/back from the crop as cut only (default: also the crop turned by
+                        180 deg, as the app's perception.crop_turn_average)
   --min-vehicle-probability P
                         drop detections the crop network's verifier gives a lower vehicle
                         probability, [0, 1] (default 0.3, as the app's
@@ -146,6 +148,7 @@ Options parseArguments(int argc, char** argv) {
                     {"--no-refine", &second.applyRefine, false},
                     {"--no-mirror", &second.mirrorAverage, false},
                     {"--no-mirror-refine", &second.mirrorRefine, false},
+                    {"--no-turn", &second.turnAverage, false},
                     {"--refine-large-length", &second.refineLargeVehicleLength, true},
                     {"--no-large-vehicle-ends", &second.largeVehicleEnds, false}};
     bool isSwitch = false;
@@ -257,6 +260,7 @@ vp::preprocess::PreprocessOptions preprocessOptions(const vp::detection::Detecti
   // default; stated because the tool's boxes must be in the images' own pixels).
   pre.undistort = false;
   pre.workingScale = workingScale;
+  pre.workingGsd_m = 0.0;  // one scale per run: the option's, or --gsd-m's
   pre.networkWidth_px = stage.detectorInputWidth();
   pre.networkHeight_px = stage.detectorInputHeight();
   return pre;

@@ -60,6 +60,11 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
       section.number("white_balance_white_share", kShareRange, wbDefaults.whitePointShare);
   wb.maxGain = section.number("white_balance_max_gain", kMaxGainRange, wbDefaults.maxGain);
   pre.workingScale = section.number("working_scale", kWorkingScaleRange, d.preprocess.workingScale);
+  pre.workingGsd_m = section.number("working_gsd_m", kFixedGsdRange_m, d.preprocess.workingGsd_m);
+  pre.minWorkingScale =
+      section.number("min_working_scale", kWorkingScaleRange, d.preprocess.minWorkingScale);
+  pre.maxWorkingScale =
+      section.number("max_working_scale", kWorkingScaleRange, d.preprocess.maxWorkingScale);
   pre.tileOverlap_px =
       section.integer("tile_overlap_px", kTileOverlapRange_px, d.preprocess.tileOverlap_px);
 
@@ -80,6 +85,7 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
   second.applyFlip = section.boolean("apply_flip", secondDefaults.applyFlip);
   second.applyRefine = section.boolean("apply_refine", secondDefaults.applyRefine);
   second.mirrorAverage = section.boolean("crop_mirror_average", secondDefaults.mirrorAverage);
+  second.turnAverage = section.boolean("crop_turn_average", secondDefaults.turnAverage);
   second.mirrorRefine = section.boolean("crop_mirror_refine", secondDefaults.mirrorRefine);
   second.largeVehicleEnds =
       section.boolean("crop_large_vehicle_ends", secondDefaults.largeVehicleEnds);

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "detection/detection.hpp"
+#include "preprocess/working_scale.hpp"
 
 namespace vp::detection {
 
@@ -34,9 +35,8 @@ struct GsdOptions {
 
 bool validate(const GsdOptions& options, std::string* why);
 
-// The first stage's working resolution: it was trained on frames brought to about this many
-// metres per working pixel (a 2592 px frame from ~90 m downscaled 4x; tools/detector, model card).
-inline constexpr double kDetectorWorkingGsd_m = 0.12;
+// The first stage's working resolution (preprocess/working_scale.hpp).
+using preprocess::kDetectorWorkingGsd_m;
 
 // Working scale (working px per frame px) that brings a frame of gsd_m metres per pixel to the
 // detector's resolution: gsd_m / kDetectorWorkingGsd_m, at most 1 (the preprocessor only

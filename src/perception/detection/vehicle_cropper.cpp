@@ -323,8 +323,30 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
     if (status != SecondStageStatus::Ok) {
       return status;
     }
+    return applyCropOutputs(outputs, gsd_m, options_, detection);
   }
-  return applyCropOutputs(outputs, gsd_m, options_, detection);
+  if (!options_.turnAverage) {
+    return applyCropOutputs(outputs, gsd_m, options_, detection);
+  }
+  // Type, shape and refinement as usual, the heading kept on the first stage's side; then the
+  // front/back from a crop at the refined box and its turned copy (see the contract).
+  SecondStageOptions refineOnly = options_;
+  refineOnly.applyFlip = false;
+  const SecondStageStatus refined = applyCropOutputs(outputs, gsd_m, refineOnly, detection);
+  if (refined != SecondStageStatus::Ok) {
+    return refined;
+  }
+  float flipLogit = 0.0F;
+  const SecondStageStatus turned = turnedFlipLogit(frame, gsd_m, detection->box, &flipLogit);
+  if (turned != SecondStageStatus::Ok) {
+    return turned;
+  }
+  detection->flipProbability =
+      static_cast<float>(1.0 / (1.0 + std::exp(-static_cast<double>(flipLogit))));
+  if (options_.applyFlip && flipLogit > 0.0F) {
+    detection->box.angle = geometry::wrapTwoPi(detection->box.angle + geometry::kPi);
+  }
+  return SecondStageStatus::Ok;
 }
 
 SecondStageStatus VehicleCropper::endsFlipLogit(const cv::Mat& frame, double gsd_m,
@@ -355,6 +377,36 @@ SecondStageStatus VehicleCropper::endsFlipLogit(const cv::Mat& frame, double gsd
       return SecondStageStatus::EngineFailed;
     }
     flips[static_cast<std::size_t>(end)] = engine_.output(flipIndex_).data[0];
+  }
+  if (!std::isfinite(flips[0]) || !std::isfinite(flips[1])) {
+    return SecondStageStatus::BadOutputs;
+  }
+  *flipLogit = 0.5F * (flips[0] - flips[1]);
+  return SecondStageStatus::Ok;
+}
+
+SecondStageStatus VehicleCropper::turnedFlipLogit(const cv::Mat& frame, double gsd_m,
+                                                  const geometry::RotatedBox& box,
+                                                  float* flipLogit) {
+  if (!initialised()) {
+    return SecondStageStatus::NotInitialised;
+  }
+  if (!(gsd_m > 0.0) || !std::isfinite(gsd_m)) {
+    return SecondStageStatus::BadGsd;
+  }
+  if (!cutCrop(frame, cropAffine(box.cx, box.cy, box.angle, gsd_m), crop_)) {
+    return SecondStageStatus::CropFailed;
+  }
+  cv::flip(crop_, mirrored_, -1);  // both axes: the crop cut at angle + pi, pixel for pixel
+  std::array<float, 2> flips{};
+  const std::array<const cv::Mat*, 2> crops{&crop_, &mirrored_};
+  for (std::size_t i = 0; i < crops.size(); ++i) {
+    const inference::ImageView view{crops[i]->data, crops[i]->cols, crops[i]->rows,
+                                    crops[i]->step[0]};
+    if (engine_.run(view) != inference::RunStatus::Ok) {
+      return SecondStageStatus::EngineFailed;
+    }
+    flips[i] = engine_.output(flipIndex_).data[0];
   }
   if (!std::isfinite(flips[0]) || !std::isfinite(flips[1])) {
     return SecondStageStatus::BadOutputs;

@@ -31,6 +31,15 @@
 //    left-right symmetric, so a mirrored car has the same gamma), with mirrorRefine also their
 //    refinements (du, length, width as they are; dv and d_angle negated back); the flip logit
 //    comes from the crop as cut. A test-time augmentation: one more crop-network run.
+//  - With turnAverage (a car; Large vehicles take their ends, below), the front/back comes from
+//    a second look: type, shape and refinement are applied as above with the heading kept on
+//    the first stage's side, then turnedFlipLogit() cuts a crop at the *refined* box (centred
+//    and aligned on the vehicle) and runs the network on it and on its copy turned by 180 deg
+//    (what cutting at angle + pi gives, pixel for pixel: x -> W-1-x, y -> H-1-y), returning
+//    (flip(crop) - flip(turned)) / 2. The turned crop shows the front where the first shows
+//    the rear, so the decision is equivariant by construction: turning the box by 180 deg
+//    negates the logit and never changes the heading the vehicle ends with. flipProbability
+//    is the sigmoid of that logit. Two more runs.
 //  - With largeVehicleEnds, a vehicle whose most likely type (after mirror averaging) is Large
 //    gets its front/back from two more crops, one at each end of its box instead of its middle:
 //    the 5.76 m window on the middle of a 12 m bus shows neither end. endsFlipLogit() cuts crop F
@@ -94,6 +103,7 @@ struct SecondStageOptions {
   bool mirrorAverage = true;              // type averaged with the mirrored crop's (see contract)
   bool mirrorRefine = true;               // ... and the refinement (needs mirrorAverage)
   bool largeVehicleEnds = true;           // Large: front/back from crops at both ends (contract)
+  bool turnAverage = true;                // front/back from the refined box and its turn (contract)
   // Detections whose verifier probability is below this are dropped after the second stage;
   // 0 keeps all, and so does a crop network without the verifier output. [0, 1]. 0.3: chosen
   // on the tuning seeds (docs/model_card.md, round 8).
@@ -134,6 +144,9 @@ class VehicleCropper {
   // the same statuses as classify().
   SecondStageStatus endsFlipLogit(const cv::Mat& frame, double gsd_m,
                                   const geometry::RotatedBox& box, float* flipLogit);
+  // Real-time: the front/back logit from a crop at box and its turned copy (contract).
+  SecondStageStatus turnedFlipLogit(const cv::Mat& frame, double gsd_m,
+                                    const geometry::RotatedBox& box, float* flipLogit);
 
   const cv::Mat& lastCrop() const { return crop_; }  // diagnostics and tests
   int shapeCount() const { return shapeCount_; }

@@ -29,20 +29,25 @@ const char* toString(PipelineStatus status) {
   return "unknown";
 }
 
-double PoseGsdProvider::groundSampleDistance_m(const detection::Detection& detection) const {
-  if (lifter_ == nullptr || pose_ == nullptr) {
-    return 0.0;
-  }
-  const Eigen::Vector2d centre(detection.box.cx, detection.box.cy);
-  const auto p0 = lifter_->pixelToWorld(*pose_, centre);
-  const auto pu = lifter_->pixelToWorld(*pose_, centre + Eigen::Vector2d(1.0, 0.0));
-  const auto pv = lifter_->pixelToWorld(*pose_, centre + Eigen::Vector2d(0.0, 1.0));
+double groundSampleDistanceAt_m(const lifting::Lifter& lifter, const lifting::CameraPoseWorld& pose,
+                                const Eigen::Vector2d& pixel) {
+  const auto p0 = lifter.pixelToWorld(pose, pixel);
+  const auto pu = lifter.pixelToWorld(pose, pixel + Eigen::Vector2d(1.0, 0.0));
+  const auto pv = lifter.pixelToWorld(pose, pixel + Eigen::Vector2d(0.0, 1.0));
   if (!p0 || !pu || !pv) {
     return 0.0;
   }
   // Ground area covered by one pixel; its square root is the isotropic GSD the crop uses.
   const double area = (*pu - *p0).cross(*pv - *p0).norm();
   return area > 0.0 && std::isfinite(area) ? std::sqrt(area) : 0.0;
+}
+
+double PoseGsdProvider::groundSampleDistance_m(const detection::Detection& detection) const {
+  if (lifter_ == nullptr || pose_ == nullptr) {
+    return 0.0;
+  }
+  return groundSampleDistanceAt_m(*lifter_, *pose_,
+                                  Eigen::Vector2d(detection.box.cx, detection.box.cy));
 }
 
 void FramePipeline::setError(const char* stage, const char* detail) {
@@ -95,6 +100,19 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
     return PipelineStatus::NotInitialised;
   }
   const auto start = std::chrono::steady_clock::now();
+  // The camera pose at the frame time, computed once: the working scale, the second stage's GSD
+  // and lifting use it.
+  const FrameCameraPose camera =
+      detectionLifter_.cameraPoseFor(lifter_, pose.status, toDronePose(pose.pose));
+  if (camera.status == LiftStatus::Ok) {
+    // The working scale follows the height: the GSD where the optical axis meets the ground.
+    const camera::Intrinsics& k = preprocessor_.frameCamera().intrinsics();
+    const Eigen::Vector2d centre(0.5 * (k.width_px - 1), 0.5 * (k.height_px - 1));
+    frameGsd_m_ = groundSampleDistanceAt_m(lifter_, camera.pose, centre);
+    if (preprocessor_.adaptToGsd(frameGsd_m_)) {
+      ++workingScaleChanges_;
+    }
+  }
   const preprocess::PreprocessStatus pre = preprocessor_.process(bgrFrame);
   timings_.preprocess_ms = msSince(start);
   if (pre != preprocess::PreprocessStatus::Ok) {
@@ -102,9 +120,6 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
     return PipelineStatus::PreprocessFailed;
   }
 
-  // The camera pose at the frame time, computed once: the second stage's GSD and lifting use it.
-  const FrameCameraPose camera =
-      detectionLifter_.cameraPoseFor(lifter_, pose.status, toDronePose(pose.pose));
   const PoseGsdProvider* gsd = nullptr;
   if (camera.status == LiftStatus::Ok) {
     cameraPose_ = camera.pose;

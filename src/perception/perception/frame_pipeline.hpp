@@ -5,12 +5,13 @@
 // working-resolution tiles), the detection stage (detector + second-stage crop network), the
 // Lifter on the camera of the *corrected* frame (the pinhole camera when undistortion runs)
 // and the detection lifter; it fails with *why naming the part and the problem. process()
-// then runs per frame: preprocess -> camera pose at the frame time (from the pose estimate
-// the caller took from its telemetry::PoseBuffer) -> detection, with the second stage's crops
-// cut at the ground sample distance computed from that pose and the DTM at each detection
-// (PoseGsdProvider; without a usable pose the detection stage's own estimate) -> lifting.
-// Every detection is kept as a VehicleObservation, lifted or with the status saying why not
-// (no/stale/invalid pose, off the DTM, ...); with a camera pose the frame's ground footprint
+// then runs per frame: camera pose at the frame time (from the pose estimate the caller took
+// from its telemetry::PoseBuffer) -> working scale for the GSD at the image centre
+// (Preprocessor::adaptToGsd, when the options ask for it) -> preprocess -> detection, with the
+// second stage's crops cut at the ground sample distance computed from that pose and the DTM at
+// each detection (PoseGsdProvider; without a usable pose the detection stage's own estimate) ->
+// lifting. Every detection is kept as a VehicleObservation, lifted or with the status saying why
+// not (no/stale/invalid pose, off the DTM, ...); with a camera pose the frame's ground footprint
 // (frameFootprint(): its corners on the DTM) is computed too. process() never throws and performs
 // no heap allocation after init(); a refused frame (wrong size/type, engine failure) returns a
 // status and lastError() names the problem, and the next frame is processed normally. The terrain,
@@ -68,6 +69,11 @@ const char* toString(PipelineStatus status);
 // DTM: the ground area one pixel covers there, lifted through the Lifter (square root of
 // the area of the lifted pixel's parallelogram). <= 0 when the pose is not set or the
 // ray misses the DTM, so the detection stage falls back to its own estimate.
+// GSD (m per pixel) at one pixel of the corrected frame: the square root of the ground area the
+// pixel covers, lifted through the Lifter; <= 0 when a ray misses the DTM.
+double groundSampleDistanceAt_m(const lifting::Lifter& lifter, const lifting::CameraPoseWorld& pose,
+                                const Eigen::Vector2d& pixel);
+
 class PoseGsdProvider final : public detection::GsdProvider {
  public:
   void setPose(const lifting::Lifter* lifter, const lifting::CameraPoseWorld* pose) {
@@ -105,6 +111,12 @@ class FramePipeline {
   const FrameFootprint& footprint() const { return footprint_; }
   const detection::DetectionStats& detectionStats() const { return detection_.stats(); }
   const PipelineTimings& timings() const { return timings_; }
+  // Working px per frame px of the last frame (preprocess options: fixed, or from the GSD).
+  double workingScale() const { return preprocessor_.workingScale(); }
+  // GSD at the image centre of the last frame with a camera pose (0 before the first), and how
+  // often the working scale changed since init().
+  double frameGsd_m() const { return frameGsd_m_; }
+  std::uint64_t workingScaleChanges() const { return workingScaleChanges_; }
   // The corrected full-resolution frame of the last process() (what the detections' pixels
   // refer to; for annotation) and the Lifter on its camera.
   const cv::Mat& correctedFrame() const { return preprocessor_.output().frame; }
@@ -126,6 +138,8 @@ class FramePipeline {
   FrameLiftSummary liftSummary_{};
   FrameFootprint footprint_{};
   PipelineTimings timings_{};
+  double frameGsd_m_ = 0.0;
+  std::uint64_t workingScaleChanges_ = 0;
   std::array<char, 256> lastError_{};
 };
 

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 namespace vp::preprocess {
 
@@ -49,6 +50,20 @@ bool validate(const PreprocessOptions& options, std::string* why) {
   if (!(options.workingScale > 0.0 && options.workingScale <= 1.0)) {
     return fail(why,
                 "working_scale: must be in (0, 1], got " + std::to_string(options.workingScale));
+  }
+  if (!(options.workingGsd_m >= 0.0 && options.workingGsd_m <= 1.0)) {
+    return fail(why, "working_gsd_m: must be in [0, 1] m (0 = a fixed working_scale), got " +
+                         std::to_string(options.workingGsd_m));
+  }
+  if (options.workingGsd_m > 0.0 &&
+      !(options.minWorkingScale > 0.0 && options.minWorkingScale <= options.workingScale &&
+        options.workingScale <= options.maxWorkingScale && options.maxWorkingScale <= 1.0)) {
+    return fail(why,
+                "min_working_scale / working_scale / max_working_scale: need 0 < min <= "
+                "working_scale <= max <= 1, got " +
+                    std::to_string(options.minWorkingScale) + " / " +
+                    std::to_string(options.workingScale) + " / " +
+                    std::to_string(options.maxWorkingScale));
   }
   if (options.networkWidth_px < 32 || options.networkHeight_px < 32) {
     return fail(why, "network input: must be >= 32 x 32 px, got " +
@@ -119,53 +134,115 @@ bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraMo
     return fail(why, detail);
   }
 
-  // 3. Working image: Python's int(round(w * s)) (half to even), padded to the network input.
-  FrameGeometry geometry;
-  geometry.frameWidth_px = frameSize.width;
-  geometry.frameHeight_px = frameSize.height;
-  geometry.workingWidth_px =
-      std::max(1, static_cast<int>(std::nearbyint(frameSize.width * options.workingScale)));
-  geometry.workingHeight_px =
-      std::max(1, static_cast<int>(std::nearbyint(frameSize.height * options.workingScale)));
-  geometry.scaleX = static_cast<double>(geometry.workingWidth_px) / frameSize.width;
-  geometry.scaleY = static_cast<double>(geometry.workingHeight_px) / frameSize.height;
-  const cv::Size content(geometry.workingWidth_px, geometry.workingHeight_px);
-  if (!resizer_.init(frameSize, content, parallel_.slots(), &detail)) {
-    return fail(why, detail);
-  }
-  working_.create(std::max(content.height, options.networkHeight_px),
-                  std::max(content.width, options.networkWidth_px), CV_8UC3);
-  working_.setTo(cv::Scalar::all(options.padValue));
-  workingContent_ = working_(cv::Rect(0, 0, content.width, content.height));
-
-  // 4. Tiles.
-  std::array<TileRect, kMaxTiles> rects{};
-  tileCount_ = layoutTiles(content.width, content.height, options.networkWidth_px,
-                           options.networkHeight_px, options.tileOverlap_px, rects);
-  if (tileCount_ == 0) {
-    const int nx = tilesAlongAxis(content.width, options.networkWidth_px, options.tileOverlap_px);
-    const int ny = tilesAlongAxis(content.height, options.networkHeight_px, options.tileOverlap_px);
-    return fail(why, "working image " + std::to_string(content.width) + "x" +
-                         std::to_string(content.height) + " needs " + std::to_string(nx) + " x " +
-                         std::to_string(ny) + " tiles, more than " + std::to_string(kMaxTiles) +
-                         ": lower working_scale or raise tile sizes");
-  }
-  for (std::size_t i = 0; i < tileCount_; ++i) {
-    TileView& tile = tiles_[i];
-    tile.rect = rects[i];
-    tile.index = static_cast<int>(i);
-    tile.data =
-        working_.ptr<std::uint8_t>(rects[i].y0_px) + static_cast<std::size_t>(rects[i].x0_px) * 3;
-    tile.strideBytes = working_.step[0];
-  }
-
-  options_ = options;
+  // 3.-4. Working image and tiles, per rung of the scale ladder (one rung at a fixed scale).
   frameSize_ = frameSize;
+  options_ = options;
+  std::array<double, kMaxScaleRungs> ladder{};
+  std::size_t count = 1;
+  ladder[0] = options.workingScale;
+  if (options.workingGsd_m > 0.0) {
+    count = buildScaleLadder(options.workingScale, options.minWorkingScale, options.maxWorkingScale,
+                             ladder);
+  }
+  rungs_.clear();
+  rungs_.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    Rung rung;
+    std::string problem;
+    if (!buildRung(rung, ladder[i], &problem)) {
+      if (ladder[i] == options.workingScale) {
+        return fail(why, problem);
+      }
+      if (ladder[i] > options.workingScale) {
+        break;  // larger rungs need even more tiles: the ladder ends here
+      }
+      continue;
+    }
+    scales_[rungs_.size()] = ladder[i];
+    rungs_.push_back(std::move(rung));
+  }
+  cv::Size largest(options.networkWidth_px, options.networkHeight_px);
+  for (const Rung& rung : rungs_) {
+    largest.width = std::max(largest.width, rung.geometry.workingWidth_px);
+    largest.height = std::max(largest.height, rung.geometry.workingHeight_px);
+    if (rung.scale == options.workingScale) {
+      rung_ = static_cast<std::size_t>(&rung - rungs_.data());
+    }
+  }
+  working_.create(largest, CV_8UC3);
+  for (Rung& rung : rungs_) {
+    const FrameGeometry& g = rung.geometry;
+    rung.content = working_(cv::Rect(0, 0, g.workingWidth_px, g.workingHeight_px));
+    for (std::size_t i = 0; i < rung.tileCount; ++i) {
+      TileView& tile = rung.tiles[i];
+      tile.data = working_.ptr<std::uint8_t>(tile.rect.y0_px) +
+                  static_cast<std::size_t>(tile.rect.x0_px) * 3;
+      tile.strideBytes = working_.step[0];
+    }
+  }
   output_ = PreprocessedFrame{};
-  output_.geometry = geometry;
-  output_.tiles = std::span<const TileView>(tiles_.data(), tileCount_);
+  selectRung(rung_);
   lastError_[0] = '\0';
   initialised_ = true;
+  return true;
+}
+
+bool Preprocessor::buildRung(Rung& rung, double scale, std::string* why) {
+  // Python's int(round(w * s)) (half to even), as the training code sizes its working images.
+  FrameGeometry& geometry = rung.geometry;
+  geometry.frameWidth_px = frameSize_.width;
+  geometry.frameHeight_px = frameSize_.height;
+  geometry.workingWidth_px =
+      std::max(1, static_cast<int>(std::nearbyint(frameSize_.width * scale)));
+  geometry.workingHeight_px =
+      std::max(1, static_cast<int>(std::nearbyint(frameSize_.height * scale)));
+  geometry.scaleX = static_cast<double>(geometry.workingWidth_px) / frameSize_.width;
+  geometry.scaleY = static_cast<double>(geometry.workingHeight_px) / frameSize_.height;
+  const cv::Size content(geometry.workingWidth_px, geometry.workingHeight_px);
+  std::string detail;
+  if (!rung.resizer.init(frameSize_, content, parallel_.slots(), &detail)) {
+    *why = detail;
+    return false;
+  }
+  std::array<TileRect, kMaxTiles> rects{};
+  rung.tileCount = layoutTiles(content.width, content.height, options_.networkWidth_px,
+                               options_.networkHeight_px, options_.tileOverlap_px, rects);
+  if (rung.tileCount == 0) {
+    const int nx = tilesAlongAxis(content.width, options_.networkWidth_px, options_.tileOverlap_px);
+    const int ny =
+        tilesAlongAxis(content.height, options_.networkHeight_px, options_.tileOverlap_px);
+    *why = "working image " + std::to_string(content.width) + "x" + std::to_string(content.height) +
+           " needs " + std::to_string(nx) + " x " + std::to_string(ny) + " tiles, more than " +
+           std::to_string(kMaxTiles) + ": lower working_scale or raise tile sizes";
+    return false;
+  }
+  for (std::size_t i = 0; i < rung.tileCount; ++i) {
+    rung.tiles[i].rect = rects[i];
+    rung.tiles[i].index = static_cast<int>(i);
+  }
+  rung.scale = scale;
+  return true;
+}
+
+void Preprocessor::selectRung(std::size_t index) {
+  rung_ = index;
+  const Rung& rung = rungs_[index];
+  // A smaller rung's tiles reach into what a larger one wrote: padding again everywhere (one
+  // grey value in every channel; memset, as cv::Mat::setTo allocates).
+  std::memset(working_.data, options_.padValue, working_.total() * working_.elemSize());
+  output_.geometry = rung.geometry;
+  output_.tiles = std::span<const TileView>(rung.tiles.data(), rung.tileCount);
+}
+
+bool Preprocessor::adaptToGsd(double frameGsd_m) {
+  if (!initialised_ || !(options_.workingGsd_m > 0.0) || rungs_.size() < 2) {
+    return false;
+  }
+  const std::size_t next = chooseRung(workingScales(), rung_, frameGsd_m / options_.workingGsd_m);
+  if (next == rung_) {
+    return false;
+  }
+  selectRung(next);
   return true;
 }
 
@@ -230,10 +307,11 @@ PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
       std::chrono::duration<double, std::milli>(balanced - undistorted).count();
 
   const cv::Mat& source = *current;
+  Rung& rung = rungs_[rung_];
   auto resizeBody = [&](int begin, int end, int slot) {
-    resizer_.applyRows(source, workingContent_, begin, end, slot);
+    rung.resizer.applyRows(source, rung.content, begin, end, slot);
   };
-  parallel_.run(workingContent_.rows, resizeBody);
+  parallel_.run(rung.content.rows, resizeBody);
   output_.timings.resize_ms = millisecondsSince(balanced);
   output_.timings.total_ms = millisecondsSince(start);
   output_.frame = source;  // header copy: no allocation

@@ -9,8 +9,11 @@
 //  2. white balance (optional; seed 001's near-white points, WhiteBalancer): gains estimated
 //     on this frame and applied to the full-resolution frame (into the owned buffer; the
 //     caller's frame is never written);
-//  3. area downscale by workingScale (AreaResizer, = cv::resize INTER_AREA) into the working
-//     image, whose padding right/bottom (to at least the network input) holds padValue;
+//  3. area downscale by the working scale (AreaResizer, = cv::resize INTER_AREA) into the
+//     working image, whose padding right/bottom (to at least the network input) holds padValue;
+//     the scale is workingScale, or - with workingGsd_m > 0 - the rung of a ladder of scales
+//     built at init() (working_scale.hpp) that adaptToGsd() picks from the frame's ground
+//     sample distance, so that a working pixel covers about workingGsd_m metres at any height;
 //  4. tiles of the network input size over the working image (tiling.hpp): one tile when the
 //     scaled frame fits, else overlapping tiles, each a view with its offset.
 // process() returns a status and never throws: an empty frame, a type other than CV_8UC3, a
@@ -36,6 +39,7 @@
 #include "preprocess/row_parallel.hpp"
 #include "preprocess/tiling.hpp"
 #include "preprocess/white_balance.hpp"
+#include "preprocess/working_scale.hpp"
 
 namespace vp::preprocess {
 
@@ -54,7 +58,13 @@ struct PreprocessOptions {
   bool whiteBalance = false;  // seed 001 AWB (the detector is trained without it)
   WhiteBalanceOptions whiteBalanceOptions{};
   double workingScale = kDefaultWorkingScale;  // working px per frame px, (0, 1]
-  int networkWidth_px = 672;                   // detector input (must equal the model's input)
+  // > 0: adapt the working scale to the frame's GSD (adaptToGsd) so that one working pixel
+  // covers about this many metres; workingScale is then the scale until the first GSD and the
+  // anchor of the ladder. 0: workingScale for every frame. [0, 1] m.
+  double workingGsd_m = kDetectorWorkingGsd_m;
+  double minWorkingScale = 0.125;  // the ladder's bounds, 0 < min <= workingScale <= max <= 1
+  double maxWorkingScale = 1.0;
+  int networkWidth_px = 672;  // detector input (must equal the model's input)
   int networkHeight_px = 512;
   int tileOverlap_px = 96;  // working px, >= the longest vehicle at the working scale
   int padValue = 128;       // 8-bit grey of the padding (the networks' mean: input 0)
@@ -130,7 +140,16 @@ class Preprocessor {
   // The camera of output().frame: pinhole when undistortion runs, else the input camera.
   const camera::CameraModel& frameCamera() const { return frameCamera_; }
   const PreprocessOptions& options() const { return options_; }
-  std::size_t tileCount() const { return tileCount_; }
+  std::size_t tileCount() const { return rungs_.empty() ? 0 : rungs_[rung_].tileCount; }
+
+  // The working scale from now on: with workingGsd_m > 0, the ladder's rung for a frame of
+  // frameGsd_m metres per pixel (chooseRung: it moves only beyond the hysteresis); true when
+  // the scale changed. No-op (false) with workingGsd_m = 0 or a non-positive GSD. Real-time
+  // path: no allocation (every rung is built at init()).
+  bool adaptToGsd(double frameGsd_m);
+  double workingScale() const { return rungs_.empty() ? 0.0 : rungs_[rung_].scale; }
+  // Every scale adaptToGsd() can choose, ascending (one entry with workingGsd_m = 0).
+  std::span<const double> workingScales() const { return {scales_.data(), rungs_.size()}; }
   bool undistorts() const { return remapActive_; }
   // Message of the last refused frame ("" after a good one).
   const char* lastError() const { return lastError_.data(); }
@@ -143,13 +162,24 @@ class Preprocessor {
   cv::Size frameSize_{};
   FrameRemap remap_{};
   WhiteBalancer balancer_{};
-  AreaResizer resizer_{};
+  // One working scale: its resize tables, geometry and tiles over the shared working image.
+  struct Rung {
+    double scale = 0.0;
+    FrameGeometry geometry{};
+    AreaResizer resizer{};
+    cv::Mat content;  // view: the scaled frame inside working_
+    std::array<TileView, kMaxTiles> tiles{};
+    std::size_t tileCount = 0;
+  };
+  bool buildRung(Rung& rung, double scale, std::string* why);
+  void selectRung(std::size_t index);
+
   RowParallel parallel_{};
-  cv::Mat corrected_;       // owned full-resolution frame (undistortion / white balance output)
-  cv::Mat working_;         // working image incl. padding
-  cv::Mat workingContent_;  // view: the scaled frame inside working_
-  std::array<TileView, kMaxTiles> tiles_{};
-  std::size_t tileCount_ = 0;
+  cv::Mat corrected_;  // owned full-resolution frame (undistortion / white balance output)
+  cv::Mat working_;    // working image incl. padding, sized for the largest rung
+  std::vector<Rung> rungs_;
+  std::array<double, kMaxScaleRungs> scales_{};
+  std::size_t rung_ = 0;
   PreprocessedFrame output_{};
   std::array<char, 200> lastError_{};
 };
