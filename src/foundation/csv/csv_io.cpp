@@ -59,7 +59,8 @@ bool CsvFileWriter::open(const std::string& path, std::size_t rowBytes, std::str
   pending_ = std::make_unique<char[]>(pendingBytes_);
   pendingSize_ = 0;
   pendingRows_ = 0;
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // 0666 less the umask: the permissions fopen() gives a new file.
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd_ < 0) {
     return failWith(why, shortened(path) + ": cannot create file: " + std::strerror(errno));
   }
