@@ -3,6 +3,7 @@
 #include <optional>
 #include <utility>
 
+#include "csv/csv_io.hpp"
 #include "detection/detection.hpp"
 #include "io/dtm_file.hpp"
 #include "loop_log.hpp"
@@ -13,7 +14,12 @@ namespace vp::app {
 App::App() = default;
 
 App::~App() {
-  capture_.requestStop();  // the capture thread ends; FrameCapture joins it
+  // The capture thread ends (its waits see the stop through the clock) and is joined before
+  // the clock forgets the stop condition: a borrowed clock may outlive the app.
+  capture_.stop();
+  if (clock_ != nullptr) {
+    clock_->setStopCondition(nullptr);
+  }
 }
 
 bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams seams,
@@ -27,6 +33,9 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
     ownClock_ = std::make_unique<platform::MonotonicClock>();
     clock_ = ownClock_.get();
   }
+  // Every wait on the loop's clock (replay pacing, capture backoff, camera reopen) ends when a
+  // stop is requested (requestStop() or SIGINT/SIGTERM), however far its deadline lies.
+  clock_->setStopCondition(&capture_);
   monotonicToUtcNs_ = realtimeNow_ns() - platform::monotonicNow_ns();
   if (!initSource(why) || !initWorld(why) || !initPose(why)) {
     return false;
@@ -131,10 +140,16 @@ bool App::initWorld(std::string* why) {
   std::string problem;
   frame_ = geodesy::LocalFrame(config_.origin);
   terrain::TerrainGrid grid;
-  if (!io::loadDtm(config_.terrain.dtmPath, config_.terrain.crs, grid, &problem) ||
-      !terrain_.init(std::move(grid), frame_, &problem)) {
+  // The DTM and ASM readers name their file in every message: the key is the context added.
+  if (!io::loadDtm(config_.terrain.dtmPath, config_.terrain.crs, grid, &problem)) {
     if (why) {
-      *why = "terrain.dtm_path " + config_.terrain.dtmPath + ": " + problem;
+      *why = "terrain.dtm_path: " + problem;
+    }
+    return false;
+  }
+  if (!terrain_.init(std::move(grid), frame_, &problem)) {
+    if (why) {
+      *why = "terrain.dtm_path " + csv::shortened(config_.terrain.dtmPath) + ": " + problem;
     }
     return false;
   }
@@ -146,7 +161,7 @@ bool App::initWorld(std::string* why) {
   }
   if (!asm_.load(config_.asmPath, &problem)) {
     if (why) {
-      *why = "perception.asm " + config_.asmPath + ": " + problem;
+      *why = "perception.asm: " + problem;
     }
     return false;
   }
@@ -291,8 +306,10 @@ bool App::run(std::string* why) {
     capture_.waitFor(seen);
   }
 
+  stoppedByRequest_ = capture_.stopRequested();
+  loopEnded_ = true;
   notifier_.stopping();
-  capture_.stop();  // the capture thread ends, every waiting frame back in the pool
+  capture_.stop();  // the capture thread ends, every waiting frame back in the pool (dropped)
   step_.finish();   // every DDS instance disposed, the files closed
   runWall_s_ = static_cast<double>(clock_->now_ns() - start_ns) / 1e9;
   return true;

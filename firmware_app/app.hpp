@@ -14,8 +14,10 @@
 //
 // init() builds everything the loop needs, in fixed memory; run() starts the capture thread
 // and runs the processing loop on the calling thread until the source ends, max frames were
-// taken, or requestStop() / a stop signal; it then stops the capture thread, returns every
-// queued frame to the pool, disposes every published DDS instance and closes the files. After
+// taken, or requestStop() / a stop signal (every wait of the loop, however long, ends within
+// platform::kStopPoll_ns of the request); it then stops the capture thread, returns every
+// queued frame to the pool (counted as dropped), disposes every published DDS instance and
+// closes the files. After
 // init(), the processing thread performs no heap allocation per frame with DDS off and the
 // annotated video off (tests count it); Cyclone's write path allocates 2 per sample
 // (docs/dds.md), the replay decoder allocates on the capture thread, cv::VideoWriter
@@ -82,6 +84,8 @@ class App final : public CounterSource {
   // Runs the loop until the end (see the contract); false when the loop could not start.
   bool run(std::string* why);
   void requestStop() { capture_.requestStop(); }
+  // requestStop() or a stop signal came before the loop ended (it did not end by itself).
+  bool stopRequested() const { return loopEnded_ ? stoppedByRequest_ : capture_.stopRequested(); }
 
   LoopCounters counters() const override;
   const LoopStats& stats() const { return stats_; }
@@ -128,6 +132,8 @@ class App final : public CounterSource {
 
   double runWall_s_ = 0.0;
   bool ran_ = false;
+  bool loopEnded_ = false;
+  bool stoppedByRequest_ = false;  // at the loop's end (stop() then stops the capture anyway)
 };
 
 }  // namespace vp::app

@@ -58,7 +58,8 @@ disposed), <prefix>/drone_status, <prefix>/occupancy (docs/dds.md); the files ab
 statistics line on stderr every app.stats_period_s and a "summary:" line at the end.
 Signals: SIGINT/SIGTERM stop cleanly (queued frames returned, DDS instances disposed, files
 closed). Under systemd (Type=notify) it reports READY, WATCHDOG, STATUS and STOPPING.
-Exit status: 0 ok, 1 runtime error (start-up or loop), 2 usage or configuration error.
+Exit status: 0 ok, 1 runtime error (start-up; no frame processed before the source ended;
+a failed output write; frames not returned), 2 usage or configuration error.
 See docs/firmware_app.md.
 )";
 }
@@ -202,6 +203,34 @@ std::string checkConsistency(const config::AppConfig& config) {
            "mavlink_udp, mavlink_serial, dds or none";
   }
   return "";
+}
+
+int runExitStatus(const LoopCounters& counters, bool stopRequested, std::size_t framesNotReturned,
+                  std::size_t poolCapacity, std::string* why) {
+  int status = kExitOk;
+  std::string lines;
+  if (framesNotReturned > 0) {
+    lines += std::to_string(framesNotReturned) + " of " + std::to_string(poolCapacity) +
+             " frames not returned to the pool\n";
+    status = kExitRuntimeError;
+  }
+  if (counters.outputErrors > 0) {
+    lines += std::to_string(counters.outputErrors) +
+             " output write(s) failed (the first one of each file is logged above): the output "
+             "files are incomplete\n";
+    status = kExitRuntimeError;
+  }
+  if (counters.framesProcessed == 0 && !stopRequested) {
+    lines += "no frame was processed (" + std::to_string(counters.framesIn) +
+             " frames in: " + std::to_string(counters.badFrames) + " bad, " +
+             std::to_string(counters.pipelineErrors) + " refused, " +
+             std::to_string(counters.framesDropped) + " dropped)\n";
+    status = kExitRuntimeError;
+  }
+  if (why != nullptr) {
+    *why = lines;
+  }
+  return status;
 }
 
 }  // namespace vp::app

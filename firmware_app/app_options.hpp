@@ -21,8 +21,10 @@ namespace vp::app {
 
 // Exit codes of vp_firmware_app.
 constexpr int kExitOk = 0;
-constexpr int kExitRuntimeError = 1;  // start-up (models, DTM, device, DDS) or loop failure
-constexpr int kExitUsageError = 2;    // command line or configuration error
+// Start-up (models, DTM, device, DDS) or loop failure: the source ended before any frame was
+// processed, an output write failed, frames were not returned to the pool.
+constexpr int kExitRuntimeError = 1;
+constexpr int kExitUsageError = 2;  // command line or configuration error
 
 struct CommandLine {
   std::string configPath;
@@ -50,6 +52,13 @@ const char* helpText();
 // Overrides config with the command line's values (see the contract).
 void applyCommandLine(const CommandLine& line, config::AppConfig& config);
 RunSettings runSettings(const CommandLine& line);
+// The exit status of a run that started (kExitOk or kExitRuntimeError) and, for each reason it
+// is not 0, one line in *why: frames not returned to the pool, a failed output write, or a
+// source that ended before any frame was processed (a stop requested before the first frame
+// is not a failure).
+int runExitStatus(const LoopCounters& counters, bool stopRequested, std::size_t framesNotReturned,
+                  std::size_t poolCapacity, std::string* why);
+
 // The configuration after the overrides, checked as a whole: "key: problem" for the first
 // inconsistency (no sequence to replay, recorded telemetry without a recording), else "".
 std::string checkConsistency(const config::AppConfig& config);

@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "core/spsc_queue.hpp"
+#include "csv/csv_io.hpp"
 #include "loop_log.hpp"
 #include "platform/system/realtime.hpp"
 #include "platform/system/stop_signals.hpp"
@@ -93,7 +94,7 @@ std::unique_ptr<FrameSource> openFrameSource(const config::SourceConfig& source,
     std::string problem;
     if (!replay->open(source.sequenceDir, source.paced, source.loop, &problem)) {
       if (why) {
-        *why = "sequence " + source.sequenceDir + ": " + problem;
+        *why = "sequence " + csv::shortened(source.sequenceDir) + ": " + problem;
       }
       return nullptr;
     }
@@ -152,7 +153,11 @@ void FrameCapture::stop() {
   if (thread_.joinable()) {
     thread_.join();
   }
-  queue_->drain();  // every waiting frame back in the pool
+  // Every waiting frame back in the pool; frames taken from the source but never processed
+  // are drops like the channel's evictions, so the counts still add up.
+  if (queue_) {
+    leftAtStop_.fetch_add(queue_->drain(), std::memory_order_relaxed);
+  }
 }
 
 std::optional<FrameIndex> FrameCapture::take() {
@@ -173,7 +178,7 @@ void FrameCapture::addCounters(LoopCounters& c) const {
   c.sourceTimeouts = counters_.timeouts.load(std::memory_order_relaxed);
   c.deviceLosses = counters_.deviceLosses.load(std::memory_order_relaxed);
   c.deviceReopens = counters_.reopens.load(std::memory_order_relaxed);
-  c.framesDropped = queue_ ? queue_->dropped() : 0;
+  c.framesDropped = (queue_ ? queue_->dropped() : 0) + leftAtStop_.load(std::memory_order_relaxed);
 }
 
 void FrameCapture::captureLoop() {
@@ -225,6 +230,7 @@ void FrameCapture::captureLoop() {
       case SourceStatus::BadFrame:
         ++taken;
         pool_.release(*index);
+        counters_.framesIn.fetch_add(1, std::memory_order_relaxed);
         counters_.badFrames.fetch_add(1, std::memory_order_relaxed);
         logLine("bad frame skipped: %s", source_->message());
         continue;

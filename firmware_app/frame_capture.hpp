@@ -12,9 +12,19 @@
 // with take(), reads them with frame() and capture_ns() (capture time on the loop clock),
 // gives them back with release(), and sleeps on waitFor(wakeCount()) between frames; done()
 // says the capture thread has ended. stop() ends and joins the capture thread and returns
-// every waiting frame to the pool (the destructor only ends and joins it). Bad frames and
-// device events are counted (addCounters()), logged once where they happen, and capture goes
-// on. The clock given to open() is borrowed and must outlive the FrameCapture.
+// every waiting frame to the pool, counted as dropped (the destructor only ends and joins it).
+// Bad frames and device events are counted (addCounters()), logged once where they happen, and
+// capture goes on. The clock given to open() is borrowed and must outlive the FrameCapture.
+//
+// Stopping: FrameCapture is the loop's StopCondition (requestStop() or a stop signal); the app
+// hands it to the clock, so every wait of the capture thread (paced replay, backoff, camera
+// reopen) ends within platform::kStopPoll_ns of a stop, and the capture thread then ends and
+// wakes the processing thread.
+//
+// Accounting: after stop(), the counts account for every frame taken from the source:
+// framesIn == framesProcessed + framesDropped + badFrames + pipelineErrors, where framesIn
+// counts every frame the source gave (good or bad), framesDropped the frames evicted from the
+// channel and those still waiting in it at stop, and the processing side counts the rest.
 #pragma once
 
 #include <array>
@@ -50,7 +60,7 @@ struct CaptureSettings {
   std::vector<int> cpus;       // affinity of the capture thread; empty = any
 };
 
-class FrameCapture {
+class FrameCapture final : public platform::StopCondition {
  public:
   FrameCapture();
   ~FrameCapture();
@@ -61,7 +71,7 @@ class FrameCapture {
             std::string* why);
   void start(const CaptureSettings& settings);
   void requestStop() { stop_.store(true, std::memory_order_relaxed); }
-  bool stopRequested() const;
+  bool stopRequested() const override;
   void stop();
 
   // Processing thread.
@@ -76,7 +86,7 @@ class FrameCapture {
   const FrameSource& source() const { return *source_; }
   const FramePool& pool() const { return pool_; }
   // The capture thread's counts and the channel's drops into c (framesIn, badFrames,
-  // sourceTimeouts, deviceLosses, deviceReopens, framesDropped).
+  // sourceTimeouts, deviceLosses, deviceReopens, framesDropped: evicted + left at stop).
   void addCounters(LoopCounters& c) const;
 
  private:
@@ -90,6 +100,7 @@ class FrameCapture {
   std::size_t depth_ = 0;
   std::array<std::int64_t, FramePool::kMaxFrames> captureNs_{};  // loop clock, per pool frame
   CaptureCounters counters_;
+  std::atomic<std::uint64_t> leftAtStop_{0};  // frames still in the channel at stop()
   std::atomic<bool> stop_{false};
   std::atomic<bool> done_{false};
   std::thread thread_;

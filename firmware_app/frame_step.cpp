@@ -131,6 +131,7 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
                         posed ? &perception_->lifter() : nullptr,
                         posed ? &lift.cameraPose : nullptr);
   }
+  outputs_.endFrame(frame.frameId);  // this frame's rows reach the files now
   counters.outputErrors = outputs_.errors();
   ++counters.framesProcessed;
   return {true, t + toUtcNs_, pose, states, perception_->footprint().corners()};

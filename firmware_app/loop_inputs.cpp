@@ -27,6 +27,8 @@ SourceStatus ReplayFrameSource::next(Frame& out) {
       return SourceStatus::BadFrame;
     case ReplayStatus::End:
       return SourceStatus::End;
+    case ReplayStatus::Stopped:
+      return SourceStatus::Retry;  // the capture loop sees the stop at its next check
     case ReplayStatus::Error:
       break;  // a pool frame of the wrong size: a wiring bug, reported and ended
   }

@@ -1,5 +1,10 @@
 #include "loop_outputs.hpp"
 
+#include <cstring>
+
+#include "csv/csv_io.hpp"
+#include "loop_log.hpp"
+
 namespace vp::app {
 
 output_files::LiftStatus toFileStatus(perception::LiftStatus status) {
@@ -58,15 +63,30 @@ LoopOutputs::~LoopOutputs() {
   close(nullptr);
 }
 
-void LoopOutputs::fail(const std::string& what) {
+void LoopOutputs::rowRefused(FileErrors& file, std::int64_t frameId) {
   ++errors_;
-  if (lastError_.empty()) {
-    lastError_ = what;
+  if (file.count++ == 0) {
+    logLine(
+        "%s: a row of frame %lld was refused (a value out of the file's range); further "
+        "errors of this file are only counted",
+        file.logPath.c_str(), static_cast<long long>(frameId));
+  }
+}
+
+void LoopOutputs::writeFailed(FileErrors& file, std::int64_t frameId, int error) {
+  ++errors_;
+  if (file.count++ == 0) {
+    logLine(
+        "%s: write failed at frame %lld: %s (the rows of that frame are lost; further "
+        "errors of this file are only counted, the exit status will be 1)",
+        file.logPath.c_str(), static_cast<long long>(frameId), std::strerror(error));
   }
 }
 
 bool LoopOutputs::open(const OutputSpec& spec, std::string* why) {
   spec_ = spec;
+  trajectoryErrors_ = {csv::shortened(spec.trajectoryCsv), 0};
+  detectionsErrors_ = {csv::shortened(spec.detectionsCsv), 0};
   if (!spec.trajectoryCsv.empty()) {
     output_files::TrajectoryFileInfo info;
     info.gammaColumns = spec.gammaColumns;
@@ -96,7 +116,8 @@ bool LoopOutputs::open(const OutputSpec& spec, std::string* why) {
     if (!video_.open(spec.annotatedVideo, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
                      spec.videoFps, spec.frameSize, true)) {
       if (why) {
-        *why = spec.annotatedVideo + ": cannot open the annotated video (MJPG/AVI, " +
+        *why = csv::shortened(spec.annotatedVideo) +
+               ": cannot open the annotated video (MJPG/AVI, " +
                std::to_string(spec.frameSize.width) + "x" + std::to_string(spec.frameSize.height) +
                ")";
       }
@@ -115,10 +136,15 @@ void LoopOutputs::writeTracks(std::int64_t frameId, std::span<const tracking::Tr
     const tracking::Wgs84Position wgs84{states[i].position.latitude_deg,
                                         states[i].position.longitude_deg,
                                         states[i].position.height_m};
+    const std::int64_t lost = trajectory_.rowsLost();
     if (!trajectory_.writeRow(frameId, tracks[i], &wgs84, nullptr)) {
-      fail(spec_.trajectoryCsv + ": a row was not written (frame " + std::to_string(frameId) +
-           ", track " + std::to_string(tracks[i].id) + ")");
-      continue;
+      // Refused by the checks, or the pending rows were full and their write failed.
+      if (trajectory_.rowsLost() != lost) {
+        writeFailed(trajectoryErrors_, frameId, trajectory_.lastErrno());
+      } else {
+        rowRefused(trajectoryErrors_, frameId);
+        continue;
+      }
     }
     ++trajectoryRows_;
   }
@@ -132,9 +158,23 @@ void LoopOutputs::writeDetections(std::int64_t frameId,
   int detId = 0;
   for (const perception::VehicleObservation& observation : observations) {
     const output_files::DetectionRecord record = toDetectionRecord(frameId, detId++, observation);
+    const std::int64_t lost = detections_.rowsLost();
     if (!detections_.writeRow(record, nullptr)) {
-      fail(spec_.detectionsCsv + ": row not written");
+      if (detections_.rowsLost() != lost) {
+        writeFailed(detectionsErrors_, frameId, detections_.lastErrno());
+      } else {
+        rowRefused(detectionsErrors_, frameId);
+      }
     }
+  }
+}
+
+void LoopOutputs::endFrame(std::int64_t frameId) {
+  if (trajectory_.isOpen() && !trajectory_.commit()) {
+    writeFailed(trajectoryErrors_, frameId, trajectory_.lastErrno());
+  }
+  if (detections_.isOpen() && !detections_.commit()) {
+    writeFailed(detectionsErrors_, frameId, detections_.lastErrno());
   }
 }
 
@@ -152,12 +192,14 @@ void LoopOutputs::writeVideo(const cv::Mat& correctedFrame,
 }
 
 bool LoopOutputs::close(std::string* why) {
+  // A failure already counted and logged during the run is not reported again; close()
+  // reports only what failed at the end (the last commit, close(2)).
   bool ok = true;
   std::string problem;
-  if (trajectory_.isOpen() && !trajectory_.close(&problem)) {
+  if (trajectory_.isOpen() && !trajectory_.close(&problem) && trajectoryErrors_.count == 0) {
     ok = false;
   }
-  if (detections_.isOpen() && !detections_.close(&problem)) {
+  if (detections_.isOpen() && !detections_.close(&problem) && detectionsErrors_.count == 0) {
     ok = false;
   }
   if (video_.isOpened()) {

@@ -2,12 +2,15 @@
 // tracking/trajectory_csv's rows), the detections file (sequence/detections_file) and the
 // optional annotated video.
 //
-// Contract: open() creates every configured file (start-up: allocates the stdio buffers, the
-// row buffers and the annotation image; fails naming the file). The per-frame writes format
-// into preallocated buffers and hand the bytes to stdio with its preallocated buffer, so the
-// CSV outputs allocate nothing per frame; the annotated video goes through cv::VideoWriter
-// (MJPG in AVI), which allocates per frame (documented; off by default). Write errors are
-// counted (errors()) and the first is kept in lastError(); the loop goes on. close() flushes and
+// Contract: open() creates every configured file (start-up: allocates the row and pending-row
+// buffers and the annotation image; fails naming the file). The per-frame writes format into
+// preallocated buffers; endFrame() then writes each file's rows of the frame with one write(2)
+// (no buffering across frames: a kill loses at most the frame being written, and a file always
+// ends with a complete row). The CSV outputs allocate nothing per frame, errors included; the
+// annotated video goes through cv::VideoWriter (MJPG in AVI), which allocates per frame
+// (documented; off by default). A failed write (disk full, I/O error) or a refused row is
+// counted when it happens (errors()) and logged the first time per file with the file, the
+// frame and the reason; the loop goes on (the app's exit status is then 1). close() commits and
 // closes (also done by the destructor). Trajectory rows: the published tracks (confirmed and
 // lost, with their status), one row per track per frame. Detection rows: every observation of
 // the frame, lifted or not, with perception::LiftStatus as the file's lift_status word.
@@ -59,6 +62,8 @@ class LoopOutputs {
                    std::span<const messages::VehicleState> states);
   void writeDetections(std::int64_t frameId,
                        std::span<const perception::VehicleObservation> observations);
+  // Writes the frame's rows of each file (one write(2) per file); errors counted and logged.
+  void endFrame(std::int64_t frameId);
   bool wantsVideo() const { return video_.isOpened(); }
   void writeVideo(const cv::Mat& correctedFrame,
                   std::span<const perception::VehicleObservation> observations,
@@ -67,10 +72,15 @@ class LoopOutputs {
 
   std::uint64_t errors() const { return errors_; }
   std::uint64_t trajectoryRows() const { return trajectoryRows_; }
-  const std::string& lastError() const { return lastError_; }
 
  private:
-  void fail(const std::string& what);
+  // One output file's error state: the first error is logged, every one counted.
+  struct FileErrors {
+    std::string logPath;  // the path shortened for messages (made at open, no allocation later)
+    std::uint64_t count = 0;
+  };
+  void rowRefused(FileErrors& file, std::int64_t frameId);
+  void writeFailed(FileErrors& file, std::int64_t frameId, int error);
 
   OutputSpec spec_{};
   output_files::TrajectoryFileWriter trajectory_;
@@ -79,8 +89,9 @@ class LoopOutputs {
   cv::VideoWriter video_;
   annotation::Annotator annotator_;
   cv::Mat annotated_;
+  FileErrors trajectoryErrors_;
+  FileErrors detectionsErrors_;
   std::uint64_t errors_ = 0;
-  std::string lastError_;
 };
 
 }  // namespace vp::app

@@ -21,7 +21,7 @@
 namespace vp::app {
 
 struct CaptureCounters {
-  std::atomic<std::uint64_t> framesIn{0};   // frames handed to the channel
+  std::atomic<std::uint64_t> framesIn{0};   // frames the source gave, good (to the channel) or bad
   std::atomic<std::uint64_t> badFrames{0};  // corrupt, truncated, damaged, capture errors
   std::atomic<std::uint64_t> timeouts{0};
   std::atomic<std::uint64_t> deviceLosses{0};
@@ -29,10 +29,12 @@ struct CaptureCounters {
   std::atomic<std::uint64_t> poolEmpty{0};  // no free frame (pool smaller than depth + 2)
 };
 
+// At the end of a run: framesIn == framesProcessed + framesDropped + badFrames + pipelineErrors.
 struct LoopCounters {
-  std::uint64_t framesIn = 0;
+  std::uint64_t framesIn = 0;  // every frame taken from the source (good or bad)
   std::uint64_t framesProcessed = 0;
-  std::uint64_t framesDropped = 0;  // evicted from the channel: processing fell behind
+  std::uint64_t framesDropped = 0;  // evicted from the channel (processing fell behind) or
+                                    // still waiting in it at stop
   std::uint64_t badFrames = 0;
   std::uint64_t sourceTimeouts = 0;
   std::uint64_t deviceLosses = 0;
@@ -42,7 +44,7 @@ struct LoopCounters {
   std::uint64_t invalidPose = 0;
   std::uint64_t telemetrySamples = 0;
   std::uint64_t telemetryRejected = 0;  // by the link or the pose buffer
-  std::uint64_t pipelineErrors = 0;     // frames the perception stage refused
+  std::uint64_t pipelineErrors = 0;     // frames refused (perception, timestamp not increasing)
   std::uint64_t trackerErrors = 0;
   std::uint64_t detections = 0;  // observations (lifted or not)
   std::uint64_t lifted = 0;

@@ -59,12 +59,16 @@ int main(int argc, char** argv) {
     return kExitRuntimeError;
   }
   std::fprintf(stderr, "vp_firmware_app: %s\n", app.summaryLine().c_str());
-  const LoopCounters counters = app.counters();
-  if (app.framesInPool() != app.poolCapacity()) {
-    std::fprintf(stderr, "vp_firmware_app: %zu of %zu frames not returned to the pool\n",
-                 app.poolCapacity() - app.framesInPool(), app.poolCapacity());
-    return kExitRuntimeError;
+  // Not 0 when frames leaked, an output write failed, or the source ended before any frame
+  // was processed (one line each).
+  std::string problems;
+  const int status =
+      runExitStatus(app.counters(), app.stopRequested(), app.poolCapacity() - app.framesInPool(),
+                    app.poolCapacity(), &problems);
+  std::size_t begin = 0;
+  for (std::size_t end = problems.find('\n'); end != std::string::npos;
+       begin = end + 1, end = problems.find('\n', begin)) {
+    std::fprintf(stderr, "vp_firmware_app: %s\n", problems.substr(begin, end - begin).c_str());
   }
-  (void)counters;
-  return kExitOk;
+  return status;
 }

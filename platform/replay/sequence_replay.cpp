@@ -12,6 +12,8 @@ const char* toString(ReplayStatus status) {
       return "bad frame";
     case ReplayStatus::End:
       return "end";
+    case ReplayStatus::Stopped:
+      return "stopped";
     case ReplayStatus::Error:
       return "error";
   }
@@ -86,8 +88,10 @@ ReplayStatus SequenceReplay::next(Frame& out, std::string* why) {
     }
     return ReplayStatus::BadFrame;
   }
-  if (options_.paced) {
-    clock_.sleepUntil_ns(startNs_ + (timestamp_ns - frames.front().timestamp_ns));
+  if (options_.paced &&
+      !clock_.sleepUntil_ns(startNs_ + (timestamp_ns - frames.front().timestamp_ns))) {
+    next_ = index;  // not delivered: the next call tries this frame again
+    return ReplayStatus::Stopped;
   }
   out.timestamp_ns = timestamp_ns;
   out.frameId = record.frameId + static_cast<std::int64_t>(loop_) * idSpan_;

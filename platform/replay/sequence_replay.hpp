@@ -6,11 +6,14 @@
 // into the caller's pool frame (CV_8UC3 of the rig's camera size, filled in place) with the
 // recorded frame id and capture timestamp. Paced, it first waits until the frame is due on
 // the given clock: t0 + (t_i - t_first), t0 being the time of the first next(); unpaced it
-// returns as fast as frames decode. Looping, the sequence starts over after its last frame and
-// timestamps and frame ids keep increasing (each loop adds loopPeriod_ns(), the recorded span
-// plus one mean frame interval, and the id span). A missing, corrupt or truncated image is a
-// BadFrame status whose message names the file and the frame; the next call goes on with the
-// next frame. Nothing throws.
+// returns as fast as frames decode. The wait is the clock's, so the clock's stop condition
+// cuts it short: next() then returns Stopped, delivers nothing, and a later call tries the same
+// frame again. (The reader refuses a recording whose timestamps jump further than
+// sequence::kMaxTimestampGap_ns, so a paced wait is never longer than that.) Looping, the sequence
+// starts over after its last frame and timestamps and frame ids keep increasing (each loop adds
+// loopPeriod_ns(), the recorded span plus one mean frame interval, and the id span). A missing,
+// corrupt or truncated image is a BadFrame status whose message names the file and the frame; the
+// next call goes on with the next frame. Nothing throws.
 //
 // Allocation: decoding an image file (cv::imread inside SequenceReader::loadFrame) allocates
 // for every frame. That is accepted here: replay stands in for the camera thread in tests and
@@ -42,6 +45,7 @@ enum class ReplayStatus : std::uint8_t {
   Frame,     // `out` holds the next frame
   BadFrame,  // this frame's image could not be read (see why); the next call goes on
   End,       // no more frames (never when looping a non-empty sequence)
+  Stopped,   // a stop request cut the paced wait short; nothing delivered (see the contract)
   Error,     // the call was wrong (output frame of the wrong size/type); nothing advanced
 };
 const char* toString(ReplayStatus status);

@@ -2,8 +2,10 @@
 //
 // Contract: while a StopSignals object is installed (install() to destruction), SIGINT and
 // SIGTERM set a process-wide atomic flag instead of killing the process, and the previous
-// handlers come back on destruction. The loop checks stopRequested() once per iteration and
-// shuts down cleanly (every queued buffer returned, DDS instances disposed, files closed).
+// handlers come back on destruction. The loop checks stopRequested() once per iteration, and
+// every wait on the loop's clock polls it (platform/clock: a long paced wait ends within
+// kStopPoll_ns, whichever thread the signal interrupted), then shuts down cleanly (every
+// queued buffer returned, DDS instances disposed, files closed).
 // A second signal while a stop is pending restores the default action, so a hung shutdown
 // can still be interrupted. One instance per process.
 #pragma once

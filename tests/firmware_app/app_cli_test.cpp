@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -165,6 +166,134 @@ TEST(AppCli, SigtermStopsCleanly) {
   EXPECT_EQ(WEXITSTATUS(status), 0) << output;
   EXPECT_NE(output.find("summary: "), std::string::npos) << output;
   EXPECT_EQ(output.find("not returned to the pool"), std::string::npos) << output;
+}
+
+// A private copy of the fixture sequence (and the DTM its rig.yaml points at, ../dtm).
+std::string fixtureCopy(const std::string& name) {
+  const fs::path root = test::scratchDir(name);
+  fs::remove_all(root / "sequence_min");
+  fs::remove_all(root / "dtm");
+  fs::copy(kSequence, root / "sequence_min", fs::copy_options::recursive);
+  fs::copy(fs::path(VP_FIXTURE_DIR) / "dtm", root / "dtm", fs::copy_options::recursive);
+  return (root / "sequence_min").string();
+}
+
+void setFrameTimes(const std::string& sequence, const std::string& t0, const std::string& t1) {
+  std::ofstream(sequence + "/frames.csv", std::ios::trunc)
+      << "frame_id,timestamp_ns,file\n0," << t0 << ",frames/000000.png\n1," << t1
+      << ",frames/000001.png\n";
+}
+
+// Every line of a CSV output has the header's field count and the file ends with a line break.
+void expectWholeRows(const std::string& path) {
+  const std::string text = readText(path);
+  ASSERT_FALSE(text.empty()) << path;
+  EXPECT_EQ(text.back(), '\n') << path;
+  std::istringstream lines(text);
+  std::string line;
+  long fields = -1;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line[0] == '#') {
+      continue;
+    }
+    const long count = std::count(line.begin(), line.end(), ',') + 1;
+    if (fields < 0) {
+      fields = count;
+    }
+    EXPECT_EQ(count, fields) << path << ": " << line;
+  }
+}
+
+TEST(AppCli, SigtermDuringALongPacedWaitExitsPromptlyAndCleanly) {
+  // The second frame is recorded 50 s after the first: the paced replay waits for it. SIGTERM
+  // during that wait must end the app within seconds, exit 0, with both CSV files whole.
+  const std::string sequence = fixtureCopy("cli_long_wait");
+  setFrameTimes(sequence, "1700000000000000000", "1700000050000000000");
+  const std::string dir = fs::path(sequence).parent_path().string();
+  const std::string log = dir + "/log.txt";
+  std::vector<std::string> args = {VP_FIRMWARE_APP,    "--config",
+                                   kDefaultConfig,     "--sequence",
+                                   sequence,           "--no-dds",
+                                   "--trajectory-csv", dir + "/tracks.csv",
+                                   "--detections-csv", dir + "/detections.csv"};
+  std::vector<char*> argv;
+  for (std::string& arg : args) {
+    argv.push_back(arg.data());
+  }
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, VP_FIRMWARE_APP, &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (readText(log).find("running: ") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // frame 0 done, frame 1 waits
+  ASSERT_EQ(kill(pid, SIGTERM), 0);
+  const auto signalled = std::chrono::steady_clock::now();
+  int status = 0;
+  pid_t done = 0;
+  while ((done = waitpid(pid, &status, WNOHANG)) == 0 &&
+         std::chrono::steady_clock::now() - signalled < std::chrono::seconds(10)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const double exit_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  if (done == 0) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    FAIL() << "still running 10 s after SIGTERM:\n" << readText(log);
+  }
+  const std::string output = readText(log);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+  EXPECT_LT(exit_s, 3.0) << output;
+  EXPECT_NE(output.find("summary: "), std::string::npos) << output;
+  std::printf("exit %.3f s after SIGTERM during a 50 s paced wait\n", exit_s);
+  expectWholeRows(dir + "/tracks.csv");
+  expectWholeRows(dir + "/detections.csv");
+  std::string why;
+  output_files::TrajectoryFile tracks;
+  EXPECT_TRUE(output_files::readTrajectoryFile(dir + "/tracks.csv", &tracks, &why)) << why;
+}
+
+TEST(AppCli, AnAbsurdTimestampGapIsAStartUpErrorNamingFileAndLine) {
+  // The first frame at -0.1 s, the next at 1.7e18 ns (what made a paced replay sleep for
+  // decades): refused at start-up.
+  const std::string sequence = fixtureCopy("cli_gap");
+  setFrameTimes(sequence, "-100000000", "1700000000000000000");
+  const Result r = runApp("--config " + kDefaultConfig + " --sequence " + sequence + " --no-dds");
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_NE(r.output.find("frames.csv:3: timestamp_ns: jumps 1700000000.100 s after the "
+                          "previous frame"),
+            std::string::npos)
+      << r.output;
+}
+
+TEST(AppCli, AllFramesBadExitsOneSayingNoFrameWasProcessed) {
+  const std::string sequence = fixtureCopy("cli_all_bad");
+  for (const char* frame : {"/frames/000000.png", "/frames/000001.png"}) {
+    std::ofstream(sequence + frame, std::ios::binary | std::ios::trunc) << "not a PNG";
+  }
+  const Result r = runApp("--config " + kDefaultConfig + " --sequence " + sequence +
+                          " --no-dds --fast --every-frame");
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_NE(r.output.find("no frame was processed (2 frames in: 2 bad, 0 refused, 0 dropped)"),
+            std::string::npos)
+      << r.output;
+}
+
+TEST(AppCli, AnOutputOnAFullDiskFailsNamingTheFile) {
+  // /dev/full refuses every write: the header write at start-up already fails.
+  const Result r = runApp("--config " + kDefaultConfig + " --sequence " + kSequence +
+                          " --no-dds --fast --every-frame --detections-csv /dev/full");
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_NE(r.output.find("/dev/full: write failed: No space left on device"), std::string::npos)
+      << r.output;
 }
 
 }  // namespace

@@ -2,6 +2,12 @@
 // variants, errors naming file:line:column, and a writer that allocates nothing per row.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cerrno>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -177,7 +183,10 @@ TEST_F(DetectionsFileTest, WriterAllocatesNothingPerRow) {
   test::AllocationCounter counter;
   bool ok = true;
   for (std::size_t i = 1; i < rows.size(); ++i) {
-    ok = writer.writeRow(rows[i], nullptr) && ok;  // ~150 KB: the stdio buffer is flushed
+    ok = writer.writeRow(rows[i], nullptr) && ok;  // ~150 KB in all
+    if (i % 10 == 9) {
+      ok = writer.commit() && ok;  // one write(2) per frame of 10 rows
+    }
   }
   ok = writer.flush(nullptr) && ok;
   counter.stop();
@@ -187,6 +196,98 @@ TEST_F(DetectionsFileTest, WriterAllocatesNothingPerRow) {
   DetectionsFile file;
   ASSERT_TRUE(readDetectionsFile(path("a.csv"), &file, &why)) << why;
   EXPECT_EQ(file.rows.size(), rows.size());
+}
+
+std::string fileText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST_F(DetectionsFileTest, CommittedRowsAreInTheFileAtOnceAndOnlyCompleteRows) {
+  // What a kill leaves: the rows of every committed frame, nothing of the frame being written.
+  std::mt19937_64 rng(21);
+  DetectionsFileWriter writer;
+  std::string why;
+  ASSERT_TRUE(writer.open(path("c.csv"), DetectionsFileInfo{}, &why)) << why;
+  const std::string header = fileText(path("c.csv"));
+  ASSERT_FALSE(header.empty()) << "the header is written at open";
+  for (int det = 0; det < 3; ++det) {
+    ASSERT_TRUE(writer.writeRow(randomRecord(rng, 0, det, det != 1), &why)) << why;
+  }
+  EXPECT_EQ(fileText(path("c.csv")), header) << "rows before the commit stay pending";
+  ASSERT_TRUE(writer.commit());
+  const std::string frame0 = fileText(path("c.csv"));
+  EXPECT_GT(frame0.size(), header.size());
+  EXPECT_EQ(frame0.back(), '\n');
+  EXPECT_EQ(std::count(frame0.begin(), frame0.end(), '\n') -
+                std::count(header.begin(), header.end(), '\n'),
+            3);
+  ASSERT_TRUE(writer.writeRow(randomRecord(rng, 1, 0, true), &why)) << why;
+  EXPECT_EQ(fileText(path("c.csv")), frame0);
+  ASSERT_TRUE(writer.close(&why)) << why;  // close commits the rest
+  DetectionsFile file;
+  ASSERT_TRUE(readDetectionsFile(path("c.csv"), &file, &why)) << why;
+  EXPECT_EQ(file.rows.size(), 4U);
+}
+
+TEST_F(DetectionsFileTest, AFullDiskIsAnErrorWhenItHappens) {
+  // /dev/full: every write fails with ENOSPC. The header is written at open, so a full disk
+  // is a start-up error naming the file, not a count found at close.
+  DetectionsFileWriter writer;
+  std::string why;
+  EXPECT_FALSE(writer.open("/dev/full", DetectionsFileInfo{}, &why));
+  EXPECT_NE(why.find("/dev/full: write failed: No space left on device"), std::string::npos) << why;
+}
+
+TEST_F(DetectionsFileTest, AWriteThatFailsMidRunIsReportedAtThatCommitAndTheFileStaysWhole) {
+  // A file-size limit stands in for a disk that fills during the run: the commit that crosses
+  // it fails (EFBIG) at once, its rows are lost, and the file is cut back to its last complete
+  // row; later commits fail too, and close() reports it.
+  std::mt19937_64 rng(22);
+  DetectionsFileWriter writer;
+  std::string why;
+  ASSERT_TRUE(writer.open(path("d.csv"), DetectionsFileInfo{}, &why)) << why;
+  const std::size_t headerBytes = fs::file_size(path("d.csv"));
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  struct sigaction previousSignal {};
+  ASSERT_EQ(sigaction(SIGXFSZ, &ignore, &previousSignal), 0);
+  rlimit previousLimit{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &previousLimit), 0);
+  rlimit limit = previousLimit;
+  limit.rlim_cur = headerBytes + 2000;  // a few frames of rows
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limit), 0);
+  int failedAt = -1;
+  for (int frame = 0; frame < 20 && failedAt < 0; ++frame) {
+    for (int det = 0; det < 3; ++det) {
+      EXPECT_TRUE(writer.writeRow(randomRecord(rng, frame, det, true), &why)) << why;
+    }
+    if (!writer.commit()) {
+      failedAt = frame;
+    }
+  }
+  const int error = writer.lastErrno();
+  for (int det = 0; det < 3; ++det) {
+    EXPECT_TRUE(writer.writeRow(randomRecord(rng, 20, det, true), &why)) << why;
+  }
+  const bool laterCommit = writer.commit();
+  const bool closed = writer.close(&why);
+  setrlimit(RLIMIT_FSIZE, &previousLimit);
+  sigaction(SIGXFSZ, &previousSignal, nullptr);
+  ASSERT_GT(failedAt, 0) << "the first frames fit, a later one does not";
+  EXPECT_EQ(error, EFBIG);
+  EXPECT_FALSE(laterCommit);
+  EXPECT_FALSE(closed);
+  EXPECT_NE(why.find("d.csv: write failed: File too large"), std::string::npos) << why;
+  EXPECT_EQ(writer.rowsLost(), 6);  // the failed frame's and the later frame's rows
+  const std::string text = fileText(path("d.csv"));
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.back(), '\n') << "cut back to the last complete row";
+  DetectionsFile file;
+  ASSERT_TRUE(readDetectionsFile(path("d.csv"), &file, &why)) << why;
+  EXPECT_EQ(file.rows.size(), static_cast<std::size_t>(3 * failedAt));
 }
 
 TEST_F(DetectionsFileTest, WriterRejectsBadRecordsWithoutWriting) {

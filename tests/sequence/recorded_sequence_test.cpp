@@ -3,6 +3,8 @@
 // and the writer's output is byte-identical for the same content (the simulator relies on it).
 #include "sequence/recorded_sequence.hpp"
 
+#include "csv/csv_io.hpp"
+
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -478,6 +480,77 @@ TEST(RecordedSequence, LoadFrameReportsMissingCorruptAndWrongSizedImages) {
   EXPECT_TRUE(contains(why, "frame index 2 out of range (2 frames)"));
 }
 
+TEST(RecordedSequence, LoadFrameRefusesATruncatedJpegThatTheDecoderAccepts) {
+  const TempDir temp;
+  const fs::path directory = copyFixture(temp.path());
+  cv::Mat noise(24, 32, CV_8UC3);
+  cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::vector<uchar> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", noise, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95}));
+  const fs::path file = directory / "frames" / "000001.jpg";
+  const auto write = [&](std::size_t size, std::size_t zeros) {
+    std::string bytes(reinterpret_cast<const char*>(jpeg.data()), size);
+    bytes.append(zeros, '\0');
+    writeText(file, bytes);
+  };
+  replaceIn(directory / "frames.csv", "frames/000001.png", "frames/000001.jpg");
+  SequenceReader reader;
+  std::string why;
+  ASSERT_TRUE(reader.open(directory.string(), &why)) << why;
+  cv::Mat image;
+  write(jpeg.size(), 0);
+  EXPECT_TRUE(reader.loadFrame(1, image, &why)) << why;
+  write(jpeg.size(), 16);  // zero padding after the end marker, as some cameras write
+  EXPECT_TRUE(reader.loadFrame(1, image, &why)) << why;
+
+  const std::size_t cut = jpeg.size() * 6 / 10;
+  const std::vector<uchar> truncated(jpeg.begin(), jpeg.begin() + static_cast<long>(cut));
+  ASSERT_FALSE(cv::imdecode(truncated, cv::IMREAD_COLOR).empty())
+      << "libjpeg refuses the cut file itself: the case below is not the partial decode";
+  write(cut, 0);
+  EXPECT_FALSE(reader.loadFrame(1, image, &why));
+  EXPECT_EQ(why, file.string() +
+                     ": truncated JPEG: partial decode refused (the file does not end with the "
+                     "end-of-image marker FF D9)");
+}
+
+TEST(RecordedSequence, LoadFrameRefusesATruncatedPngNamingIt) {
+  const TempDir temp;
+  const fs::path directory = copyFixture(temp.path());
+  const fs::path file = directory / "frames" / "000001.png";
+  fs::resize_file(file, fs::file_size(file) - 12);  // the IEND chunk only
+  SequenceReader reader;
+  std::string why;
+  ASSERT_TRUE(reader.open(directory.string(), &why)) << why;
+  cv::Mat image;
+  EXPECT_FALSE(reader.loadFrame(1, image, &why));
+  EXPECT_TRUE(startsWith(why, file.string() + ": ")) << why;
+}
+
+TEST(RecordedSequence, AHugeFileNameIsShortenedInMessages) {
+  // A 10 MB name in frames.csv (no such file can exist): the message keeps the start and the
+  // end of the path around "..." instead of the whole name.
+  const TempDir temp;
+  const fs::path directory = copyFixture(temp.path());
+  const std::string name = "frames/" + std::string(10'000'000, 'x') + "_end.png";
+  replaceIn(directory / "frames.csv", "frames/000001.png", name);
+  SequenceReader reader;
+  std::string why;
+  ASSERT_TRUE(reader.open(directory.string(), &why)) << why;
+  cv::Mat image;
+  EXPECT_FALSE(reader.loadFrame(1, image, &why));
+  EXPECT_LE(why.size(), csv::kMaxMessagePathChars + 64) << why.substr(0, 300);
+  EXPECT_NE(why.find("..."), std::string::npos) << why;
+  EXPECT_NE(why.find("x_end.png: cannot decode image (missing or corrupt)"), std::string::npos)
+      << why;
+  // A field quoted in a reader's message is capped too.
+  replaceIn(directory / "frames.csv", name, "/" + name);
+  EXPECT_FALSE(reader.open(directory.string(), &why));
+  EXPECT_LE(why.size(), directory.string().size() + csv::kMaxQuotedChars + 128);
+  EXPECT_NE(why.find("frames.csv:3: file: must be relative"), std::string::npos)
+      << why.substr(0, 300);
+}
+
 // ---- malformed sequences: copy the fixture, break one thing, expect one precise message ----
 
 struct BrokenCase {
@@ -538,6 +611,22 @@ std::vector<BrokenCase> brokenCases() {
       {"FrameTimestampsNotIncreasing",
        [](const fs::path& s) { replaceIn(s / "frames.csv", "1,1700000000100000000", "1,1000"); },
        "frames.csv:3: timestamp_ns: not increasing (1000 after 1700000000000000000)"},
+      {"FrameTimestampsJumpTooFar",
+       [](const fs::path& s) {
+         replaceIn(s / "frames.csv", "1,1700000000100000000", "1,1700000100000000000");
+       },
+       "frames.csv:3: timestamp_ns: jumps 100.000 s after the previous frame "
+       "(1700000100000000000 after 1700000000000000000 ns); a recording may pause at most 60 s"},
+      {"FirstFrameYearsBeforeTheNext",
+       [](const fs::path& s) {
+         replaceIn(s / "frames.csv", "0,1700000000000000000", "0,-100000000");
+       },
+       "frames.csv:3: timestamp_ns: jumps 1700000000.200 s after the previous frame"},
+      {"TelemetryTimestampsJumpTooFar",
+       [](const fs::path& s) {
+         replaceIn(s / "telemetry.csv", "1700000000050000000", "1700000090050000000");
+       },
+       "telemetry.csv:4: timestamp_ns: jumps 90.050 s after the previous sample"},
       {"QuotedField",
        [](const fs::path& s) {
          replaceIn(s / "frames.csv", "frames/000000.png", "\"frames/000000.png\"");

@@ -1,5 +1,9 @@
 #include "csv/csv_io.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -10,7 +14,9 @@
 namespace vp::csv {
 namespace {
 
-constexpr std::size_t kIoBufferBytes = 64 * 1024;  // stdio buffer: a few hundred rows
+// Pending rows: one frame's rows in one write (hundreds of detections or tracks), more only
+// when a frame has more; a writer that never commits (offline tools) writes in blocks of it.
+constexpr std::size_t kPendingBytes = 256 * 1024;
 
 }  // namespace
 
@@ -24,76 +30,140 @@ bool failWith(std::string* why, const std::string& message) {
 // ---- writer --------------------------------------------------------------------------------
 
 CsvFileWriter::~CsvFileWriter() {
-  if (file_ != nullptr) {
-    std::fclose(file_);
+  if (fd_ >= 0) {
+    commit();
+    ::close(fd_);
   }
 }
 
 bool CsvFileWriter::checkOpen(const std::string& path, int gammaColumns, int maxGammaColumns,
                               std::string* why) const {
-  if (file_ != nullptr) {
-    return failWith(why, path + ": writer already open on " + path_);
+  if (fd_ >= 0) {
+    return failWith(why, shortened(path) + ": writer already open on " + shortened(path_));
   }
   if (gammaColumns < 0 || gammaColumns > maxGammaColumns) {
-    return failWith(why, path + ": gammaColumns must be in [0, " + std::to_string(maxGammaColumns) +
-                             "], got " + std::to_string(gammaColumns));
+    return failWith(why, shortened(path) + ": gammaColumns must be in [0, " +
+                             std::to_string(maxGammaColumns) + "], got " +
+                             std::to_string(gammaColumns));
   }
   return true;
 }
 
 bool CsvFileWriter::open(const std::string& path, std::size_t rowBytes, std::string* why) {
-  if (file_ != nullptr) {
-    return failWith(why, path + ": writer already open on " + path_);
+  if (fd_ >= 0) {
+    return failWith(why, shortened(path) + ": writer already open on " + shortened(path_));
   }
-  ioBuffer_ = std::make_unique<char[]>(kIoBufferBytes);
   row_ = std::make_unique<char[]>(rowBytes);
   rowBytes_ = rowBytes;
-  file_ = std::fopen(path.c_str(), "wb");
-  if (file_ == nullptr) {
-    return failWith(why, path + ": cannot create file: " + std::strerror(errno));
+  pendingBytes_ = std::max(kPendingBytes, rowBytes);
+  pending_ = std::make_unique<char[]>(pendingBytes_);
+  pendingSize_ = 0;
+  pendingRows_ = 0;
+  // 0666 less the umask: the permissions fopen() gives a new file.
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
+    return failWith(why, shortened(path) + ": cannot create file: " + std::strerror(errno));
   }
-  // Our buffer, set before any I/O: stdio then never allocates one on the first write.
-  std::setvbuf(file_, ioBuffer_.get(), _IOFBF, kIoBufferBytes);
   path_ = path;
+  fileBytes_ = 0;
   rowsWritten_ = 0;
-  failed_ = false;
+  rowsLost_ = 0;
+  lastErrno_ = 0;
+  firstErrno_ = 0;
+  return true;
+}
+
+bool CsvFileWriter::writeAll(const char* data, std::size_t size) {
+  std::size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::write(fd_, data + done, size - done);
+    if (n < 0 && errno == EINTR) {
+      continue;
+    }
+    if (n <= 0) {
+      lastErrno_ = n < 0 ? errno : EIO;
+      if (firstErrno_ == 0) {
+        firstErrno_ = lastErrno_;
+      }
+      // Cut a partly written block back to the last complete line, so that the file stays
+      // readable and the next commit does not continue a broken row (not possible on every
+      // file: /dev/full, pipes).
+      if (done > 0 && ::ftruncate(fd_, static_cast<off_t>(fileBytes_)) == 0) {
+        ::lseek(fd_, static_cast<off_t>(fileBytes_), SEEK_SET);
+      }
+      return false;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  fileBytes_ += static_cast<std::int64_t>(size);
   return true;
 }
 
 bool CsvFileWriter::writeHeader(std::string_view text, std::string* why) {
-  if (text.empty() || std::fwrite(text.data(), 1, text.size(), file_) != text.size()) {
-    failed_ = true;
-    return failWith(why, path_ + ": write failed: " + std::strerror(errno));
+  if (fd_ < 0) {
+    return failWith(why, "writeHeader() without open()");
+  }
+  if (text.empty() || !writeAll(text.data(), text.size())) {
+    return failWith(why, shortened(path_) + ": write failed: " +
+                             (text.empty() ? std::string("empty header")
+                                           : std::string(std::strerror(lastErrno_))));
   }
   return true;
 }
 
 bool CsvFileWriter::writeRow(std::size_t size) {
-  if (std::fwrite(row_.get(), 1, size, file_) != size) {
-    failed_ = true;
+  if (fd_ < 0 || size > rowBytes_) {
     return false;
   }
+  bool ok = true;
+  if (pendingBytes_ - pendingSize_ < size) {
+    ok = commit();
+  }
+  std::memcpy(pending_.get() + pendingSize_, row_.get(), size);
+  pendingSize_ += size;
+  ++pendingRows_;
   ++rowsWritten_;
-  return true;
+  return ok;
+}
+
+bool CsvFileWriter::commit() {
+  if (fd_ < 0) {
+    return false;
+  }
+  if (pendingSize_ == 0) {
+    return true;
+  }
+  const bool ok = writeAll(pending_.get(), pendingSize_);
+  if (!ok) {
+    rowsLost_ += pendingRows_;
+  }
+  pendingSize_ = 0;
+  pendingRows_ = 0;
+  return ok;
 }
 
 bool CsvFileWriter::flush(std::string* why) {
-  if (file_ == nullptr || std::fflush(file_) != 0 || failed_) {
-    return failWith(why,
-                    path_ + ": flush failed" + (file_ == nullptr ? " (writer is not open)" : ""));
+  if (fd_ < 0) {
+    return failWith(why, shortened(path_) + ": flush failed (writer is not open)");
+  }
+  if (!commit()) {
+    return failWith(why, shortened(path_) + ": write failed: " + std::strerror(lastErrno_));
   }
   return true;
 }
 
 bool CsvFileWriter::close(const char* writerName, std::string* why) {
-  if (file_ == nullptr) {
+  if (fd_ < 0) {
     return failWith(why, std::string(writerName) + ": close() without open()");
   }
-  const bool flushed = std::fflush(file_) == 0 && std::ferror(file_) == 0;
-  const bool closed = std::fclose(file_) == 0;
-  file_ = nullptr;
-  if (!flushed || !closed || failed_) {
-    return failWith(why, path_ + ": write failed (disk full?)");
+  commit();
+  if (::close(fd_) != 0 && firstErrno_ == 0) {
+    firstErrno_ = errno;
+  }
+  fd_ = -1;
+  if (firstErrno_ != 0) {
+    return failWith(why, shortened(path_) + ": write failed: " + std::strerror(firstErrno_) + " (" +
+                             std::to_string(rowsLost_) + " rows lost)");
   }
   return true;
 }
@@ -108,18 +178,38 @@ std::string joinColumns(const std::vector<std::string>& names) {
 
 // ---- reader --------------------------------------------------------------------------------
 
+std::string shortened(std::string_view text, std::size_t maxChars) {
+  constexpr std::string_view kEllipsis = "...";
+  if (text.size() <= maxChars) {
+    return std::string(text);
+  }
+  if (maxChars <= kEllipsis.size()) {
+    return std::string(text.substr(0, maxChars));
+  }
+  const std::size_t kept = maxChars - kEllipsis.size();
+  const std::size_t head = kept / 2;
+  const std::size_t tail = kept - head;
+  std::string out;
+  out.reserve(maxChars);
+  out.append(text.substr(0, head));
+  out.append(kEllipsis);
+  out.append(text.substr(text.size() - tail));
+  return out;
+}
+
 std::string quote(std::string_view text) {
   // Built by appending: GCC 12 at -O3 reports a false -Wrestrict on "'" + std::string(...).
+  const std::string body = shortened(text, kMaxQuotedChars);
   std::string out;
-  out.reserve(text.size() + 2);
+  out.reserve(body.size() + 2);
   out.push_back('\'');
-  out.append(text);
+  out.append(body);
   out.push_back('\'');
   return out;
 }
 
 std::string location(const std::string& file, int line) {
-  return file + ":" + std::to_string(line);
+  return shortened(file) + ":" + std::to_string(line);
 }
 
 void splitFields(std::string_view line, std::vector<std::string_view>& fields) {

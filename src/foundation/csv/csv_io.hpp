@@ -3,13 +3,16 @@
 // (sequence/recorded_sequence, output_files/detections_file, output_files/trajectory_file).
 //
 // Contract: CsvFileWriter is a small RAII writer for the real-time loop: open() allocates once
-// (the stdio buffer and a row buffer of the size asked for) and creates the file; the owner
-// formats a row into rowBuffer() and writeRow() hands it to stdio without allocating; every
-// failure is returned as a value (never thrown), and the destructor closes an open file,
-// dropping errors. The reader helpers are for offline (start-up) readers: they throw ReadError
-// with a complete message, "<file>:<line>:<column>: <field>: <problem>" for a field (column =
-// 1-based character position of the field in the line), which readChecked() catches and
-// returns. Fields are plain comma-separated text: quoted fields are rejected.
+// (a row buffer of the size asked for and the buffer of pending rows) and creates the file; the
+// owner formats a row into rowBuffer(), writeRow() appends it to the pending rows and commit()
+// hands them to the kernel with one write(2) (no stdio buffering: rows committed survive a
+// kill, and the file always ends with a complete row, a kill inside the write call aside). No
+// allocation after open(); every failure is returned as a value (never thrown) when it
+// happens, and the destructor commits and closes an open file, dropping errors. The reader helpers
+// are for offline (start-up) readers: they throw ReadError with a complete message,
+// "<file>:<line>:<column>: <field>: <problem>" for a field (column = 1-based character position of
+// the field in the line), which readChecked() catches and returns. Fields are plain comma-separated
+// text: quoted fields are rejected.
 #pragma once
 
 #include <algorithm>
@@ -32,7 +35,7 @@ bool failWith(std::string* why, const std::string& message);
 class CsvFileWriter {
  public:
   CsvFileWriter() = default;
-  ~CsvFileWriter();  // closes an open file, dropping errors
+  ~CsvFileWriter();  // commits the pending rows and closes an open file, dropping errors
   CsvFileWriter(const CsvFileWriter&) = delete;
   CsvFileWriter& operator=(const CsvFileWriter&) = delete;
 
@@ -43,29 +46,50 @@ class CsvFileWriter {
                  std::string* why) const;
   // Allocates the buffers and creates (truncates) path. Start-up.
   bool open(const std::string& path, std::size_t rowBytes, std::string* why);
-  // Writes the lines before the rows; an empty text (a formatter that failed) fails too.
+  // Writes the lines before the rows, at once; an empty text (a formatter that failed) fails.
   bool writeHeader(std::string_view text, std::string* why);
   // The preallocated buffer a row is formatted into.
   std::span<char> rowBuffer() { return {row_.get(), rowBytes_}; }
-  // Hands the first `size` bytes of rowBuffer() to stdio. False on a short write (the file
-  // is then marked failed, so flush() and close() report it too). No allocation.
+  // Appends the first `size` bytes of rowBuffer() (one complete row) to the pending rows. When
+  // they are full, commit() runs first; false when that commit failed (the row is kept for the
+  // next one). No allocation.
   bool writeRow(std::size_t size);
+  // Hands every pending row to the kernel in one write(2) (continued only after a partial
+  // write): from then on they survive the process being killed. The app commits once per
+  // frame. On failure (disk full, I/O error) the pending rows are dropped (rowsLost()), the
+  // file is cut back to its last complete row where the file system allows it, the errno is
+  // kept (lastErrno(), the first one in firstErrno()) and false returned; a later commit tries
+  // again. No allocation, never throws.
+  bool commit();
+  // commit() with a message naming the file.
   bool flush(std::string* why);
-  // `writerName` names the writer in the message of a close() without open().
+  // Commits and closes; false (naming the file and the first error) when any write failed
+  // since open(). `writerName` names the writer in the message of a close() without open().
   bool close(const char* writerName, std::string* why);
 
-  bool isOpen() const { return file_ != nullptr; }
+  bool isOpen() const { return fd_ >= 0; }
   const std::string& path() const { return path_; }
-  std::int64_t rowsWritten() const { return rowsWritten_; }
+  std::int64_t rowsWritten() const { return rowsWritten_; }  // rows taken by writeRow()
+  std::int64_t rowsLost() const { return rowsLost_; }        // of those, dropped by a failed commit
+  int lastErrno() const { return lastErrno_; }
+  int firstErrno() const { return firstErrno_; }
 
  private:
-  std::FILE* file_ = nullptr;
-  std::unique_ptr<char[]> ioBuffer_;  // stdio's buffer, given at open so fwrite never allocates
-  std::unique_ptr<char[]> row_;       // one formatted row
+  bool writeAll(const char* data, std::size_t size);
+
+  int fd_ = -1;
+  std::unique_ptr<char[]> pending_;  // rows not yet committed, complete rows only
+  std::size_t pendingBytes_ = 0;     // capacity
+  std::size_t pendingSize_ = 0;
+  std::int64_t pendingRows_ = 0;
+  std::unique_ptr<char[]> row_;  // one formatted row
   std::size_t rowBytes_ = 0;
   std::string path_;
+  std::int64_t fileBytes_ = 0;  // bytes committed: the file ends with a complete line there
   std::int64_t rowsWritten_ = 0;
-  bool failed_ = false;
+  std::int64_t rowsLost_ = 0;
+  int lastErrno_ = 0;
+  int firstErrno_ = 0;
 };
 
 // The header line of these column names (without the line break).
@@ -85,8 +109,16 @@ struct Problem {
   const char* what = "";
 };
 
+// User text in a message is capped, so that a 10 MB file name or field neither floods the log
+// nor pushes the rest of the line (frame, line number) out of it: longer text keeps its start
+// and its end around "..." (the end of a path names the file).
+constexpr std::size_t kMaxMessagePathChars = 200;  // a path in a message
+constexpr std::size_t kMaxQuotedChars = 1024;      // a quoted field or header in a message
+std::string shortened(std::string_view text, std::size_t maxChars = kMaxMessagePathChars);
+
+// 'text' in quotes, shortened() to kMaxQuotedChars.
 std::string quote(std::string_view text);
-// "<file>:<line>", the start of every message about a line.
+// "<file>:<line>" (the file shortened()), the start of every message about a line.
 std::string location(const std::string& file, int line);
 
 // Splits `line` at commas into `fields` (views into `line`; quotes are not special).

@@ -7,7 +7,8 @@
 // version, name, frame rate, source), frames.csv + the frame images, telemetry.csv, and
 // optionally ground_truth/objects.csv and ground_truth/keypoints.csv. SequenceReader::open()
 // reads and checks every text part at once (start-up) and reports the first problem naming
-// the file, line and field ("telemetry.csv:17: qw: not a number 'x'"); frame images are read
+// the file, line and field ("telemetry.csv:17: qw: not a number 'x'"; timestamps going back
+// or jumping more than kMaxTimestampGap_ns included); frame images are read
 // one at a time by loadFrame(), which reports a missing or corrupt image as an error value,
 // never an exception. SequenceWriter writes the same format (used by the simulator).
 // rig.yaml's rig sections are read with the configuration's own rig reader
@@ -37,6 +38,12 @@
 namespace vp::sequence {
 
 constexpr int kFormatVersion = 1;
+
+// The longest pause between two consecutive frames, or two consecutive telemetry samples, that
+// a recording may hold. A recording is one continuous flight segment; a larger jump means a
+// corrupt or spliced file, and a paced replay would wait that long for the next frame, so the
+// reader refuses it at start-up naming the file and line.
+constexpr std::int64_t kMaxTimestampGap_ns = 60'000'000'000;  // 60 s
 
 struct SequenceInfo {
   int formatVersion = kFormatVersion;

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <set>
@@ -105,6 +106,23 @@ std::string formatKeypointRow(const KeypointTruth& keypoint);
 // ---- rules between rows and files (shared by reader and writer) ----------------------------
 
 class SequenceRules {
+  // A jump beyond kMaxTimestampGap_ns (docs/recorded_sequence.md): `later` >= `earlier`.
+  static void checkGap(std::int64_t later, std::int64_t earlier, const char* what) {
+    // Unsigned: the difference of any two int64 values in order fits without overflow.
+    const std::uint64_t gap_ns =
+        static_cast<std::uint64_t>(later) - static_cast<std::uint64_t>(earlier);
+    if (gap_ns > static_cast<std::uint64_t>(kMaxTimestampGap_ns)) {
+      char text[160];
+      std::snprintf(text, sizeof(text),
+                    "jumps %.3f s after the previous %s (%lld after %lld ns); a recording may "
+                    "pause at most %lld s",
+                    static_cast<double>(gap_ns) / 1e9, what, static_cast<long long>(later),
+                    static_cast<long long>(earlier),
+                    static_cast<long long>(kMaxTimestampGap_ns / 1'000'000'000));
+      throw FieldError{"timestamp_ns", text};
+    }
+  }
+
  public:
   void checkFrame(const FrameRecord& frame) const {
     if (frameIds_.empty()) {
@@ -118,6 +136,7 @@ class SequenceRules {
       throw FieldError{"timestamp_ns", "not increasing (" + std::to_string(frame.timestamp_ns) +
                                            " after " + std::to_string(lastFrameNs_) + ")"};
     }
+    checkGap(frame.timestamp_ns, lastFrameNs_, "frame");
   }
   void addFrame(const FrameRecord& frame) {
     checkFrame(frame);
@@ -129,6 +148,9 @@ class SequenceRules {
     if (lastTelemetryNs_ && record.timestamp_ns < *lastTelemetryNs_) {
       throw FieldError{"timestamp_ns", "decreasing (" + std::to_string(record.timestamp_ns) +
                                            " after " + std::to_string(*lastTelemetryNs_) + ")"};
+    }
+    if (lastTelemetryNs_) {
+      checkGap(record.timestamp_ns, *lastTelemetryNs_, "sample");
     }
     lastTelemetryNs_ = record.timestamp_ns;
   }
@@ -196,7 +218,7 @@ class CsvFile {
   CsvFile(const fs::path& directory, const char* relativePath)
       : name_((directory / relativePath).string()) {
     if (!readWholeFile(directory / relativePath, &text_)) {
-      throw SequenceError(name_ + ": missing (required)");
+      throw SequenceError(csv::shortened(name_) + ": missing (required)");
     }
   }
 
@@ -239,7 +261,7 @@ class CsvFile {
   const std::string& name() const { return name_; }
 
   [[noreturn]] void fail(const std::string& problem) const {
-    throw SequenceError(name_ + ":" + std::to_string(line_) + ": " + problem);
+    throw SequenceError(csv::location(name_, line_) + ": " + problem);
   }
   [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
     fail(field + ": " + problem);
@@ -248,7 +270,8 @@ class CsvFile {
 
   [[noreturn]] void failHeader(const std::string& expected, std::string_view got,
                                const std::string& note = "") const {
-    throw SequenceError(name_ + ":1: header: expected " + csv::quote(expected) + note + ", got " +
+    throw SequenceError(csv::location(name_, 1) + ": header: expected " + csv::quote(expected) +
+                        note + ", got " +
                         (got.empty() ? std::string("an empty line or file") : csv::quote(got)));
   }
 

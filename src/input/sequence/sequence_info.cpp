@@ -34,7 +34,7 @@ class InfoReader {
   explicit InfoReader(std::string name) : name_(std::move(name)) {}
 
   [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
-    throw SequenceError(name_ + ": " + (key.empty() ? "" : key + ": ") + problem);
+    throw SequenceError(csv::shortened(name_) + ": " + (key.empty() ? "" : key + ": ") + problem);
   }
 
   std::int64_t integer(const YAML::Node& node, const std::string& key) const {

@@ -4,7 +4,10 @@
 #include "sequence/recorded_sequence.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cstdio>
 #include <filesystem>
+#include <span>
 #include <string_view>
 #include <system_error>
 #include <utility>
@@ -20,6 +23,7 @@ namespace vp::sequence {
 using namespace detail;  // this module's internals (sequence_format.hpp)
 using csv::joinColumns;
 using csv::quote;
+using csv::shortened;
 using csv::splitFields;
 
 namespace {
@@ -30,7 +34,7 @@ Rig readRig(const fs::path& directory) {
   const fs::path path = directory / kRigFile;
   std::error_code error;
   if (!fs::is_regular_file(path, error)) {
-    throw SequenceError(path.string() + ": missing (required)");
+    throw SequenceError(shortened(path.string()) + ": missing (required)");
   }
   config::RigConfig config;
   try {
@@ -39,7 +43,7 @@ Rig readRig(const fs::path& directory) {
     throw SequenceError(problem.what());
   }
   if (!fs::is_regular_file(config.terrain.dtmPath, error)) {
-    throw SequenceError(path.string() + ": terrain.dtm_path: no such file " +
+    throw SequenceError(shortened(path.string()) + ": terrain.dtm_path: no such file " +
                         quote(config.terrain.dtmPath));
   }
   // Only the rig sections: the loop's sections of a rig.yaml are the application's, not recorded.
@@ -138,6 +142,61 @@ std::vector<KeypointTruth> readKeypoints(const fs::path& directory, SequenceRule
   return keypoints;
 }
 
+// The whole file into bytes (reused by the caller's vector); false when it cannot be read.
+bool readFileBytes(const std::string& path, std::vector<unsigned char>& bytes) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) {
+    return false;
+  }
+  bytes.clear();
+  std::array<unsigned char, 64 * 1024> chunk{};
+  bool ok = true;
+  for (;;) {
+    const std::size_t n = std::fread(chunk.data(), 1, chunk.size(), file);
+    bytes.insert(bytes.end(), chunk.data(), chunk.data() + n);
+    if (n < chunk.size()) {
+      ok = std::ferror(file) == 0;
+      break;
+    }
+  }
+  std::fclose(file);
+  return ok;
+}
+
+// Why an image file is cut short, or nullptr when it ends as its format requires (formats
+// other than JPEG and PNG are left to the decoder).
+const char* imageEndProblem(std::span<const unsigned char> bytes) {
+  constexpr std::array<unsigned char, 2> kJpegStart{0xFF, 0xD8};
+  constexpr std::array<unsigned char, 8> kPngSignature{0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  // The IEND chunk: length 0, type, CRC of the type.
+  constexpr std::array<unsigned char, 12> kPngEnd{0,   0,   0,    0,    'I',  'E',
+                                                  'N', 'D', 0xAE, 0x42, 0x60, 0x82};
+  const auto startsWith = [&](std::span<const unsigned char> prefix) {
+    return bytes.size() >= prefix.size() && std::equal(prefix.begin(), prefix.end(), bytes.begin());
+  };
+  if (startsWith(kJpegStart)) {
+    // The end-of-image marker FF D9, after which some writers pad with zero bytes.
+    std::size_t end = bytes.size();
+    while (end > 0 && bytes[end - 1] == 0x00) {
+      --end;
+    }
+    if (end < 4 || bytes[end - 2] != 0xFF || bytes[end - 1] != 0xD9) {
+      return "truncated JPEG: partial decode refused (the file does not end with the "
+             "end-of-image marker FF D9)";
+    }
+    return nullptr;
+  }
+  if (startsWith(kPngSignature)) {
+    if (bytes.size() < kPngSignature.size() + kPngEnd.size() ||
+        !std::equal(kPngEnd.begin(), kPngEnd.end(), bytes.end() - kPngEnd.size())) {
+      return "truncated PNG: partial decode refused (the file does not end with the IEND "
+             "chunk)";
+    }
+    return nullptr;
+  }
+  return nullptr;
+}
+
 // Storage is in non-decreasing frame order (the files must be); spans are found by bisection.
 struct ByFrame {
   template <typename T>
@@ -171,7 +230,7 @@ bool SequenceReader::open(const std::string& directory, std::string* why) {
     SequenceRules rules;
     reader.frames_ = readFrames(dir, rules);
     if (static_cast<std::size_t>(frameCount) != reader.frames_.size()) {
-      throw SequenceError((dir / kSequenceFile).string() +
+      throw SequenceError(shortened((dir / kSequenceFile).string()) +
                           ": frame_count: " + std::to_string(frameCount) + " but frames.csv has " +
                           std::to_string(reader.frames_.size()) + " frames");
     }
@@ -183,8 +242,8 @@ bool SequenceReader::open(const std::string& directory, std::string* why) {
     }
     if (fileExists(dir / kKeypointsFile)) {
       if (!hasObjects) {
-        throw SequenceError((dir / kKeypointsFile).string() + ": present without " +
-                            (dir / kObjectsFile).string());
+        throw SequenceError(shortened((dir / kKeypointsFile).string()) + ": present without " +
+                            kObjectsFile);
       }
       reader.keypoints_ = readKeypoints(dir, rules);
     }
@@ -206,24 +265,35 @@ std::span<const KeypointTruth> SequenceReader::keypoints(std::int64_t frameId) c
 
 bool SequenceReader::loadFrame(std::size_t index, cv::Mat& image, std::string* why) const {
   if (index >= frames_.size()) {
-    setWhy(why, directory_ + ": frame index " + std::to_string(index) + " out of range (" +
-                    std::to_string(frames_.size()) + " frames)");
+    setWhy(why, shortened(directory_) + ": frame index " + std::to_string(index) +
+                    " out of range (" + std::to_string(frames_.size()) + " frames)");
     return false;
   }
   const std::string path = (fs::path(directory_) / frames_[index].file).string();
+  // The file's bytes, decoded from memory: the decoder and the end check below see the same
+  // bytes (allocates; loadFrame runs on the replay thread, see the contract).
+  std::vector<unsigned char> bytes;
   cv::Mat decoded;
-  try {
-    decoded = cv::imread(path, cv::IMREAD_COLOR);
-  } catch (const cv::Exception&) {
-    decoded.release();  // a decoder that throws on a corrupt file: same report as one that fails
+  if (readFileBytes(path, bytes) && !bytes.empty()) {
+    try {
+      decoded = cv::imdecode(bytes, cv::IMREAD_COLOR);
+    } catch (const cv::Exception&) {
+      decoded.release();  // a decoder that throws on a corrupt file: same as one that fails
+    }
   }
   if (decoded.empty()) {
-    setWhy(why, path + ": cannot decode image (missing or corrupt)");
+    setWhy(why, shortened(path) + ": cannot decode image (missing or corrupt)");
+    return false;
+  }
+  // A truncated JPEG decodes "successfully" (libjpeg fills the missing rows with grey and only
+  // prints a warning): the file must end where its format says it ends.
+  if (const char* problem = imageEndProblem(bytes)) {
+    setWhy(why, shortened(path) + ": " + problem);
     return false;
   }
   const camera::Intrinsics& camera = rig_.intrinsics;
   if (decoded.cols != camera.width_px || decoded.rows != camera.height_px) {
-    setWhy(why, path + ": image is " + std::to_string(decoded.cols) + "x" +
+    setWhy(why, shortened(path) + ": image is " + std::to_string(decoded.cols) + "x" +
                     std::to_string(decoded.rows) + ", rig.yaml camera is " +
                     std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px));
     return false;

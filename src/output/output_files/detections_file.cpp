@@ -500,7 +500,7 @@ bool DetectionsFileWriter::writeRow(const DetectionRecord& record, std::string* 
     return failWith("-", "row longer than the row buffer");
   }
   if (!writer_.writeRow(static_cast<std::size_t>(out.position() - row.data()))) {
-    return failWith("-", "write failed (disk full or file closed?)");
+    return failWith("-", "write failed (disk full or I/O error; see lastErrno())");
   }
   return true;
 }

@@ -5,12 +5,14 @@
 // Contract: DetectionRecord is a plain fixed-size value (no heap) holding everything a row
 // says: the image rotated box, score, driving-direction flag, the 7 type probabilities, the ASM
 // gamma and, when lifting succeeded (liftStatus Ok), the world pose and size. The writer is
-// made for the real-time loop: open() allocates once (row and stdio buffers) and checks the
-// path; writeRow() formats a row with std::to_chars into the preallocated buffer and hands it
-// to stdio, allocating nothing and returning errors as values (never throwing); close()
-// flushes and reports I/O errors. Numbers are written in the shortest form that reads back
-// to the same value, so a write/read round trip is exact. readDetectionsFile() is an offline
-// (start-up) reader: it checks every field and reports the first problem as
+// made for the real-time loop: open() allocates once (row and pending-row buffers) and checks
+// the path; writeRow() formats a row with std::to_chars into the preallocated buffer and adds
+// it to the pending rows, commit() writes them to the file with one write(2) (the loop commits
+// every frame, so a kill loses at most the frame being written and never leaves half a row),
+// allocating nothing and returning errors as values when they happen (never throwing);
+// close() commits and reports I/O errors (csv::CsvFileWriter). Numbers are written in the shortest
+// form that reads back to the same value, so a write/read round trip is exact. readDetectionsFile()
+// is an offline (start-up) reader: it checks every field and reports the first problem as
 // "<file>:<line>:<column>: <field>: <problem>" (column = 1-based character position of the
 // field in the line). The `type` column is the most probable type of the probabilities
 // (ties: the first in shape::VehicleType order); the reader rejects a row where it is not.
@@ -104,9 +106,14 @@ class DetectionsFileWriter {
   bool open(const std::string& path, const DetectionsFileInfo& info, std::string* why);
   // One row; checks it as the reader would. No heap allocation on success.
   bool writeRow(const DetectionRecord& record, std::string* why);
+  // The pending rows to the file in one write(2) (after each frame). False on a write error
+  // (errno in lastErrno()); those rows are lost (rowsLost()). No allocation.
+  bool commit() { return writer_.commit(); }
   bool flush(std::string* why);
   bool close(std::string* why);
   bool isOpen() const { return writer_.isOpen(); }
+  int lastErrno() const { return writer_.lastErrno(); }
+  std::int64_t rowsLost() const { return writer_.rowsLost(); }
   std::int64_t rowsWritten() const { return writer_.rowsWritten(); }
 
  private:

@@ -345,7 +345,7 @@ bool TrajectoryFileWriter::writeRow(std::int64_t frameId, const tracking::TrackS
     return failWith(-1, "row longer than the row buffer");
   }
   if (!writer_.writeRow(static_cast<std::size_t>(n))) {
-    return failWith(-1, "write failed (disk full or file closed?)");
+    return failWith(-1, "write failed (disk full or I/O error; see lastErrno())");
   }
   return true;
 }

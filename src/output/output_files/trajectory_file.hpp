@@ -3,13 +3,15 @@
 // The columns are tracking/trajectory_csv's (seed 002's eight first, then ours), documented in
 // docs/tracking.md.
 //
-// Contract: the writer is made for the real-time loop: open() allocates once (row and stdio
-// buffers), checks the path and writes the header; writeRow() checks the track as the reader
-// would, formats it with tracking::trajectoryCsvRow() into the preallocated buffer and hands it
-// to stdio, allocating nothing and returning errors as values (never throwing); close() flushes
-// and reports I/O errors. The file is plain CSV (no metadata lines), so seed 002's readers and
-// spreadsheets open it as is. Numbers have the fixed precision of trajectory_csv (mm, 0.01 deg,
-// 1e-4 for probabilities and gamma), so reading gives the written values rounded to that
+// Contract: the writer is made for the real-time loop: open() allocates once (row and
+// pending-row buffers), checks the path and writes the header; writeRow() checks the track as
+// the reader would, formats it with tracking::trajectoryCsvRow() into the preallocated buffer
+// and adds it to the pending rows, commit() writes them to the file with one write(2) (the loop
+// commits every frame: a kill loses at most that frame, never half a row), allocating nothing
+// and returning errors as values when they happen (never throwing); close() commits and
+// reports I/O errors (csv::CsvFileWriter). The file is plain CSV (no metadata lines), so seed 002's
+// readers and spreadsheets open it as is. Numbers have the fixed precision of trajectory_csv (mm,
+// 0.01 deg, 1e-4 for probabilities and gamma), so reading gives the written values rounded to that
 // precision, and writing what was read (toTrackState()) reproduces the file byte for byte.
 // readTrajectoryFile() is an offline (start-up) reader: it checks every field and reports the
 // first problem as "<file>:<line>:<column>: <field>: <problem>" (column = 1-based character
@@ -87,9 +89,14 @@ class TrajectoryFileWriter {
   // history). No heap allocation on success.
   bool writeRow(std::int64_t frameId, const tracking::TrackState& track,
                 const tracking::Wgs84Position* centreWgs84, std::string* why);
+  // The pending rows to the file in one write(2) (after each frame). False on a write error
+  // (errno in lastErrno()); those rows are lost (rowsLost()). No allocation.
+  bool commit() { return writer_.commit(); }
   bool flush(std::string* why);
   bool close(std::string* why);
   bool isOpen() const { return writer_.isOpen(); }
+  int lastErrno() const { return writer_.lastErrno(); }
+  std::int64_t rowsLost() const { return writer_.rowsLost(); }
   std::int64_t rowsWritten() const { return writer_.rowsWritten(); }
 
  private:

@@ -62,7 +62,7 @@ bool FramePipeline::init(const PipelineOptions& options, const camera::CameraMod
   std::string detail;
   if (!detection_.init(options.detection, preprocess::kMaxTiles, &detail)) {
     if (why)
-      *why = "detection stage: " + detail;
+      *why = detail;  // DetectionStage names itself ("detection stage: ...")
     return false;
   }
   // The tiles must be exactly the detector's input.

@@ -2,9 +2,12 @@
 // damaged frame files reported by name while the replay goes on.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -124,6 +127,103 @@ TEST_F(ReplayTest, CorruptTruncatedAndMissingFramesAreNamedAndSkipped) {
   EXPECT_NE(why.find("(frame 1, frames.csv line 3, loop 1)"), std::string::npos) << why;
   EXPECT_EQ(replay.counters().badFrames, 3u);
   EXPECT_EQ(replay.counters().frames, 1u);
+}
+
+struct StopFlag final : StopCondition {
+  std::atomic<bool> stop{false};
+  bool stopRequested() const override { return stop.load(); }
+};
+
+// Rewrites frames.csv with these timestamps (the fixture's two frames).
+void setFrameTimes(const std::string& sequence, std::int64_t t0_ns, std::int64_t t1_ns) {
+  std::ofstream out(fs::path(sequence) / "frames.csv", std::ios::trunc);
+  out << "frame_id,timestamp_ns,file\n0," << t0_ns << ",frames/000000.png\n1," << t1_ns
+      << ",frames/000001.png\n";
+}
+
+TEST_F(ReplayTest, AStopCutsThePacedWaitShortAndTheFrameComesLater) {
+  SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {true, false}, &why)) << why;
+  ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
+  StopFlag flag;
+  flag.stop = true;
+  clock.setStopCondition(&flag);
+  const std::int64_t before_ns = clock.now_ns();
+  EXPECT_EQ(replay.next(frame(), &why), ReplayStatus::Stopped);
+  EXPECT_EQ(clock.now_ns(), before_ns);  // no time passed: the wait did not happen
+  EXPECT_EQ(replay.counters().frames, 1u);
+  EXPECT_EQ(replay.position(), 1u);  // frame 1 not delivered
+  clock.setStopCondition(nullptr);
+  ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
+  EXPECT_EQ(frame().frameId, 1);
+}
+
+TEST_F(ReplayTest, AStopEndsALongPacedWaitOnTheRealClockPromptly) {
+  // The next frame is 50 s ahead (under the reader's largest gap): a stop 100 ms into the wait
+  // must end it within the clock's poll period, not 50 s later.
+  setFrameTimes(sequence(), kFirstFrame_ns, kFirstFrame_ns + 50'000'000'000);
+  MonotonicClock realClock;
+  StopFlag flag;
+  realClock.setStopCondition(&flag);
+  SequenceReplay replay(realClock);
+  std::string why;
+  ASSERT_TRUE(replay.open(sequence(), {true, false}, &why)) << why;
+  ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    flag.stop = true;
+  });
+  const auto start = std::chrono::steady_clock::now();
+  const ReplayStatus status = replay.next(frame(), &why);
+  const auto waited = std::chrono::steady_clock::now() - start;
+  stopper.join();
+  EXPECT_EQ(status, ReplayStatus::Stopped);
+  EXPECT_LT(waited, std::chrono::seconds(2));
+}
+
+TEST_F(ReplayTest, AnAbsurdGapInFramesCsvIsAStartUpErrorNamingFileAndLine) {
+  // The first frame at -0.1 s, the next at 1.7e18 ns: a paced replay would wait 54 years.
+  setFrameTimes(sequence(), -100'000'000, kFirstFrame_ns);
+  SequenceReplay replay(clock);
+  std::string why;
+  EXPECT_FALSE(replay.open(sequence(), {true, false}, &why));
+  EXPECT_NE(why.find("frames.csv:3: timestamp_ns: jumps"), std::string::npos) << why;
+}
+
+TEST_F(ReplayTest, ATruncatedJpegIsABadFrameNamedByFileAndFrame) {
+  // A JPEG cut short decodes "successfully" with libjpeg (grey rows, a warning on stderr); the
+  // replay must refuse it. Frame 1 becomes a noisy JPEG of the rig's size, then loses its end.
+  cv::Mat noise(24, 32, CV_8UC3);
+  cv::randu(noise, cv::Scalar::all(0), cv::Scalar::all(255));
+  std::vector<uchar> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", noise, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95}));
+  const fs::path jpegPath = root_ / "sequence_min" / "frames" / "000001.jpg";
+  std::ofstream(jpegPath, std::ios::binary)
+      .write(reinterpret_cast<const char*>(jpeg.data()), static_cast<std::streamsize>(jpeg.size()));
+  {
+    std::ofstream out(fs::path(sequence()) / "frames.csv", std::ios::trunc);
+    out << "frame_id,timestamp_ns,file\n0," << kFirstFrame_ns << ",frames/000000.png\n1,"
+        << kFirstFrame_ns + kFrameInterval_ns << ",frames/000001.jpg\n";
+  }
+  // Whole, it decodes.
+  SequenceReplay whole(clock);
+  std::string why;
+  ASSERT_TRUE(whole.open(sequence(), {false, false}, &why)) << why;
+  ASSERT_EQ(whole.next(frame(), &why), ReplayStatus::Frame) << why;
+  ASSERT_EQ(whole.next(frame(), &why), ReplayStatus::Frame) << why;
+  const std::size_t cut = jpeg.size() * 6 / 10;
+  // The decoder alone takes the cut file for a good one (what the check is for).
+  const std::vector<uchar> truncated(jpeg.begin(), jpeg.begin() + static_cast<long>(cut));
+  EXPECT_FALSE(cv::imdecode(truncated, cv::IMREAD_COLOR).empty());
+  fs::resize_file(jpegPath, cut);
+  SequenceReplay replay(clock);
+  ASSERT_TRUE(replay.open(sequence(), {false, false}, &why)) << why;
+  ASSERT_EQ(replay.next(frame(), &why), ReplayStatus::Frame) << why;
+  EXPECT_EQ(replay.next(frame(), &why), ReplayStatus::BadFrame);
+  EXPECT_NE(why.find("frames/000001.jpg: truncated JPEG"), std::string::npos) << why;
+  EXPECT_NE(why.find("(frame 1, frames.csv line 3)"), std::string::npos) << why;
+  EXPECT_EQ(replay.counters().badFrames, 1u);
 }
 
 TEST_F(ReplayTest, WrongOutputFrameIsRefusedWithoutAdvancing) {
