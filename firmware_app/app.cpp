@@ -202,7 +202,11 @@ bool App::initPose(std::string* why) {
         return false;
       }
       auto recording = std::make_unique<RecordingPoseInput>();
-      recording->open(replay_->replay(), config_.source.loop, link.replayLookahead_s);
+      recording->open(replay_->replay(), config_.source.loop, link.replayLookahead_s,
+                      config_.pose.limits);
+      for (const std::string& warning : recording->warnings()) {
+        logLine("warning: %s", warning.c_str());
+      }
       poseInput_ = std::move(recording);
       return true;
     }

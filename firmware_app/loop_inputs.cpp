@@ -1,6 +1,9 @@
 #include "loop_inputs.hpp"
 
 #include <cstdio>
+#include <filesystem>
+
+#include "loop_log.hpp"
 
 namespace vp::app {
 
@@ -92,29 +95,92 @@ SourceEvents CameraFrameSource::events() const {
 
 // --- pose ------------------------------------------------------------------------------------
 
-void PoseInput::push(const telemetry::PoseSample& sample, telemetry::PoseBuffer& buffer) {
+telemetry::PushResult PoseInput::push(const telemetry::PoseSample& sample,
+                                      telemetry::PoseBuffer& buffer, const char* where) {
   ++counters_.received;
-  if (buffer.push(sample) != telemetry::PushResult::Accepted) {
-    ++counters_.bufferRejected;
+  const telemetry::PushResult result = buffer.push(sample);
+  if (result == telemetry::PushResult::Accepted) {
+    return result;
   }
+  ++counters_.bufferRejected;
+  bool& logged = logged_[static_cast<std::size_t>(result)];
+  if (!logged) {
+    logged = true;
+    std::array<char, 256> reason{};
+    telemetry::formatRejection(reason, buffer.lastRejection());
+    logLine(
+        "telemetry %s: sample refused (%s): %s; further samples refused for this reason are "
+        "only counted",
+        where != nullptr ? where : name(), telemetry::toString(result), reason.data());
+  }
+  return result;
 }
 
+namespace {
+
+telemetry::PoseSample toPoseSample(const sequence::TelemetryRecord& record) {
+  telemetry::PoseSample sample;
+  sample.timestamp_ns = record.timestamp_ns;
+  sample.position = record.position;
+  sample.bodyToNed = record.bodyToNed;
+  sample.gimbal = record.gimbal;
+  return sample;
+}
+
+}  // namespace
+
 void RecordingPoseInput::open(const platform::replay::SequenceReplay& replay, bool loop,
-                              double lookahead_s) {
-  telemetry_.open(replay.reader().telemetry(), loop, replay.loopPeriod_ns());
+                              double lookahead_s, const telemetry::PoseLimits& limits) {
+  const std::vector<sequence::TelemetryRecord>& records = replay.reader().telemetry();
+  telemetry_.open(records, loop, replay.loopPeriod_ns());
   lookaheadNs_ = static_cast<std::int64_t>(lookahead_s * 1e9);
+  path_ = (std::filesystem::path(replay.reader().directory()) / "telemetry.csv").string();
+  pass_ = 0;
+  // The rows the buffer will refuse, found now with the same checks in the same order (the
+  // newest accepted row is the one each row is judged against), so that a bad recording is
+  // reported at start-up with its lines, not only by the counters at the end.
+  warnings_.clear();
+  rowsRefused_ = 0;
+  telemetry::PoseSample previous;
+  bool havePrevious = false;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const telemetry::PoseSample sample = toPoseSample(records[i]);
+    telemetry::PoseCheck check = telemetry::checkSample(sample, limits);
+    if (check.ok() && havePrevious) {
+      check = telemetry::checkStep(previous, sample, limits);
+    }
+    if (check.ok()) {
+      previous = sample;
+      previous.bodyToNed.normalize();
+      havePrevious = true;
+      continue;
+    }
+    ++rowsRefused_;
+    if (warnings_.size() < kMaxWarnings) {
+      std::array<char, 256> reason{};
+      telemetry::formatRejection(reason, check);
+      warnings_.push_back(path_ + ":" + std::to_string(i + 2) + ": " + reason.data() +
+                          ": sample refused (" + telemetry::toString(check.result) + ")");
+    }
+  }
+  if (rowsRefused_ > warnings_.size()) {
+    warnings_.push_back(path_ + ": " + std::to_string(rowsRefused_ - warnings_.size()) +
+                        " more rows refused");
+  }
 }
 
 void RecordingPoseInput::poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) {
   // Interpolating to the frame time needs the sample after it: the recording is pushed ahead.
   while (const sequence::TelemetryRecord* record =
              telemetry_.nextDue(frameTime_ns + lookaheadNs_)) {
-    telemetry::PoseSample sample;
-    sample.timestamp_ns = record->timestamp_ns;
-    sample.position = record->position;
-    sample.bodyToNed = record->bodyToNed;
-    sample.gimbal = record->gimbal;
-    push(sample, buffer);
+    if (telemetry_.lastPass() != pass_) {
+      // Looping: the recording starts over where it began, a jump that is no fault of it.
+      pass_ = telemetry_.lastPass();
+      buffer.markDiscontinuity();
+    }
+    std::snprintf(where_.data(), where_.size(), "%s:%zu", path_.c_str(),
+                  telemetry_.lastIndex() + 2);  // line 1 is the header
+    push(toPoseSample(*record), buffer, where_.data());
   }
 }
 

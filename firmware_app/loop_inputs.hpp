@@ -7,15 +7,20 @@
 // thread, where allocation is accepted (replay decodes image files; see frame_sources.md).
 // A PoseInput moves the samples that have arrived into the loop's PoseBuffer without
 // blocking; it runs on the processing thread before each frame and allocates nothing after
-// open(). Samples a link refuses (NaN, bad quaternion) and samples the buffer refuses are
-// counted, never used. Both are wired by the app from the configuration; tests substitute
-// their own (the seams of app.hpp).
+// open(). Samples a link refuses (NaN, bad quaternion) and samples the buffer refuses (its
+// range and consistency checks, telemetry/pose_check.hpp) are counted, never used; the first
+// refusal of each kind is logged with where the sample came from (a recording: its
+// telemetry.csv line) and what was wrong, later ones only counted. A recording's telemetry is
+// also checked as a whole at open(): each row the buffer will refuse is a start-up warning
+// naming the file and line (the recording still plays; those samples are refused). Both are wired
+// by the app from the configuration; tests substitute their own (the seams of app.hpp).
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "config/config.hpp"
 #include "core/frame_pool.hpp"
@@ -107,20 +112,38 @@ class PoseInput {
   const PoseInputCounters& counters() const { return counters_; }
 
  protected:
-  void push(const telemetry::PoseSample& sample, telemetry::PoseBuffer& buffer);
+  // Pushes one sample into the buffer; `where` names its origin in the first log line of each
+  // kind of refusal (nullptr: the input's name()).
+  telemetry::PushResult push(const telemetry::PoseSample& sample, telemetry::PoseBuffer& buffer,
+                             const char* where = nullptr);
   PoseInputCounters counters_{};
+
+ private:
+  std::array<bool, static_cast<std::size_t>(telemetry::PushResult::NotInitialised) + 1> logged_{};
 };
 
 // The recorded telemetry.csv of the sequence being replayed.
 class RecordingPoseInput final : public PoseInput {
  public:
-  void open(const platform::replay::SequenceReplay& replay, bool loop, double lookahead_s);
+  // limits: the pose buffer's, to find at start-up the rows it will refuse (warnings()).
+  void open(const platform::replay::SequenceReplay& replay, bool loop, double lookahead_s,
+            const telemetry::PoseLimits& limits);
   void poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) override;
   const char* name() const override { return "recording"; }
+  // "<dir>/telemetry.csv:17: gimbal_pitch_deg 999 outside [-120, 30]: sample refused", at
+  // most kMaxWarnings of them, then one line with the count of the rest.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+  std::size_t rowsRefusedAtOpen() const { return rowsRefused_; }
+  static constexpr std::size_t kMaxWarnings = 10;
 
  private:
   platform::replay::TelemetryReplay telemetry_;
   std::int64_t lookaheadNs_ = 0;
+  std::string path_;  // <dir>/telemetry.csv
+  std::array<char, 512> where_{};
+  std::uint64_t pass_ = 0;
+  std::vector<std::string> warnings_;
+  std::size_t rowsRefused_ = 0;
 };
 
 // MAVLink 2 over UDP or a serial port, through the pose assembler (docs/telemetry.md).

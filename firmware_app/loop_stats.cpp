@@ -112,6 +112,11 @@ int formatSummaryLine(std::span<char> out, const LoopCounters& c, const LoopStat
          static_cast<unsigned long long>(c.tracksDisposed),
          static_cast<unsigned long long>(c.publishErrors),
          static_cast<unsigned long long>(c.outputErrors));
+  // Pose samples, not frames: what the telemetry delivered and what was refused (by the link's
+  // or the pose buffer's checks, docs/telemetry.md).
+  append(out, &length, " telemetry_samples=%llu telemetry_rejected=%llu",
+         static_cast<unsigned long long>(c.telemetrySamples),
+         static_cast<unsigned long long>(c.telemetryRejected));
   for (std::size_t s = 0; s < kStageCount; ++s) {
     const auto stage = static_cast<Stage>(s);
     const diagnostics::LatencyHistogram& h = stats.total(stage);

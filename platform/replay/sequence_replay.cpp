@@ -131,6 +131,8 @@ const sequence::TelemetryRecord* TelemetryReplay::nextDue(std::int64_t time_ns) 
     if (timestamp_ns > time_ns) {
       return nullptr;
     }
+    lastIndex_ = next_;
+    lastPass_ = pass_;
     current_ = records_[next_++];
     current_.timestamp_ns = timestamp_ns;
     delivered_ = true;

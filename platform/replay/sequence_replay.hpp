@@ -99,6 +99,10 @@ class TelemetryReplay {
   const sequence::TelemetryRecord* nextDue(std::int64_t time_ns);
 
   bool finished() const { return !loop_ && next_ >= records_.size(); }
+  // Where the record nextDue() returned last comes from: its index in the records (telemetry.csv
+  // line index + 2) and the loop pass (0 for the first); valid after a non-null nextDue().
+  std::size_t lastIndex() const { return lastIndex_; }
+  std::uint64_t lastPass() const { return lastPass_; }
 
  private:
   std::span<const sequence::TelemetryRecord> records_;
@@ -109,6 +113,8 @@ class TelemetryReplay {
   bool delivered_ = false;
   std::int64_t lastTimestampNs_ = 0;
   sequence::TelemetryRecord current_{};
+  std::size_t lastIndex_ = 0;
+  std::uint64_t lastPass_ = 0;
 };
 
 }  // namespace vp::platform::replay

@@ -137,6 +137,23 @@ perception:
 pose:
   max_age_s: 0.3
   buffer_capacity: 128
+  limits:
+    min_height_m: -400.0
+    max_height_m: 5000.0
+    quaternion_norm_tolerance: 0.02
+    max_tilt_deg: 70.0
+    min_gimbal_roll_deg: -45.0
+    max_gimbal_roll_deg: 45.0
+    min_gimbal_pitch_deg: -100.0
+    max_gimbal_pitch_deg: 10.0
+    min_gimbal_yaw_deg: -180.0
+    max_gimbal_yaw_deg: 180.0
+    max_horizontal_speed_mps: 40.0
+    max_vertical_speed_mps: 20.0
+    max_angular_rate_degps: 360.0
+    jump_tolerance_m: 5.0
+    jump_tolerance_deg: 4.0
+    consistency_window_s: 2.0
 tracking:
   max_tracks: 300
   confirm_hits: 4
@@ -689,6 +706,40 @@ const MalformedCase kMalformedCases[] = {
     {"max_age_s: 0.3", "max_age_s: 0", "pose.max_age_s", "must be in (0, 10], got 0"},
     {"buffer_capacity: 128", "buffer_capacity: 1", "pose.buffer_capacity",
      "must be in [2, 100000], got 1"},
+    {"  limits:\n    min_height_m", "  limits: 3\n  x:\n    min_height_m", "pose.limits",
+     "expected a map, got '3'"},
+    {"min_height_m: -400.0", "min_height_m: -2000", "pose.limits.min_height_m",
+     "must be in [-1000, 100000], got -2000"},
+    {"max_height_m: 5000.0", "max_height_m: -450", "pose.limits.max_height_m",
+     "must be greater than min_height_m (-400), got -450"},
+    {"quaternion_norm_tolerance: 0.02", "quaternion_norm_tolerance: 0",
+     "pose.limits.quaternion_norm_tolerance", "must be in (0, 0.5], got 0"},
+    {"max_tilt_deg: 70.0", "max_tilt_deg: 200", "pose.limits.max_tilt_deg",
+     "must be in (0, 180], got 200"},
+    {"min_gimbal_roll_deg: -45.0", "min_gimbal_roll_deg: -400", "pose.limits.min_gimbal_roll_deg",
+     "must be in [-360, 360], got -400"},
+    {"max_gimbal_roll_deg: 45.0", "max_gimbal_roll_deg: -50", "pose.limits.max_gimbal_roll_deg",
+     "must be greater than min_gimbal_roll_deg (-45), got -50"},
+    {"min_gimbal_pitch_deg: -100.0", "min_gimbal_pitch_deg: x", "pose.limits.min_gimbal_pitch_deg",
+     "expected a number, got 'x'"},
+    {"max_gimbal_pitch_deg: 10.0", "max_gimbal_pitch_deg: -100", "pose.limits.max_gimbal_pitch_deg",
+     "must be greater than min_gimbal_pitch_deg (-100)"},
+    {"min_gimbal_yaw_deg: -180.0", "min_gimbal_yaw_deg: 361", "pose.limits.min_gimbal_yaw_deg",
+     "must be in [-360, 360], got 361"},
+    {"max_gimbal_yaw_deg: 180.0", "max_gimbal_yaw_deg: -180", "pose.limits.max_gimbal_yaw_deg",
+     "must be greater than min_gimbal_yaw_deg (-180), got -180"},
+    {"max_horizontal_speed_mps: 40.0", "max_horizontal_speed_mps: 0",
+     "pose.limits.max_horizontal_speed_mps", "must be in (0, 1000], got 0"},
+    {"max_vertical_speed_mps: 20.0", "max_vertical_speed_mps: 2000",
+     "pose.limits.max_vertical_speed_mps", "must be in (0, 1000], got 2000"},
+    {"max_angular_rate_degps: 360.0", "max_angular_rate_degps: -1",
+     "pose.limits.max_angular_rate_degps", "must be in (0, 100000], got -1"},
+    {"jump_tolerance_m: 5.0", "jump_tolerance_m: -1", "pose.limits.jump_tolerance_m",
+     "must be in [0, 10000], got -1"},
+    {"jump_tolerance_deg: 4.0", "jump_tolerance_deg: 400", "pose.limits.jump_tolerance_deg",
+     "must be in [0, 360], got 400"},
+    {"consistency_window_s: 2.0", "consistency_window_s: 61", "pose.limits.consistency_window_s",
+     "must be in [0, 60], got 61"},
     // tracking
     {"tracking:\n  max_tracks", "tracking: [1]\nx:\n  max_tracks", "tracking",
      "expected a map, got a sequence of 1 element(s)"},
@@ -907,6 +958,23 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "pose",
                                                "pose.max_age_s",
                                                "pose.buffer_capacity",
+                                               "pose.limits",
+                                               "pose.limits.min_height_m",
+                                               "pose.limits.max_height_m",
+                                               "pose.limits.quaternion_norm_tolerance",
+                                               "pose.limits.max_tilt_deg",
+                                               "pose.limits.min_gimbal_roll_deg",
+                                               "pose.limits.max_gimbal_roll_deg",
+                                               "pose.limits.min_gimbal_pitch_deg",
+                                               "pose.limits.max_gimbal_pitch_deg",
+                                               "pose.limits.min_gimbal_yaw_deg",
+                                               "pose.limits.max_gimbal_yaw_deg",
+                                               "pose.limits.max_horizontal_speed_mps",
+                                               "pose.limits.max_vertical_speed_mps",
+                                               "pose.limits.max_angular_rate_degps",
+                                               "pose.limits.jump_tolerance_m",
+                                               "pose.limits.jump_tolerance_deg",
+                                               "pose.limits.consistency_window_s",
                                                "tracking",
                                                "tracking.max_tracks",
                                                "tracking.confirm_hits",
@@ -1029,6 +1097,47 @@ TEST(ConfigWarnings, DistortionWithAnotherLensModelIsIgnoredWithAWarning) {
   EXPECT_EQ(config.camera.distortion.k3, 0.0);
 }
 
+// A value inside its range can still be surely wrong for the rig it configures (an error) or
+// merely unusual (a warning naming the key, the configuration is still used).
+TEST(ConfigWarnings, WorkingScaleTooSmallForTheFrameIsAnErrorAndUnusualOnesAreWarned) {
+  EXPECT_EQ(errorOf(edited("working_scale: 0.5", "working_scale: 0.001")),
+            "site.yaml: perception.working_scale: 0.001 makes the 2592 x 2048 frame 3 x 2 working "
+            "px; the shorter side must be at least 16 px");
+  const AppConfig small = parse(edited("working_scale: 0.5", "working_scale: 0.05"));
+  ASSERT_EQ(small.warnings.size(), 1U);
+  EXPECT_EQ(small.warnings[0],
+            "site.yaml: perception.working_scale: unusual: 0.05 makes the frame 130 x 102 working "
+            "px (below 0.1; vehicles shrink to a few pixels, check the value)");
+  EXPECT_DOUBLE_EQ(small.perception.preprocess.workingScale, 0.05);
+  EXPECT_TRUE(parse(edited("working_scale: 0.5", "working_scale: 0.1")).warnings.empty());
+}
+
+TEST(ConfigWarnings, LensCoefficientsThatFoldTheImageAreAnErrorAndStrongOnesAreWarned) {
+  // k1 = 99 (a unit or copy mistake): points at the image corner move outwards 33-fold.
+  const AppConfig strong = parse(edited("k1: -0.12", "k1: 99"));
+  ASSERT_EQ(strong.warnings.size(), 1U);
+  EXPECT_EQ(strong.warnings[0].rfind("site.yaml: camera.distortion: unusual: k1, k2, k3 move image "
+                                     "points radially by 3",
+                                     0),
+            0U)
+      << strong.warnings[0];
+  EXPECT_NE(strong.warnings[0].find("check the coefficients' units and order"), std::string::npos);
+  // Strongly negative: the radial model turns back inside the image, two rays share a pixel.
+  const std::string folded = errorOf(edited("k1: -0.12", "k1: -5"));
+  EXPECT_EQ(folded.rfind("site.yaml: camera.distortion: k1, k2, k3 fold the image over at "
+                         "normalised radius ",
+                         0),
+            0U)
+      << folded;
+  // Tangential coefficients of a real lens are tiny.
+  const AppConfig decentred = parse(edited("p1: 0.0001", "p1: 0.2"));
+  ASSERT_EQ(decentred.warnings.size(), 1U);
+  EXPECT_EQ(decentred.warnings[0],
+            "site.yaml: camera.distortion.p1: unusual: 0.2 (real lenses: |p| below 0.05)");
+  // A real wide-angle calibration passes silently.
+  EXPECT_TRUE(parse(edited("k1: -0.12", "k1: -0.3")).warnings.empty());
+}
+
 TEST(ConfigSyntax, YamlErrorNamesTheSourceAndLine) {
   const std::string message = errorOf("origin:\n  latitude_deg: [43.0\ncamera: {\n");
   EXPECT_EQ(message.rfind("site.yaml: YAML syntax error at line 3, column ", 0), 0U) << message;
@@ -1093,7 +1202,7 @@ TEST(ConfigDds, AbsentSectionGivesTheDocumentedDefaults) {
   EXPECT_DOUBLE_EQ(dds.statusRate_hz, 1.0);
   EXPECT_DOUBLE_EQ(dds.occupancyRate_hz, 2.0);
   EXPECT_EQ(dds.vehicleState.reliability, Reliability::Reliable);
-  EXPECT_EQ(dds.vehicleState.durability, Durability::Volatile);
+  EXPECT_EQ(dds.vehicleState.durability, Durability::TransientLocal);
   EXPECT_EQ(dds.vehicleState.historyDepth, 1);
   EXPECT_DOUBLE_EQ(dds.vehicleState.maxBlocking_s, 0.01);
   EXPECT_DOUBLE_EQ(dds.vehicleState.deadline_s, 0.3);
@@ -1278,6 +1387,23 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(config.perception.lift.boxHeightShare, 0.4);
   EXPECT_EQ(config.pose.maxAge_ns, 300'000'000);
   EXPECT_EQ(config.pose.capacity, 128U);
+  const telemetry::PoseLimits& limits = config.pose.limits;
+  EXPECT_DOUBLE_EQ(limits.minHeight_m, -400.0);
+  EXPECT_DOUBLE_EQ(limits.maxHeight_m, 5000.0);
+  EXPECT_DOUBLE_EQ(limits.quaternionNormTolerance, 0.02);
+  EXPECT_DOUBLE_EQ(limits.maxTilt_deg, 70.0);
+  EXPECT_DOUBLE_EQ(limits.minGimbalRoll_deg, -45.0);
+  EXPECT_DOUBLE_EQ(limits.maxGimbalRoll_deg, 45.0);
+  EXPECT_DOUBLE_EQ(limits.minGimbalPitch_deg, -100.0);
+  EXPECT_DOUBLE_EQ(limits.maxGimbalPitch_deg, 10.0);
+  EXPECT_DOUBLE_EQ(limits.minGimbalYaw_deg, -180.0);
+  EXPECT_DOUBLE_EQ(limits.maxGimbalYaw_deg, 180.0);
+  EXPECT_DOUBLE_EQ(limits.maxHorizontalSpeed_mps, 40.0);
+  EXPECT_DOUBLE_EQ(limits.maxVerticalSpeed_mps, 20.0);
+  EXPECT_DOUBLE_EQ(limits.maxAngularRate_degps, 360.0);
+  EXPECT_DOUBLE_EQ(limits.jumpTolerance_m, 5.0);
+  EXPECT_DOUBLE_EQ(limits.jumpTolerance_deg, 4.0);
+  EXPECT_EQ(limits.consistencyWindow_ns, 2'000'000'000);
   const tracking::TrackerConfig& t = config.tracking;
   EXPECT_EQ(t.maxTracks, 300);
   EXPECT_EQ(t.confirmHits, 4);

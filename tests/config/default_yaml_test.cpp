@@ -93,6 +93,24 @@ TEST(DefaultYaml, PoseIsThePoseBuffersDefaults) {
   EXPECT_EQ(file.capacity, code.capacity);
   EXPECT_EQ(file.maxAge_ns, code.maxAge_ns);
   EXPECT_EQ(file.startTolerance_ns, code.startTolerance_ns);
+  const telemetry::PoseLimits& l = file.limits;
+  const telemetry::PoseLimits& lc = code.limits;
+  EXPECT_EQ(l.minHeight_m, lc.minHeight_m);
+  EXPECT_EQ(l.maxHeight_m, lc.maxHeight_m);
+  EXPECT_EQ(l.quaternionNormTolerance, lc.quaternionNormTolerance);
+  EXPECT_EQ(l.maxTilt_deg, lc.maxTilt_deg);
+  EXPECT_EQ(l.minGimbalRoll_deg, lc.minGimbalRoll_deg);
+  EXPECT_EQ(l.maxGimbalRoll_deg, lc.maxGimbalRoll_deg);
+  EXPECT_EQ(l.minGimbalPitch_deg, lc.minGimbalPitch_deg);
+  EXPECT_EQ(l.maxGimbalPitch_deg, lc.maxGimbalPitch_deg);
+  EXPECT_EQ(l.minGimbalYaw_deg, lc.minGimbalYaw_deg);
+  EXPECT_EQ(l.maxGimbalYaw_deg, lc.maxGimbalYaw_deg);
+  EXPECT_EQ(l.maxHorizontalSpeed_mps, lc.maxHorizontalSpeed_mps);
+  EXPECT_EQ(l.maxVerticalSpeed_mps, lc.maxVerticalSpeed_mps);
+  EXPECT_EQ(l.maxAngularRate_degps, lc.maxAngularRate_degps);
+  EXPECT_EQ(l.jumpTolerance_m, lc.jumpTolerance_m);
+  EXPECT_EQ(l.jumpTolerance_deg, lc.jumpTolerance_deg);
+  EXPECT_EQ(l.consistencyWindow_ns, lc.consistencyWindow_ns);
 }
 
 TEST(DefaultYaml, TrackingIsTheTrackersDefaults) {

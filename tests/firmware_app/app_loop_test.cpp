@@ -357,6 +357,93 @@ TEST(AppFaults, TelemetryGapGivesStalePosesAndLiftingResumesAfterIt) {
   EXPECT_LE(stale, static_cast<int>(c.stalePose));
 }
 
+// Recorded telemetry with a gimbal pitch of 999 deg in one row and, after another row, a
+// repeat of its timestamp with the height 5.5 m off. Both rows are named (file and line) as
+// warnings at start-up; the recording still plays, both samples are refused and counted, and
+// every frame is lifted with the good samples around them (before, the 999 deg row was taken
+// as -81 deg and its frames were lifted metres off with status ok).
+TEST(AppFaults, ImplausibleRecordedTelemetryRowsAreNamedRefusedAndCounted) {
+  const std::string dir = test::copySequence(sequence(), "bad_telemetry_rows");
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(dir + "/telemetry.csv");
+    for (std::string line; std::getline(in, line);) {
+      lines.push_back(line);
+    }
+  }
+  ASSERT_GT(lines.size(), 20U);
+  const auto fields = [](const std::string& line) {
+    std::vector<std::string> out;
+    std::stringstream stream(line);
+    for (std::string field; std::getline(stream, field, ',');) {
+      out.push_back(field);
+    }
+    return out;
+  };
+  const auto join = [](const std::vector<std::string>& f) {
+    std::string out;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      out += (i ? "," : "") + f[i];
+    }
+    return out;
+  };
+  const std::size_t gimbalRow = lines.size() / 3;  // index into lines; file line = index + 1
+  std::vector<std::string> bad = fields(lines[gimbalRow]);
+  ASSERT_EQ(bad.size(), 12U);
+  bad[9] = "999";  // gimbal_pitch_deg
+  lines[gimbalRow] = join(bad);
+  const std::size_t repeatedRow = 2 * lines.size() / 3;
+  std::vector<std::string> repeat = fields(lines[repeatedRow]);
+  repeat[3] = std::to_string(std::stod(repeat[3]) + 5.5);  // height_m
+  lines.insert(lines.begin() + static_cast<std::ptrdiff_t>(repeatedRow) + 1, join(repeat));
+  {
+    std::ofstream out(dir + "/telemetry.csv", std::ios::trunc);
+    for (const std::string& line : lines) {
+      out << line << "\n";
+    }
+  }
+
+  // Start-up: the rows the pose buffer will refuse, by file and line.
+  platform::MonotonicClock clock;
+  platform::replay::SequenceReplay replay(clock);
+  std::string why;
+  ASSERT_TRUE(replay.open(dir, {}, &why)) << why;
+  RecordingPoseInput input;
+  input.open(replay, false, 0.2, telemetry::PoseLimits{});
+  ASSERT_EQ(input.warnings().size(), 2U);
+  const std::string file = (fs::path(dir) / "telemetry.csv").string();
+  EXPECT_EQ(input.warnings()[0], file + ":" + std::to_string(gimbalRow + 1) +
+                                     ": gimbal_pitch_deg 999 outside [-120, 30]: sample refused "
+                                     "(outside the pose limits)");
+  EXPECT_EQ(
+      input.warnings()[1].rfind(file + ":" + std::to_string(repeatedRow + 2) + ": timestamp ", 0),
+      0U)
+      << input.warnings()[1];
+  EXPECT_NE(input.warnings()[1].find("repeated with other values: height differs by (m) 5.5"),
+            std::string::npos)
+      << input.warnings()[1];
+
+  // The run: both refused and counted, every frame posed and lifted.
+  const std::string out = test::scratchDir("bad_telemetry_rows_out");
+  config::AppConfig config = loopConfig(dir);
+  config.app.detectionsCsv = out + "/detections.csv";
+  App app;
+  AppSeams seams;
+  seams.perception = truth(dir);
+  ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+  ASSERT_TRUE(app.run(&why)) << why;
+  const LoopCounters c = app.counters();
+  EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames));
+  EXPECT_EQ(c.telemetryRejected, 2U);
+  EXPECT_EQ(c.noPose + c.stalePose + c.invalidPose, 0U);
+  for (const auto& [frameId, counts] : liftStatusesByFrame(out + "/detections.csv")) {
+    EXPECT_GT(counts.count("ok"), 0U) << "frame " << frameId;
+    EXPECT_EQ(counts.count("invalid_pose") + counts.count("stale_pose") + counts.count("no_pose"),
+              0U)
+        << "frame " << frameId;
+  }
+}
+
 // A camera (emulated driver) that is unplugged after 5 frames and plugged in again at the
 // camera's second reopen attempt, with 5 more frames. Every call comes from the capture thread.
 class UnpluggingCamera final : public platform::v4l2::V4l2Device {

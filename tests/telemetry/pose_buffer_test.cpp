@@ -166,7 +166,8 @@ TEST(PoseBuffer, InvalidSamplesAreRejectedCountedAndNeverUsed) {
   zero.bodyToNed.coeffs().setZero();
   EXPECT_EQ(buffer.push(zero), PushResult::ZeroQuaternion);
   EXPECT_EQ(buffer.push(sampleAt(180 * kMs, 91.0, -89.0, 300.0, 0.0)), PushResult::OutOfRange);
-  EXPECT_EQ(buffer.push(sampleAt(100 * kMs, 43.0, -89.0, 300.0, 0.0)), PushResult::OutOfOrder);
+  // The newest sample's time with another height contradicts it; an earlier time is late.
+  EXPECT_EQ(buffer.push(sampleAt(100 * kMs, 43.0, -89.0, 300.0, 0.0)), PushResult::Inconsistent);
   EXPECT_EQ(buffer.push(sampleAt(50 * kMs, 43.0, -89.0, 300.0, 0.0)), PushResult::OutOfOrder);
 
   const PoseBufferCounters& c = buffer.counters();
@@ -174,7 +175,8 @@ TEST(PoseBuffer, InvalidSamplesAreRejectedCountedAndNeverUsed) {
   EXPECT_EQ(c.notFinite, 3U);
   EXPECT_EQ(c.zeroQuaternion, 1U);
   EXPECT_EQ(c.outOfRange, 1U);
-  EXPECT_EQ(c.outOfOrder, 2U);
+  EXPECT_EQ(c.inconsistent, 1U);
+  EXPECT_EQ(c.outOfOrder, 1U);
   EXPECT_EQ(c.rejected(), 7U);
   EXPECT_EQ(buffer.size(), 2U);
 

@@ -6,10 +6,13 @@ namespace vp::config {
 
 QosProfile DdsConfig::defaultVehicleStateQos() {
   // Reliable KEEP_LAST 1: a lost sample is resent only while it is still the newest state of
-  // its track, and disposals (track deleted) are never lost. Lifespan drops states that sat
-  // in a queue for more than 5 frames; the deadline flags a track not refreshed for 3 frames.
+  // its track, and disposals (track deleted) are never lost. Transient-local: the writer keeps
+  // that newest state per track for a reader that matches late (joining, or finishing a DDS
+  // Security handshake after the first frames). Lifespan drops states that sat in a queue for
+  // more than 5 frames; the deadline flags a track not refreshed for 3 frames.
   QosProfile qos;
   qos.reliability = Reliability::Reliable;
+  qos.durability = Durability::TransientLocal;
   qos.maxBlocking_s = 0.01;
   qos.historyDepth = 1;
   qos.deadline_s = 0.3;

@@ -1,6 +1,8 @@
 // config/perception_section: `perception:` into the pipeline's own options
 // (perception::PipelineOptions: preprocess, detection stage, lifter) and the ASM file. An
 // absent key keeps the module's default.
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,6 +27,35 @@ const Range kSampleStrideRange_px = Range::closed(1.0, 64.0);
 const Range kMaxGainRange = Range::closed(1.0, 16.0);
 
 constexpr std::string_view kBackendNames = "int8, fp32, opencv";
+
+// The working frame must still be an image: at least as many pixels as the smallest camera.
+constexpr int kMinWorkingSide_px = 16;
+// Below this a vehicle shrinks to a few working pixels at the flying heights the detector was
+// trained for (0.25 of a 2592 px frame; 1 for small frames): legal, but worth a warning.
+constexpr double kUnusualWorkingScale = 0.1;
+
+// Python's round-half-even, as the preprocessing sizes the working frame.
+int workingSize(int size_px, double scale) {
+  return static_cast<int>(std::nearbyint(size_px * scale));
+}
+
+void checkWorkingScale(MapReader& section, double scale, const camera::Intrinsics& camera) {
+  const int width = workingSize(camera.width_px, scale);
+  const int height = workingSize(camera.height_px, scale);
+  if (std::min(width, height) < kMinWorkingSide_px) {
+    section.fail("working_scale",
+                 formatNumber(scale) + " makes the " + std::to_string(camera.width_px) + " x " +
+                     std::to_string(camera.height_px) + " frame " + std::to_string(width) + " x " +
+                     std::to_string(height) + " working px; the shorter side must be at least " +
+                     std::to_string(kMinWorkingSide_px) + " px");
+  }
+  if (scale < kUnusualWorkingScale) {
+    section.warn("working_scale", "unusual: " + formatNumber(scale) + " makes the frame " +
+                                      std::to_string(width) + " x " + std::to_string(height) +
+                                      " working px (below " + formatNumber(kUnusualWorkingScale) +
+                                      "; vehicles shrink to a few pixels, check the value)");
+  }
+}
 
 }  // namespace
 
@@ -60,6 +91,7 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
       section.number("white_balance_white_share", kShareRange, wbDefaults.whitePointShare);
   wb.maxGain = section.number("white_balance_max_gain", kMaxGainRange, wbDefaults.maxGain);
   pre.workingScale = section.number("working_scale", kWorkingScaleRange, d.preprocess.workingScale);
+  checkWorkingScale(section, pre.workingScale, config.camera.intrinsics);
   pre.workingGsd_m = section.number("working_gsd_m", kFixedGsdRange_m, d.preprocess.workingGsd_m);
   pre.minWorkingScale =
       section.number("min_working_scale", kWorkingScaleRange, d.preprocess.minWorkingScale);

@@ -2,9 +2,11 @@
 // lens and mount structs of camera/ and geodesy/ are filled directly).
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "rig_config/rig_sections.hpp"
 #include "rig_config/section_reader.hpp"
@@ -53,6 +55,64 @@ std::optional<std::optional<terrain::CrsSpec>> crsSettingFromString(const std::s
     return std::nullopt;
   }
   return crs;
+}
+
+// Largest radial displacement |r_d / r - 1| of a Brown-Conrady lens a mapping camera is
+// expected to have within its image; beyond it the coefficients are more likely in the wrong
+// units or order than a real lens (a strong wide-angle lens stays near 0.3).
+constexpr double kUnusualRadialDistortion = 0.5;
+// Largest |p1|, |p2| of a real lens: decentring is a small effect (typically 1e-4 .. 1e-3).
+constexpr double kUnusualTangentialDistortion = 0.05;
+
+// Checks the Brown-Conrady coefficients against the image they apply to: in normalised
+// coordinates r = |(u - cx) / fx, (v - cy) / fy| the image reaches out to its farthest corner;
+// over [0, that radius] the radial model r_d = r (1 + k1 r^2 + k2 r^4 + k3 r^6) must keep
+// increasing (else two directions map to one pixel: surely wrong coefficients, an error), and a
+// displacement beyond kUnusualRadialDistortion is worth a warning.
+void checkDistortion(MapReader& section, const camera::Intrinsics& in,
+                     const camera::Distortion& lens) {
+  if (lens.model != camera::LensModel::BrownConrady) {
+    return;
+  }
+  const double du = std::max(in.cx_px + 0.5, in.width_px - 0.5 - in.cx_px) / in.fx_px;
+  const double dv = std::max(in.cy_px + 0.5, in.height_px - 0.5 - in.cy_px) / in.fy_px;
+  const double corner = std::hypot(du, dv);
+  constexpr int kSteps = 200;
+  double worst = 0.0;
+  double worstRadius = 0.0;
+  for (int i = 1; i <= kSteps; ++i) {
+    const double r = corner * i / kSteps;
+    const double r2 = r * r;
+    const double factor = 1.0 + r2 * (lens.k1 + r2 * (lens.k2 + r2 * lens.k3));
+    const double slope = 1.0 + r2 * (3.0 * lens.k1 + r2 * (5.0 * lens.k2 + r2 * 7.0 * lens.k3));
+    if (slope <= 0.0) {
+      section.fail("distortion",
+                   "k1, k2, k3 fold the image over at normalised radius " +
+                       formatNumber(std::round(r * 1000.0) / 1000.0) + " (the corner is at " +
+                       formatNumber(std::round(corner * 1000.0) / 1000.0) +
+                       "): not a lens; check the coefficients' units and order (OpenCV k1 k2 p1 "
+                       "p2 k3)");
+    }
+    if (std::abs(factor - 1.0) > worst) {
+      worst = std::abs(factor - 1.0);
+      worstRadius = r;
+    }
+  }
+  if (worst > kUnusualRadialDistortion) {
+    section.warn("distortion",
+                 "unusual: k1, k2, k3 move image points radially by " +
+                     formatNumber(std::round(worst * 100.0)) + " % at normalised radius " +
+                     formatNumber(std::round(worstRadius * 1000.0) / 1000.0) +
+                     " (within the image); check the coefficients' units and order (OpenCV k1 k2 "
+                     "p1 p2 k3)");
+  }
+  for (const auto& [name, value] : {std::pair{"p1", lens.p1}, std::pair{"p2", lens.p2}}) {
+    if (std::abs(value) > kUnusualTangentialDistortion) {
+      section.warn(std::string("distortion.") + name,
+                   "unusual: " + formatNumber(value) + " (real lenses: |p| below " +
+                       formatNumber(kUnusualTangentialDistortion) + ")");
+    }
+  }
 }
 
 geodesy::EulerAnglesDeg readAngles(MapReader& section, const Range& pitchRange_deg,
@@ -104,6 +164,7 @@ CameraConfig readCamera(MapReader section) {
     section.warn("distortion", "ignored: only lens_model brown_conrady uses it");
     lens = camera::Distortion{lens.model};
   }
+  checkDistortion(section, in, lens);
   section.warnUnknownKeys();
   return config;
 }

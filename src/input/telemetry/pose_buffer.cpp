@@ -27,10 +27,6 @@ double wrapDeg180(double angle) {
   return a;
 }
 
-bool finite(const geodesy::EulerAnglesDeg& e) {
-  return std::isfinite(e.roll_deg) && std::isfinite(e.pitch_deg) && std::isfinite(e.yaw_deg);
-}
-
 // a * (a^-1 b)^s along the shorter arc; s outside [0, 1] extrapolates at the same rate.
 Eigen::Quaterniond slerp(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double s) {
   Eigen::Quaterniond delta = a.conjugate() * b;
@@ -76,24 +72,6 @@ const char* toString(PoseStatus status) {
   return "unknown pose status";
 }
 
-const char* toString(PushResult result) {
-  switch (result) {
-    case PushResult::Accepted:
-      return "accepted";
-    case PushResult::NotFinite:
-      return "not finite";
-    case PushResult::OutOfRange:
-      return "position out of range";
-    case PushResult::ZeroQuaternion:
-      return "zero attitude quaternion";
-    case PushResult::OutOfOrder:
-      return "timestamp not after the newest sample";
-    case PushResult::NotInitialised:
-      return "pose buffer not initialised";
-  }
-  return "unknown push result";
-}
-
 geodesy::GeodeticPoint interpolatePosition(const geodesy::GeodeticPoint& a,
                                            const geodesy::GeodeticPoint& b, double s) {
   geodesy::GeodeticPoint out;
@@ -126,12 +104,18 @@ bool PoseBuffer::init(const PoseBufferConfig& config, std::string* why) {
   if (config.startTolerance_ns < 0) {
     return fail("startTolerance_ns must be >= 0, got " + std::to_string(config.startTolerance_ns));
   }
+  std::string problem;
+  if (!validateLimits(config.limits, &problem)) {
+    return fail(problem);
+  }
   config_ = config;
   ring_.assign(config.capacity, PoseSample{});
   oldest_ = 0;
   count_ = 0;
   rejectedSinceNewest_ = false;
+  judgeNextStep_ = true;
   counters_ = {};
+  lastRejection_ = {};
   return true;
 }
 
@@ -146,42 +130,48 @@ const PoseSample& PoseBuffer::at(std::size_t i) const {
 }
 
 PushResult PoseBuffer::push(const PoseSample& sample) {
-  const geodesy::GeodeticPoint& p = sample.position;
-  const Eigen::Vector4d q = sample.bodyToNed.coeffs();
-  PushResult result = PushResult::Accepted;
   if (ring_.empty()) {
     return PushResult::NotInitialised;
   }
-  if (!std::isfinite(p.latitude_deg) || !std::isfinite(p.longitude_deg) ||
-      !std::isfinite(p.height_m) || !q.allFinite() || !finite(sample.gimbal.angles)) {
-    result = PushResult::NotFinite;
-  } else if (std::abs(p.latitude_deg) > 90.0 || std::abs(p.longitude_deg) > 180.0) {
-    result = PushResult::OutOfRange;
-  } else if (q.norm() < kMinQuaternionNorm) {
-    result = PushResult::ZeroQuaternion;
-  } else if (count_ > 0 && sample.timestamp_ns <= at(count_ - 1).timestamp_ns) {
-    result = PushResult::OutOfOrder;
+  PoseCheck check = checkSample(sample, config_.limits);
+  if (check.ok() && count_ > 0) {
+    check = checkStep(at(count_ - 1), sample, config_.limits, judgeNextStep_);
   }
-  switch (result) {
-    case PushResult::NotFinite:
-      ++counters_.notFinite;
-      rejectedSinceNewest_ = true;
-      return result;
-    case PushResult::OutOfRange:
-      ++counters_.outOfRange;
-      rejectedSinceNewest_ = true;
-      return result;
-    case PushResult::ZeroQuaternion:
-      ++counters_.zeroQuaternion;
-      rejectedSinceNewest_ = true;
-      return result;
-    case PushResult::OutOfOrder:
-      // A late or repeated sample (e.g. two links) says nothing about the link's health.
-      ++counters_.outOfOrder;
-      return result;
+  switch (check.result) {
     case PushResult::Accepted:
     case PushResult::NotInitialised:
       break;
+    case PushResult::NotFinite:
+      ++counters_.notFinite;
+      break;
+    case PushResult::OutOfRange:
+      ++counters_.outOfRange;
+      break;
+    case PushResult::ZeroQuaternion:
+      ++counters_.zeroQuaternion;
+      break;
+    case PushResult::OutOfLimits:
+      ++counters_.outOfLimits;
+      break;
+    case PushResult::Inconsistent:
+      ++counters_.inconsistent;
+      break;
+    case PushResult::OutOfOrder:
+      ++counters_.outOfOrder;
+      break;
+    case PushResult::Duplicate:
+      ++counters_.duplicates;
+      break;
+  }
+  if (!check.ok()) {
+    lastRejection_ = check;
+    // A late or repeated sample (e.g. two links) says nothing about the link's health; every
+    // other refusal means the telemetry is currently wrong: extrapolating past the newest
+    // good sample is not trusted until a good one arrives.
+    if (check.result != PushResult::OutOfOrder && check.result != PushResult::Duplicate) {
+      rejectedSinceNewest_ = true;
+    }
+    return check.result;
   }
   std::size_t slot = 0;
   if (count_ == ring_.size()) {
@@ -195,6 +185,7 @@ PushResult PoseBuffer::push(const PoseSample& sample) {
   ring_[slot] = sample;
   ring_[slot].bodyToNed.normalize();
   rejectedSinceNewest_ = false;
+  judgeNextStep_ = true;
   ++counters_.accepted;
   return PushResult::Accepted;
 }

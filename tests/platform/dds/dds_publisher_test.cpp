@@ -286,6 +286,83 @@ TEST(DdsWriters, StatusAndOccupancyArrive) {
   EXPECT_EQ(received.cells, grid.cells);
 }
 
+// A roadside unit that joins late (or whose DDS Security handshake finishes a few frames after
+// the drone started writing) must still get the current state of every vehicle: the writer
+// keeps the newest state of each instance (transient-local, KEEP_LAST 1) and hands it to a
+// reader that matches later. The reader sits in its own participant, created after the
+// writes, so that it is discovered only then, as a late joiner is. Returns the events the
+// late reader received within `listen`.
+std::vector<Event> lateJoinerEvents(const config::DdsConfig& config, std::uint32_t vehicles,
+                                    int statesPerVehicle, std::uint32_t removed,
+                                    std::map<std::uint32_t, messages::VehicleState>* last) {
+  Participant writerSide;
+  VehicleStatePublisher publisher;
+  EXPECT_TRUE(writerSide.open(config).ok());
+  EXPECT_TRUE(publisher.open(writerSide, config).ok());
+  const std::int64_t start = dds_time();
+  for (int k = 0; k < statesPerVehicle; ++k) {
+    const std::int64_t t = start + k * 1'000'000;  // 1 ms apart: well within the lifespan
+    for (std::uint32_t id = 1; id <= vehicles; ++id) {
+      messages::VehicleState s = test::makeState(id, t);
+      s.speed_mps += static_cast<float>(k);  // each state of a vehicle differs
+      EXPECT_TRUE(publisher.publish(s).ok());
+      (*last)[id] = s;
+    }
+  }
+  if (removed != 0) {
+    EXPECT_TRUE(publisher.remove(7, removed, dds_time()).ok());
+    last->erase(removed);
+  }
+  Participant readerSide;
+  Topic topic;
+  Reader reader;
+  EXPECT_TRUE(readerSide.open(config).ok());
+  EXPECT_TRUE(topic
+                  .open(readerSide, vp_msg_VehicleState_desc, vehicleStateTopicName(config),
+                        config.vehicleState)
+                  .ok());
+  EXPECT_TRUE(reader.open(readerSide, topic, config.vehicleState, config.partition).ok());
+  EXPECT_TRUE(waitForMatch(publisher.writer(), 1, 5000ms));
+  // Everything that arrives within the listening time (more than expected would show too).
+  return takeEvents(reader.get(), vehicles * statesPerVehicle, 1500ms);
+}
+
+TEST(DdsLateJoiner, GetsTheLatestStateOfEachVehicle) {
+  test::useLoopbackDds();
+  const config::DdsConfig config = test::uniqueDdsConfig();
+  ASSERT_EQ(config.vehicleState.durability, config::Durability::TransientLocal);
+  ASSERT_EQ(config.vehicleState.historyDepth, 1);
+  constexpr std::uint32_t kVehicles = 5;
+  std::map<std::uint32_t, messages::VehicleState> last;
+  const std::vector<Event> events = lateJoinerEvents(config, kVehicles, 4, 5, &last);
+  std::map<std::uint32_t, int> received;
+  for (const Event& e : events) {
+    if (!e.valid) {
+      continue;  // a disposal of the removed vehicle may be handed on as well
+    }
+    ++received[e.state.trackId];
+    ASSERT_EQ(last.count(e.state.trackId), 1U) << "state of removed vehicle " << e.state.trackId;
+    EXPECT_EQ(fields(e.state), fields(last[e.state.trackId])) << "not the newest state";
+  }
+  std::printf("late joiner: %zu events, %zu vehicles with a state\n", events.size(),
+              received.size());
+  EXPECT_EQ(received.size(), kVehicles - 1);
+  for (const auto& [id, count] : received) {
+    EXPECT_EQ(count, 1) << "vehicle " << id << ": only the newest state is kept";
+  }
+}
+
+// The same with the old volatile durability: the late reader gets nothing until the next
+// write (what made a secured roadside unit miss the first frames).
+TEST(DdsLateJoiner, VolatileWriterGivesALateReaderNothing) {
+  test::useLoopbackDds();
+  config::DdsConfig config = test::uniqueDdsConfig();
+  config.vehicleState.durability = config::Durability::Volatile;
+  std::map<std::uint32_t, messages::VehicleState> last;
+  const std::vector<Event> events = lateJoinerEvents(config, 3, 2, 0, &last);
+  EXPECT_TRUE(events.empty()) << events.size() << " events";
+}
+
 // Allocations per written sample with the reader in ANOTHER process (vp_rsu_subscriber), so
 // that nothing is delivered locally: 200 tracks x 20 frames in steady state. The counter is
 // process-wide, so it also sees Cyclone's own threads (receive thread handling the reader's
