@@ -153,9 +153,13 @@ void FrameStep::countObservations() {
 void FrameStep::logWorkingScale(std::int64_t frameId) {
   // Once per change: the scale follows the drone's height (perception.working_gsd_m).
   const double scale = perception_->workingScale();
-  if (scale != lastWorkingScale_ && (lastWorkingScale_ > 0.0 || perception_->frameGsd_m() > 0.0)) {
-    logLine("working scale %.3f at frame %lld (was %.3f; GSD %.4f m/px at the image centre)", scale,
-            static_cast<long long>(frameId), lastWorkingScale_, perception_->frameGsd_m());
+  if (scale != lastWorkingScale_ && lastWorkingScale_ > 0.0) {
+    logLine("working scale %.3f from frame %lld (was %.3f; GSD %.4f m/px at the image centre)",
+            scale, static_cast<long long>(frameId), lastWorkingScale_, perception_->frameGsd_m());
+  } else if (lastWorkingScale_ == 0.0 && scale > 0.0) {
+    logLine(
+        "working scale %.3f from frame %lld (GSD %.4f m/px at the image centre; 0 = no pose yet)",
+        scale, static_cast<long long>(frameId), perception_->frameGsd_m());
   }
   lastWorkingScale_ = scale;
 }
