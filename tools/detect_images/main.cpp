@@ -68,8 +68,9 @@ options:
                         averaged, as the app's perception.crop_mirror_average)
   --no-mirror-refine    average only the type over the crop and its mirror image, not the box
                         refinement (default: both, as the app's perception.crop_mirror_refine)
-  --no-turn             front/back from the crop as cut only (default: also the crop turned by
-                        180 deg, as the app's perception.crop_turn_average)
+  --no-turn             front/back from the crop as cut only (default: from a crop at the
+                        refined box and its 180 deg turn, as the app's
+                        perception.crop_turn_average)
   --min-vehicle-probability P
                         drop detections the crop network's verifier gives a lower vehicle
                         probability, [0, 1] (default 0.3, as the app's
