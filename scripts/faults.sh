@@ -6,7 +6,7 @@
 # Environment: BUILD (build folder; default build/release, else build/ci), OUT (folder for the
 # sequence, configuration, logs and outputs; default a new /tmp/vp_faults.XXXXXX, never inside
 # the repository), FULL_KIB (size of the full file system, default 48), SLOW_BPS (the slow
-# disk's bytes/s, default 16384), CHURN (subscriber starts, default 20), GAP_S (silent source
+# disk's bytes/s, default 8192), CHURN (subscriber starts, default 20), GAP_S (silent source
 # of camera-loss, default 8).
 #
 #   full-disk         the CSV outputs on a 48 KiB tmpfs (mount; without the right to mount: a
@@ -171,7 +171,7 @@ case_full_disk() {
 
 # ---- slow-disk -------------------------------------------------------------------------------
 case_slow_disk() {
-  local dir="$out/slow-disk" rate=${SLOW_BPS:-16384} frames=100
+  local dir="$out/slow-disk" rate=${SLOW_BPS:-8192} frames=100
   rm -rf "$dir"
   mkdir -p "$dir/normal" "$dir/slow"
   local tracer=()
