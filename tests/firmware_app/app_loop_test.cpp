@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -483,11 +485,14 @@ class UnpluggingCamera final : public platform::v4l2::V4l2Device {
     if (dequeued_ == 5 && !unplugged_) {
       device_.unplug(kPath);
       unplugged_ = true;
+      unpluggedAt_ns_.store(platform::monotonicNow_ns());
     }
     return device_.poll(fd, timeout_ms, revents);
   }
   std::vector<std::string> listVideoNodes() override { return device_.listVideoNodes(); }
   const test::FakeV4l2Device& fake() const { return device_; }
+  int reopenAttempts() const { return reopenAttempts_; }
+  std::int64_t unpluggedAt_ns() const { return unpluggedAt_ns_.load(); }
 
  private:
   static constexpr const char* kPath = "/dev/video0";
@@ -509,6 +514,7 @@ class UnpluggingCamera final : public platform::v4l2::V4l2Device {
   int dequeued_ = 0;
   int reopenAttempts_ = 0;
   bool unplugged_ = false;
+  std::atomic<std::int64_t> unpluggedAt_ns_{0};  // set on the capture thread, read after run()
   bool replugged_ = false;
 };
 
@@ -532,9 +538,18 @@ TEST(AppFaults, CameraDisappearsAndComesBackAndProcessingResumes) {
   config.perception.preprocess.workingScale = 1.0;
   config.app.statsPeriod_s = 3600.0;
   UnpluggingCamera device;
+  // When each frame was done, on the loop's clock: the recovery time runs from the unplug to
+  // the first frame processed after the reopen.
+  struct FrameTimes final : LoopObserver {
+    std::vector<std::int64_t> done_ns;
+    void onFrameDone(std::uint64_t /*framesProcessed*/) override {
+      done_ns.push_back(platform::monotonicNow_ns());
+    }
+  } times;
   App app;
   AppSeams seams;
   seams.v4l2Device = &device;
+  seams.observer = &times;
   RunSettings run = everyFrame();
   run.maxFrames = 10;
   std::string why;
@@ -548,6 +563,30 @@ TEST(AppFaults, CameraDisappearsAndComesBackAndProcessingResumes) {
   EXPECT_EQ(c.noPose, 10U);
   EXPECT_EQ(app.framesInPool(), app.poolCapacity());
   EXPECT_TRUE(device.fake().violations().empty()) << device.fake().violations().front();
+
+  // Back at the second reopen attempt: the backoff waits the initial step, then twice it.
+  ASSERT_EQ(times.done_ns.size(), 10U);
+  EXPECT_EQ(device.reopenAttempts(), 2);
+  const std::int64_t backoff_ms = 3 * platform::v4l2::V4l2CameraConfig{}.reopenInitialBackoff_ms;
+  const double recovery_ms = static_cast<double>(times.done_ns[5] - device.unpluggedAt_ns()) / 1e6;
+  std::vector<double> intervals_ms;
+  for (std::size_t i = 1; i < times.done_ns.size(); ++i) {
+    if (i != 5) {
+      intervals_ms.push_back(static_cast<double>(times.done_ns[i] - times.done_ns[i - 1]) / 1e6);
+    }
+  }
+  std::sort(intervals_ms.begin(), intervals_ms.end());
+  EXPECT_GE(recovery_ms, static_cast<double>(backoff_ms));
+  EXPECT_LT(recovery_ms, static_cast<double>(backoff_ms) + 2000.0);
+  std::printf(
+      "camera unplugged: %llu loss, %llu reopen at attempt %d; from the unplug to the first "
+      "frame processed after the reopen %.0f ms (backoff %lld ms; other frame intervals "
+      "median %.1f ms); %llu of %llu frames processed\n",
+      static_cast<unsigned long long>(c.deviceLosses),
+      static_cast<unsigned long long>(c.deviceReopens), device.reopenAttempts(), recovery_ms,
+      static_cast<long long>(backoff_ms), intervals_ms[intervals_ms.size() / 2],
+      static_cast<unsigned long long>(c.framesProcessed),
+      static_cast<unsigned long long>(c.framesIn));
 }
 
 TEST(AppSource, FasterThanTheLoopDropsTheOldestAndAccountsForEveryFrame) {
