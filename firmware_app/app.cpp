@@ -11,6 +11,14 @@
 
 namespace vp::app {
 
+namespace {
+
+// The longest the processing thread sleeps without a frame before it looks at the periodic
+// reports (watchdog, drone status): well under half the shortest sensible WatchdogSec.
+constexpr std::int64_t kIdleTick_ns = 250'000'000;
+
+}  // namespace
+
 App::App() = default;
 
 App::~App() {
@@ -305,9 +313,10 @@ bool App::run(std::string* why) {
     if (capture_.stopRequested()) {
       break;
     }
-    // The capture thread bumps the count after each frame and when it ends, and it checks the
-    // stop flag at every frame (paced replay: one frame period; camera: the dequeue timeout).
-    capture_.waitFor(seen);
+    // The capture thread bumps the count after each frame, bad frame and retry and when it ends;
+    // it checks the stop flag at every step and within kStopPoll_ns of every wait.
+    capture_.waitFor(seen, kIdleTick_ns);
+    idleTick();
   }
 
   stoppedByRequest_ = capture_.stopRequested();
@@ -319,12 +328,27 @@ bool App::run(std::string* why) {
   return true;
 }
 
+void App::idleTick() {
+  // No frame for a while (a silent camera, a reopen backing off, a paced recording's pause):
+  // the periodic reports go on - the watchdog, the drone status, the statistics line - as long
+  // as the capture thread shows it is alive; a hung capture thread lets the watchdog fire.
+  const std::uint64_t beat = capture_.heartbeat();
+  if (beat == lastHeartbeat_) {
+    return;
+  }
+  lastHeartbeat_ = beat;
+  FrameOutcome idle;
+  idle.pose = lastPose_;
+  reports_.tick(clock_->now_ns(), idle);
+}
+
 void App::processFrame(FrameIndex index) {
   const FrameOutcome outcome = step_.process(capture_.frame(index), capture_.capture_ns(index));
   capture_.release(index);
   if (!outcome.processed) {
     return;
   }
+  lastPose_ = outcome.pose;
   reports_.tick(clock_->now_ns(), outcome);
   if (seams_.observer != nullptr) {
     seams_.observer->onFrameDone(counters_.framesProcessed);

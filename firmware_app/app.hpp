@@ -102,6 +102,7 @@ class App final : public CounterSource {
   bool initPose(std::string* why);
   bool startRealtime(std::string* why);
   void processFrame(FrameIndex index);
+  void idleTick();
 
   config::AppConfig config_;
   RunSettings run_{};
@@ -132,6 +133,8 @@ class App final : public CounterSource {
 
   double runWall_s_ = 0.0;
   bool ran_ = false;
+  std::uint64_t lastHeartbeat_ = 0;     // the capture thread's, at the last idle tick
+  telemetry::PoseEstimate lastPose_{};  // of the last processed frame (the idle drone status)
   bool loopEnded_ = false;
   bool stoppedByRequest_ = false;  // at the loop's end (stop() then stops the capture anyway)
 };

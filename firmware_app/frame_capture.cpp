@@ -1,5 +1,8 @@
 #include "frame_capture.hpp"
 
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <utility>
 
 #include "core/spsc_queue.hpp"
@@ -35,15 +38,25 @@ class FrameQueue {
   // Wakes the processing thread: bumped after every publish and when capture ends.
   void notify() {
     wake_.fetch_add(1, std::memory_order_release);
-    wake_.notify_one();
+    // Taking the mutex after the increment: a waiter between its check and its sleep holds it,
+    // so the wake-up cannot fall between the two.
+    { const std::lock_guard<std::mutex> lock(mutex_); }
+    wakeup_.notify_one();
   }
   std::uint32_t wakeCount() const { return wake_.load(std::memory_order_acquire); }
-  void waitFor(std::uint32_t seen) const { wake_.wait(seen, std::memory_order_acquire); }
+  // Until the count moves past `seen` or timeout_ns passed (no allocation).
+  void waitFor(std::uint32_t seen, std::int64_t timeout_ns) const {
+    std::unique_lock<std::mutex> lock(mutex_);
+    wakeup_.wait_for(lock, std::chrono::nanoseconds(timeout_ns),
+                     [&] { return wake_.load(std::memory_order_acquire) != seen; });
+  }
 
   static std::unique_ptr<FrameQueue> make(int depth, FramePool& pool);
 
  private:
   std::atomic<std::uint32_t> wake_{0};
+  mutable std::mutex mutex_;
+  mutable std::condition_variable wakeup_;
 };
 
 namespace {
@@ -145,6 +158,11 @@ void FrameCapture::start(const CaptureSettings& settings) {
 }
 
 bool FrameCapture::stopRequested() const {
+  // The capture thread asks at every step of its loop and every few ms of each wait on the
+  // clock (replay pacing, backoff, camera reopen): each question is a sign of life.
+  if (std::this_thread::get_id() == captureThread_.load(std::memory_order_relaxed)) {
+    heartbeat_.fetch_add(1, std::memory_order_relaxed);
+  }
   return stop_.load(std::memory_order_relaxed) || platform::StopSignals::stopRequested();
 }
 
@@ -168,8 +186,8 @@ std::uint32_t FrameCapture::wakeCount() const {
   return queue_->wakeCount();
 }
 
-void FrameCapture::waitFor(std::uint32_t seen) const {
-  queue_->waitFor(seen);
+void FrameCapture::waitFor(std::uint32_t seen, std::int64_t timeout_ns) const {
+  queue_->waitFor(seen, timeout_ns);
 }
 
 void FrameCapture::addCounters(LoopCounters& c) const {
@@ -182,6 +200,7 @@ void FrameCapture::addCounters(LoopCounters& c) const {
 }
 
 void FrameCapture::captureLoop() {
+  captureThread_.store(std::this_thread::get_id(), std::memory_order_relaxed);
   platform::setCurrentThreadName("vp-capture");
   std::string problem;
   if (!settings_.cpus.empty() && !platform::setCurrentThreadAffinity(settings_.cpus, &problem)) {
@@ -233,9 +252,11 @@ void FrameCapture::captureLoop() {
         counters_.framesIn.fetch_add(1, std::memory_order_relaxed);
         counters_.badFrames.fetch_add(1, std::memory_order_relaxed);
         logLine("bad frame skipped: %s", source_->message());
+        queue_->notify();  // no frame, but the processing thread's periodic reports go on
         continue;
       case SourceStatus::Retry:
         pool_.release(*index);
+        queue_->notify();
         sleep_ns(*clock_, kCaptureBackoff_ns);
         continue;
       case SourceStatus::End:

@@ -10,7 +10,10 @@
 // with everyFrame it waits for room instead), until the source ends, maxFrames were taken or
 // a stop is requested (requestStop() or a stop signal). The processing thread takes frames
 // with take(), reads them with frame() and capture_ns() (capture time on the loop clock),
-// gives them back with release(), and sleeps on waitFor(wakeCount()) between frames; done()
+// gives them back with release(), and sleeps on waitFor(wakeCount(), timeout) between frames
+// (woken by each frame, bad frame and source retry, or by the timeout); heartbeat() moves while
+// the capture thread lives, so the processing thread can feed the watchdog while no frame
+// comes (a silent camera) and stop feeding it when capture hangs; done()
 // says the capture thread has ended. stop() ends and joins the capture thread and returns
 // every waiting frame to the pool, counted as dropped (the destructor only ends and joins it).
 // Bad frames and device events are counted (addCounters()), logged once where they happen, and
@@ -78,7 +81,11 @@ class FrameCapture final : public platform::StopCondition {
   std::optional<FrameIndex> take();
   bool done() const { return done_.load(std::memory_order_acquire); }
   std::uint32_t wakeCount() const;
-  void waitFor(std::uint32_t seen) const;
+  // Until the capture thread wakes it (a frame, a bad frame, a retry, the end) or timeout_ns.
+  void waitFor(std::uint32_t seen, std::int64_t timeout_ns) const;
+  // Moves while the capture thread is alive: at every step of its loop and while it waits on
+  // the clock (it polls the stop condition); stands still when it hangs, e.g. in a driver call.
+  std::uint64_t heartbeat() const { return heartbeat_.load(std::memory_order_relaxed); }
   const Frame& frame(FrameIndex index) const { return pool_.frame(index); }
   std::int64_t capture_ns(FrameIndex index) const { return captureNs_[index]; }
   void release(FrameIndex index) { pool_.release(index); }
@@ -102,6 +109,8 @@ class FrameCapture final : public platform::StopCondition {
   CaptureCounters counters_;
   std::atomic<std::uint64_t> leftAtStop_{0};  // frames still in the channel at stop()
   std::atomic<bool> stop_{false};
+  std::atomic<std::thread::id> captureThread_{};
+  mutable std::atomic<std::uint64_t> heartbeat_{0};
   std::atomic<bool> done_{false};
   std::thread thread_;
 };

@@ -2,8 +2,11 @@
 // names the option or key), a start-up failure (exit 1), the shipped default configuration on
 // the fixture sequence, and a clean stop on SIGTERM (exit 0, every frame back in the pool).
 #include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -259,6 +262,98 @@ TEST(AppCli, SigtermDuringALongPacedWaitExitsPromptlyAndCleanly) {
   std::string why;
   output_files::TrajectoryFile tracks;
   EXPECT_TRUE(output_files::readTrajectoryFile(dir + "/tracks.csv", &tracks, &why)) << why;
+}
+
+// Under systemd's watchdog (WATCHDOG_USEC), a source that gives no frame for longer than the
+// watchdog period - a silent camera, a reopen backing off, here a recording's 4 s pause - must not
+// get the service killed: while the capture thread is alive the loop keeps sending WATCHDOG=1 at
+// half the period. A fake service manager (a datagram socket at NOTIFY_SOCKET) records them.
+TEST(AppCli, TheWatchdogIsFedWhileTheSourceIsSilent) {
+  const std::string sequence = fixtureCopy("cli_watchdog");
+  setFrameTimes(sequence, "1700000000000000000", "1700000004000000000");
+  const std::string dir = fs::path(sequence).parent_path().string();
+  const std::string socketPath = dir + "/notify.sock";
+  fs::remove(socketPath);
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  ASSERT_LT(socketPath.size(), sizeof(address.sun_path));
+  std::copy(socketPath.begin(), socketPath.end(), address.sun_path);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+
+  std::vector<std::string> args = {VP_FIRMWARE_APP, "--config", kDefaultConfig,
+                                   "--sequence",    sequence,   "--no-dds"};
+  std::vector<char*> argv;
+  for (std::string& arg : args) {
+    argv.push_back(arg.data());
+  }
+  argv.push_back(nullptr);
+  std::vector<std::string> env = {"NOTIFY_SOCKET=" + socketPath, "WATCHDOG_USEC=1000000"};
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string entry(*e);
+    if (entry.rfind("NOTIFY_SOCKET=", 0) != 0 && entry.rfind("WATCHDOG_", 0) != 0) {
+      env.push_back(entry);
+    }
+  }
+  std::vector<char*> envp;
+  for (std::string& entry : env) {
+    envp.push_back(entry.data());
+  }
+  envp.push_back(nullptr);
+  const std::string log = dir + "/log.txt";
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, VP_FIRMWARE_APP, &actions, nullptr, argv.data(), envp.data()), 0);
+  posix_spawn_file_actions_destroy(&actions);
+
+  using Clock = std::chrono::steady_clock;
+  std::vector<Clock::time_point> kicks;
+  bool ready = false;
+  bool stopping = false;
+  int status = 0;
+  const auto deadline = Clock::now() + std::chrono::seconds(60);
+  while (Clock::now() < deadline) {
+    pollfd p{fd, POLLIN, 0};
+    if (::poll(&p, 1, 50) > 0) {
+      char message[512];
+      const ssize_t n = ::recv(fd, message, sizeof(message) - 1, 0);
+      if (n > 0) {
+        const std::string text(message, static_cast<std::size_t>(n));
+        ready = ready || text.find("READY=1") != std::string::npos;
+        stopping = stopping || text.find("STOPPING=1") != std::string::npos;
+        if (ready && !stopping && text.find("WATCHDOG=1") != std::string::npos) {
+          kicks.push_back(Clock::now());
+        }
+      }
+      continue;
+    }
+    if (::waitpid(pid, &status, WNOHANG) == pid) {
+      pid = 0;
+      break;
+    }
+  }
+  if (pid != 0) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+  }
+  ::close(fd);
+  const std::string output = readText(log);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << output;
+  ASSERT_TRUE(ready) << output;
+  ASSERT_GE(kicks.size(), 2U) << output;
+  double longest_s = 0.0;
+  for (std::size_t i = 1; i < kicks.size(); ++i) {
+    longest_s = std::max(longest_s, std::chrono::duration<double>(kicks[i] - kicks[i - 1]).count());
+  }
+  // Due every 0.5 s; systemd would kill after 1 s without one. The pause alone is 4 s.
+  EXPECT_LT(longest_s, 1.0) << kicks.size() << " WATCHDOG=1\n" << output;
+  EXPECT_GE(kicks.size(), 6U) << output;
+  std::printf("%zu WATCHDOG=1 over a 4 s pause of the source, longest gap %.3f s\n", kicks.size(),
+              longest_s);
 }
 
 TEST(AppCli, AnAbsurdTimestampGapIsAStartUpErrorNamingFileAndLine) {
