@@ -110,7 +110,8 @@ bool App::initSource(std::string* why) {
     config_.origin = rig.origin;
     config_.camera = {rig.intrinsics, rig.distortion};
     config_.mount = {rig.mount, rig.gimbal};
-    config_.terrain = {rig.dtmPath, rig.crs};
+    config_.terrain.dtmPath = rig.dtmPath;  // the DTM load options stay the application's
+    config_.terrain.crs = rig.crs;
   }
   const camera::Intrinsics& in = config_.camera.intrinsics;
   if (in.width_px != source->width_px() || in.height_px != source->height_px()) {
@@ -131,7 +132,8 @@ bool App::initWorld(std::string* why) {
   std::string problem;
   frame_ = geodesy::LocalFrame(config_.origin);
   terrain::TerrainGrid grid;
-  if (!io::loadDtm(config_.terrain.dtmPath, config_.terrain.crs, grid, &problem) ||
+  if (!io::loadDtm(config_.terrain.dtmPath, config_.terrain.crs, grid, &problem,
+                   config_.terrain.load) ||
       !terrain_.init(std::move(grid), frame_, &problem)) {
     if (why) {
       *why = "terrain.dtm_path " + config_.terrain.dtmPath + ": " + problem;
