@@ -516,6 +516,34 @@ TEST(InferenceEngine, MatchesGeneratorReferenceOutputs) {
   }
 }
 
+// Dims whose product overflows 64 bits (a fuzzing finding): refused with a message, computed
+// without overflow.
+TEST(InferenceEngine, HostileTensorDimsAreRefused) {
+  onnx::ModelProto model = readModel(kModelDir / "classifier.onnx");
+  onnx::TensorProto* scale = nullptr;
+  for (auto& tensor : *model.mutable_graph()->mutable_initializer()) {
+    if (tensor.data_type() == onnx::TensorProto::FLOAT && tensor.dims_size() == 1 &&
+        tensor.dims(0) > 1) {
+      scale = &tensor;
+      break;
+    }
+  }
+  ASSERT_NE(scale, nullptr);
+  const std::string name = scale->name();
+  scale->clear_dims();
+  scale->add_dims(2222574027840000);
+  scale->add_dims(4567);
+  Engine engine;
+  std::string why;
+  EXPECT_FALSE(engine.load(writeModel(model, "hostile_dims.onnx").string(), {}, &why));
+  EXPECT_NE(why.find("'" + name + "' has invalid dims (negative, or over 2^31 values)"),
+            std::string::npos)
+      << why;
+  scale->set_dims(1, -3);
+  EXPECT_FALSE(engine.load(writeModel(model, "negative_dims.onnx").string(), {}, &why));
+  EXPECT_NE(why.find("has invalid dims"), std::string::npos) << why;
+}
+
 TEST(InferenceEngine, NoHeapAllocationPerRun) {
   std::printf("  counting %s\n", vp::test::AllocationCounter::countsMalloc()
                                      ? "the malloc family (interposed)"
