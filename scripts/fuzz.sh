@@ -27,10 +27,7 @@ if ! [[ "$SECONDS_PER_TARGET" =~ ^[0-9]+$ ]]; then
   echo "usage: scripts/fuzz.sh [SECONDS] [TARGET...]  (targets: ${ALL_TARGETS[*]})" >&2
   exit 2
 fi
-if ! command -v clang++ > /dev/null; then
-  echo "fuzz: clang++ not found: scripts/setup.sh --fuzz installs clang and libFuzzer" >&2
-  exit 2
-fi
+scripts/setup.sh --fuzz  # clang and libFuzzer besides the build dependencies (idempotent)
 
 cmake --preset fuzz > /dev/null
 cmake --build --preset fuzz -j "$JOBS"
