@@ -127,7 +127,8 @@ bool App::initSource(std::string* why) {
     config_.origin = rig.origin;
     config_.camera = {rig.intrinsics, rig.distortion};
     config_.mount = {rig.mount, rig.gimbal};
-    config_.terrain = {rig.dtmPath, rig.crs};
+    config_.terrain.dtmPath = rig.dtmPath;  // the DTM load options stay the application's
+    config_.terrain.crs = rig.crs;
   }
   const camera::Intrinsics& in = config_.camera.intrinsics;
   if (in.width_px != source->width_px() || in.height_px != source->height_px()) {
@@ -149,7 +150,8 @@ bool App::initWorld(std::string* why) {
   frame_ = geodesy::LocalFrame(config_.origin);
   terrain::TerrainGrid grid;
   // The DTM and ASM readers name their file in every message: the key is the context added.
-  if (!io::loadDtm(config_.terrain.dtmPath, config_.terrain.crs, grid, &problem)) {
+  if (!io::loadDtm(config_.terrain.dtmPath, config_.terrain.crs, grid, &problem,
+                   config_.terrain.load)) {
     if (why) {
       *why = "terrain.dtm_path: " + problem;
     }

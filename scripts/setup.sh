@@ -4,6 +4,8 @@
 #   scripts/setup.sh           build and test dependencies (C++)
 #   scripts/setup.sh --python  also Debian's Python stack for training, model tools and the
 #                              PyTorch side of the engine benchmark (python3-torch etc.)
+#   scripts/setup.sh --fuzz    also clang and its libFuzzer/sanitizer runtime (libclang-rt-14-dev)
+#                              for scripts/fuzz.sh (docs/fuzzing.md); CI's g++ build needs neither
 set -euo pipefail
 
 PACKAGES=(
@@ -16,9 +18,13 @@ PACKAGES=(
   cyclonedds-dev cyclonedds-tools libcycloneddsidl0
 )
 
-if [ "${1:-}" = "--python" ]; then
-  PACKAGES+=(python3 python3-torch python3-onnx python3-numpy python3-opencv)
-fi
+for option in "$@"; do
+  case "$option" in
+    --python) PACKAGES+=(python3 python3-torch python3-onnx python3-numpy python3-opencv) ;;
+    --fuzz) PACKAGES+=(clang libclang-rt-14-dev) ;;
+    *) echo "setup: unknown option $option (--python, --fuzz)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${PACKAGES[@]}"; do

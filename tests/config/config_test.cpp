@@ -1615,3 +1615,30 @@ TEST(RigConfig, LoadReportsMissingFilesAsTheWholeConfiguration) {
 
 }  // namespace
 }  // namespace vp::config
+
+namespace vp::config {
+namespace {
+
+// A model without its checksum file loads unverified (inference/model_checksum.hpp): the
+// configuration says so once, as a start-up warning naming the key and the file.
+TEST(ConfigPerception, ModelWithoutChecksumFileIsAWarning) {
+  const fs::path dir = fs::temp_directory_path() / ("vp_config_sha_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "det.onnx") << "model bytes";
+  std::ofstream(dir / "crop.onnx") << "model bytes";
+  std::ofstream(dir / "crop.onnx.sha256") << "digest";
+  const std::string text = std::string(kMinimalConfig) +
+                           "perception:\n  detector_model: det.onnx\n  crop_model: crop.onnx\n";
+  const AppConfig config = parseConfig(text, kSource, dir.string());
+  ASSERT_EQ(config.warnings.size(), 1U);
+  EXPECT_EQ(config.warnings[0],
+            "site.yaml: perception.detector_model: " + (dir / "det.onnx").string() +
+                " has no checksum file det.onnx.sha256: its integrity is not "
+                "verified (scripts/model_checksums.sh)");
+  std::ofstream(dir / "det.onnx.sha256") << "digest";
+  EXPECT_TRUE(parseConfig(text, kSource, dir.string()).warnings.empty());
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace vp::config

@@ -87,6 +87,12 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(file.lift.nominalHeight_m, code.lift.nominalHeight_m);
 }
 
+TEST(DefaultYaml, TerrainIsTheDtmLoadersDefaults) {
+  const AppConfig config = shippedDefaults();
+  EXPECT_EQ(config.terrain.load.maxSamples, io::DtmLoadOptions{}.maxSamples);
+  EXPECT_EQ(config.terrain.load.maxSamples, io::kDefaultDtmMaxSamples);
+}
+
 TEST(DefaultYaml, PoseIsThePoseBuffersDefaults) {
   const telemetry::PoseBufferConfig code;
   const telemetry::PoseBufferConfig file = shippedDefaults().pose;

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -513,6 +514,69 @@ TEST(InferenceEngine, MatchesGeneratorReferenceOutputs) {
       }
       EXPECT_EQ(offset, expected.size());
     }
+  }
+}
+
+// Dims whose product overflows 64 bits (a fuzzing finding): refused with a message, computed
+// without overflow.
+TEST(InferenceEngine, HostileTensorDimsAreRefused) {
+  onnx::ModelProto model = readModel(kModelDir / "classifier.onnx");
+  onnx::TensorProto* scale = nullptr;
+  for (auto& tensor : *model.mutable_graph()->mutable_initializer()) {
+    if (tensor.data_type() == onnx::TensorProto::FLOAT && tensor.dims_size() == 1 &&
+        tensor.dims(0) > 1) {
+      scale = &tensor;
+      break;
+    }
+  }
+  ASSERT_NE(scale, nullptr);
+  const std::string name = scale->name();
+  scale->clear_dims();
+  scale->add_dims(2222574027840000);
+  scale->add_dims(4567);
+  Engine engine;
+  std::string why;
+  EXPECT_FALSE(engine.load(writeModel(model, "hostile_dims.onnx").string(), {}, &why));
+  EXPECT_NE(why.find("'" + name + "' has invalid dims (negative, or over 2^31 values)"),
+            std::string::npos)
+      << why;
+  scale->set_dims(1, -3);
+  EXPECT_FALSE(engine.load(writeModel(model, "negative_dims.onnx").string(), {}, &why));
+  EXPECT_NE(why.find("has invalid dims"), std::string::npos) << why;
+}
+
+// A NaN bias (a fuzzing finding: its int32 quantization was undefined) is a load error.
+TEST(InferenceEngine, NonFiniteBiasIsRefused) {
+  onnx::ModelProto model = readModel(kModelDir / "classifier.onnx");
+  std::string biasName;
+  for (const auto& node : model.graph().node()) {
+    if (node.op_type() == "Conv" && node.input_size() > 2) {
+      biasName = node.input(2);
+      break;
+    }
+  }
+  onnx::TensorProto* bias = nullptr;
+  for (auto& tensor : *model.mutable_graph()->mutable_initializer()) {
+    if (tensor.name() == biasName && tensor.data_type() == onnx::TensorProto::FLOAT) {
+      bias = &tensor;
+    }
+  }
+  ASSERT_NE(bias, nullptr) << "no float Conv bias in classifier.onnx";
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  if (bias->has_raw_data()) {
+    std::memcpy(bias->mutable_raw_data()->data() + sizeof(float), &nan, sizeof(float));
+  } else {
+    bias->set_float_data(1, nan);
+  }
+  for (const Backend backend : {Backend::XnnpackInt8, Backend::XnnpackFp32}) {
+    Engine engine;
+    std::string why;
+    EngineOptions options;
+    options.backend = backend;
+    EXPECT_FALSE(engine.load(writeModel(model, "nan_bias.onnx").string(), options, &why));
+    EXPECT_NE(why.find("bias '" + biasName + "' of output channel 1 is not finite"),
+              std::string::npos)
+        << why;
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <geotiff.h>
 #include <geovalues.h>
+#include <sys/resource.h>
 #include <unistd.h>
 #include <xtiffio.h>
 
@@ -446,6 +447,74 @@ TEST_F(DtmFile, WriteRejectsInconsistentGrid) {
   EXPECT_FALSE(writeDtmGeoTiff((dir_ / "no_such_dir" / "y.tif").string(),
                                makeGrid(5, 5, kUtmTransform, kUtm16N), &why));
   EXPECT_NE(why.find("y.tif: cannot create TIFF"), std::string::npos) << why;
+}
+
+// A 551 kB file whose header declares 65 535 x 16 000 float32 samples (4.2 GB): refused from
+// the declared size, before the grid is allocated, naming the file and the sizes.
+TEST_F(DtmFile, HeaderClaimingAHugeRasterIsRefusedBeforeAllocating) {
+  const std::string path = file("dtm.tif");
+  {
+    TIFF* tif = XTIFFOpen(path.c_str(), "w");
+    ASSERT_NE(tif, nullptr);
+    TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, std::uint32_t{65535});
+    TIFFSetField(tif, TIFFTAG_IMAGELENGTH, std::uint32_t{16000});
+    TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 1);
+    TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 32);
+    TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
+    TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+    TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_NONE);
+    TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, std::uint32_t{16000});
+    double tie[6] = {0.0, 0.0, 0.0, 305000.0, 4771000.0, 0.0};
+    double scale[3] = {1.0, 1.0, 0.0};
+    TIFFSetField(tif, TIFFTAG_GEOTIEPOINTS, 6, tie);
+    TIFFSetField(tif, TIFFTAG_GEOPIXELSCALE, 3, scale);
+    std::vector<unsigned char> strip(551 * 1000, 0);
+    ASSERT_GE(TIFFWriteRawStrip(tif, 0, strip.data(), static_cast<tmsize_t>(strip.size())), 0);
+    XTIFFClose(tif);
+  }
+  ASSERT_LT(fs::file_size(path), 560'000U);
+
+  rusage before{};
+  getrusage(RUSAGE_SELF, &before);
+  TerrainGrid grid;
+  std::string why;
+  // The default cap (2^26 samples) refuses it first.
+  EXPECT_FALSE(loadDtm(path, kUtm16N, grid, &why));
+  EXPECT_NE(why.find(path + ": raster of 65535 x 16000 = 1 048 560 000 samples exceeds "
+                            "terrain.max_samples 67 108 864"),
+            std::string::npos)
+      << why;
+  // With the cap at its largest, the file's size refuses it: the raster is not compressed.
+  DtmLoadOptions options;
+  options.maxSamples = kDtmMaxSamplesLimit;
+  EXPECT_FALSE(loadDtm(path, kUtm16N, grid, &why, options));
+  EXPECT_NE(why.find(path + ": header declares an uncompressed raster of 65535 x 16000 = "
+                            "1 048 560 000 samples (4 194 240 000 bytes), larger than the file"),
+            std::string::npos)
+      << why;
+  EXPECT_TRUE(grid.heights_m.empty());
+  // Nothing near the declared 4.2 GB was touched (peak resident size grew by < 64 MB).
+  rusage after{};
+  getrusage(RUSAGE_SELF, &after);
+  EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 64 * 1024) << "kB";
+}
+
+TEST_F(DtmFile, MaxSamplesCapsTheRaster) {
+  const TerrainGrid grid = makeGrid(64, 50, kUtmTransform, kUtm16N);
+  std::string why;
+  ASSERT_TRUE(writeDtmGeoTiff(file("capped.tif"), grid, &why)) << why;
+  TerrainGrid back;
+  DtmLoadOptions options;
+  options.maxSamples = 3199;
+  EXPECT_FALSE(loadDtm(file("capped.tif"), std::nullopt, back, &why, options));
+  EXPECT_NE(why.find("capped.tif: raster of 64 x 50 = 3 200 samples exceeds terrain.max_samples "
+                     "3 199 (0 MiB in memory)"),
+            std::string::npos)
+      << why;
+  options.maxSamples = 3200;
+  ASSERT_TRUE(loadDtm(file("capped.tif"), std::nullopt, back, &why, options)) << why;
+  expectSameGrid(grid, back);
 }
 
 // The sample DTM shipped for the demo (see tests/fixtures/dtm/README.md).

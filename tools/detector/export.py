@@ -11,7 +11,9 @@ Contract
 * Writes EXPORTDIR/{detector,crop}_fp32.onnx (opset 13, BN folded) and
   EXPORTDIR/{detector,crop}_int8.onnx (tools/quantize/qdq.py: per-channel int8 weights,
   calibrated activation Q/DQ, metadata vp.input.* = model.NORMALIZATION, vp.model.name
-  ``vp_detector`` / ``vp_vehicle_crop``) and EXPORTDIR/export_report.json (MACs, per camera
+  ``vp_detector`` / ``vp_vehicle_crop``), beside each int8 file its checksum
+  ``<name>_int8.onnx.sha256`` (sha256sum's format; the engine verifies it at load) and
+  EXPORTDIR/export_report.json (MACs, per camera
   megapixel, parameter counts, operator counts, float-vs-QDQ error per output, optional
   detection metrics of fp32 and int8 (fake-quant) on ``--eval-data``, optional engine run).
 * ``engine_ops_only(model)`` walks an ONNX graph and returns the operators outside the engine's
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import hashlib
 import json
 import math
 import os
@@ -243,6 +246,7 @@ def export(args) -> dict:
             raise SystemExit(f"{name} QDQ: operators the engine does not run: {', '.join(bad)}")
         path = os.path.join(args.out, f"{name}_int8.onnx")
         onnx.save(qm, path)
+        write_checksum(path)
         qmodels[name] = qm
         macs = onnx_macs(fp32)
         entry = {"fp32": os.path.join(args.out, f"{name}_fp32.onnx"), "int8": path,
@@ -302,6 +306,18 @@ def parse_args(argv=None):
     p.add_argument("--engine-bench", default=None, help="path of vp_bench_engine")
     p.add_argument("--seed", type=int, default=0)
     return p.parse_args(argv)
+
+
+def write_checksum(path: str) -> str:
+    """Writes PATH.sha256 in sha256sum's format ("<hex>  <file name>"); returns the digest.
+
+    The engine refuses a model whose bytes do not match it (src/perception/inference/
+    model_checksum.hpp), so a copy corrupted on its way to the drone fails at start-up."""
+    with open(path, "rb") as f:
+        digest = hashlib.sha256(f.read()).hexdigest()
+    with open(path + ".sha256", "w", encoding="ascii") as f:
+        f.write(f"{digest}  {os.path.basename(path)}\n")
+    return digest
 
 
 def main(argv=None) -> int:

@@ -14,6 +14,7 @@ the torch module (float) and prints the float-vs-QDQ (fake-quant) error table.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import os
 import sys
 
@@ -98,6 +99,10 @@ def make(name: str, out_dir: str, n_calib: int, n_check: int, write_fp32: bool,
     qmodel = qdq.quantize_model(float_model, calib, cfg)
     path = os.path.join(out_dir, f"{file_stem}.onnx")
     onnx.save(qmodel, path)
+    with open(path, "rb") as f:  # the checksum file the engine verifies (sha256sum's format)
+        digest = hashlib.sha256(f.read()).hexdigest()
+    with open(path + ".sha256", "w", encoding="ascii") as f:
+        f.write(f"{digest}  {os.path.basename(path)}\n")
     info = {"path": path, "size": os.path.getsize(path), "ops": qdq.summarize(qmodel)}
     if write_fp32:
         fpath = os.path.join(out_dir, f"{file_stem}_fp32.onnx")

@@ -161,7 +161,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   vp::terrain::TerrainGrid grid;
-  if (!vp::io::loadDtm(config.terrain.dtmPath, config.terrain.crs, grid, &why)) {
+  if (!vp::io::loadDtm(config.terrain.dtmPath, config.terrain.crs, grid, &why,
+                       config.terrain.load)) {
     std::fprintf(stderr, "vp_lift_demo: %s\n", why.c_str());
     return 1;
   }

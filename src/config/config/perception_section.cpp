@@ -3,12 +3,15 @@
 // absent key keeps the module's default.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
 
 #include "config/sections.hpp"
 #include "inference/engine.hpp"
+#include "inference/model_checksum.hpp"
 #include "rig_config/section_reader.hpp"
 
 namespace vp::config::detail {
@@ -57,6 +60,20 @@ void checkWorkingScale(MapReader& section, double scale, const camera::Intrinsic
   }
 }
 
+// A model that exists without its checksum file loads unchecked (inference/model_checksum.hpp):
+// said once at start-up, as a warning.
+void warnUnchecked(const std::string& modelPath, const char* key, AppConfig& config) {
+  std::error_code error;
+  if (modelPath.empty() || !std::filesystem::is_regular_file(modelPath, error) ||
+      std::filesystem::exists(inference::checksumPath(modelPath), error)) {
+    return;
+  }
+  config.warnings.push_back(
+      config.sourcePath + ": perception." + key + ": " + modelPath + " has no checksum file " +
+      std::filesystem::path(inference::checksumPath(modelPath)).filename().string() +
+      ": its integrity is not verified (scripts/model_checksums.sh)");
+}
+
 }  // namespace
 
 void readPerception(MapReader section, const std::string& baseDir, AppConfig& config) {
@@ -68,6 +85,8 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
       resolvePath(section.text("detector_model", std::string(kDefaultDetectorModel)), baseDir);
   det.cropModelPath = readOptionalPath(section, "crop_model", baseDir, kDefaultCropModel);
   config.asmPath = resolvePath(section.text("asm", std::string(kDefaultAsm)), baseDir);
+  warnUnchecked(det.detectorModelPath, "detector_model", config);
+  warnUnchecked(det.cropModelPath, "crop_model", config);
   det.engine.backend = section.choice<inference::Backend>(
       "backend", inference::backendFromString, kBackendNames, d.detection.engine.backend);
   // One knob for the detector's threads and the preprocessing row loops.

@@ -7,6 +7,7 @@
 #include <geovalues.h>
 #include <xtiffio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -34,8 +36,6 @@ using terrain::GeoTransform;
 using terrain::HorizontalCrs;
 using terrain::TerrainGrid;
 
-constexpr std::uint64_t kMaxSamples = 1ULL << 30;
-
 std::string crsName(const CrsSpec& crs) {
   return terrain::toString(crs);
 }
@@ -50,7 +50,45 @@ bool sameCrs(const CrsSpec& a, const CrsSpec& b) {
 
 // --- Reading -----------------------------------------------------------------------------
 
-bool readRaster(TIFF* tif, const std::string& path, TerrainGrid& grid, std::string* why) {
+// "12 345 678": sizes in messages, readable at a glance.
+std::string grouped(std::uint64_t value) {
+  std::string digits = std::to_string(value);
+  for (int at = static_cast<int>(digits.size()) - 3; at > 0; at -= 3) {
+    digits.insert(static_cast<std::size_t>(at), " ");
+  }
+  return digits;
+}
+
+// The declared raster size against the configured cap and, uncompressed, against the file:
+// checked before the grid is allocated.
+bool checkDeclaredSize(TIFF* tif, const std::string& path, std::uint32_t width,
+                       std::uint32_t height, std::size_t bytesPerSample,
+                       const DtmLoadOptions& options, std::string* why) {
+  const std::uint64_t samples = static_cast<std::uint64_t>(width) * height;
+  const std::string size = std::to_string(width) + " x " + std::to_string(height) + " = " +
+                           grouped(samples) + " samples";
+  const std::uint64_t cap = std::min(options.maxSamples, kDtmMaxSamplesLimit);
+  if (samples > cap) {
+    return fail(why, path,
+                "raster of " + size + " exceeds terrain.max_samples " + grouped(cap) + " (" +
+                    grouped(samples * sizeof(float) >> 20) + " MiB in memory)");
+  }
+  std::uint16_t compression = COMPRESSION_NONE;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_COMPRESSION, &compression);
+  std::error_code error;
+  const std::uintmax_t fileBytes = std::filesystem::file_size(path, error);
+  const std::uint64_t rasterBytes = samples * bytesPerSample;
+  if (compression == COMPRESSION_NONE && !error && rasterBytes > fileBytes) {
+    return fail(why, path,
+                "header declares an uncompressed raster of " + size + " (" + grouped(rasterBytes) +
+                    " bytes), larger than the file (" + grouped(fileBytes) +
+                    " bytes): truncated or corrupt");
+  }
+  return true;
+}
+
+bool readRaster(TIFF* tif, const std::string& path, const DtmLoadOptions& options,
+                TerrainGrid& grid, std::string* why) {
   std::uint32_t width = 0;
   std::uint32_t height = 0;
   std::uint16_t samples = 1;
@@ -72,15 +110,18 @@ bool readRaster(TIFF* tif, const std::string& path, TerrainGrid& grid, std::stri
                 "not a float32 single-band TIFF (bits " + std::to_string(bits) + ", samples " +
                     std::to_string(samples) + ", sample format " + formatName + ")");
   }
-  if (width < 2 || height < 2 || static_cast<std::uint64_t>(width) * height > kMaxSamples) {
+  if (width < 2 || height < 2) {
     return fail(why, path,
                 "unsupported image size " + std::to_string(width) + "x" + std::to_string(height) +
-                    " (needs at least 2x2 and at most 2^30 samples)");
+                    " (needs at least 2x2)");
+  }
+  const std::size_t bytesPerSample = bits / 8;
+  if (!checkDeclaredSize(tif, path, width, height, bytesPerSample, options, why)) {
+    return false;
   }
   grid.cols = static_cast<int>(width);
   grid.rows = static_cast<int>(height);
   grid.heights_m.assign(static_cast<std::size_t>(width) * height, 0.0F);
-  const std::size_t bytesPerSample = bits / 8;
 
   // Copies a block (strip or tile) of bw x bh samples stored at `block` into the grid at
   // (col0, row0), clipping to the image.
@@ -314,7 +355,7 @@ bool readWorldFile(const std::filesystem::path& file, GeoTransform& transform, s
 }  // namespace
 
 bool loadDtm(const std::string& path, const std::optional<terrain::CrsSpec>& crsForWorldFile,
-             terrain::TerrainGrid& grid, std::string* why) {
+             terrain::TerrainGrid& grid, std::string* why, const DtmLoadOptions& options) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) {
     return fail(why, path, "file not found");
@@ -326,7 +367,7 @@ bool loadDtm(const std::string& path, const std::optional<terrain::CrsSpec>& crs
     return fail(why, path, "cannot open as TIFF" + TiffDiagnostics::detail());
   }
   TerrainGrid loaded;
-  if (!readRaster(tif.get(), path, loaded, why)) {
+  if (!readRaster(tif.get(), path, options, loaded, why)) {
     return false;
   }
 

@@ -18,6 +18,7 @@
 #include "camera/camera_model.hpp"
 #include "geodesy/attitude.hpp"
 #include "geodesy/geodesy.hpp"
+#include "io/dtm_file.hpp"
 #include "terrain/terrain_model.hpp"
 
 namespace vp::config {
@@ -40,6 +41,7 @@ struct MountConfig {
 struct TerrainConfig {
   std::string dtmPath;                  // absolute after loading
   std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
+  io::DtmLoadOptions load{};            // terrain.max_samples
 };
 
 struct RigConfig {

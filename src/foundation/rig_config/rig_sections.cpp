@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -190,6 +191,9 @@ TerrainConfig readTerrain(MapReader section, const std::string& baseDir) {
   config.dtmPath = resolvePath(section.text("dtm_path", kRequired), baseDir);
   config.crs = section.choice<std::optional<terrain::CrsSpec>>(
       "crs", crsSettingFromString, kCrsForms, std::optional<terrain::CrsSpec>());
+  config.load.maxSamples = section.uint32(
+      "max_samples", Range::closed(4.0, static_cast<double>(io::kDtmMaxSamplesLimit)),
+      static_cast<std::uint32_t>(io::DtmLoadOptions{}.maxSamples));
   section.warnUnknownKeys();
   return config;
 }

@@ -27,14 +27,20 @@ using csv::splitFields;
 
 // ---- SequenceWriter ------------------------------------------------------------------------
 
-struct SequenceWriter::Files {
-  // One CSV output: the stream, its display name and the line the next row goes to.
-  struct Csv {
-    std::ofstream stream;
-    std::string name;
-    int nextLine = 2;
-  };
+namespace {
 
+// One CSV output: the stream, its display name and the line the next row goes to. At namespace
+// scope, not nested in Files: inside Files' definition a nested struct with default member
+// initializers is not yet default-constructible for std::optional (clang rejects emplace()).
+struct Csv {
+  std::ofstream stream;
+  std::string name;
+  int nextLine = 2;
+};
+
+}  // namespace
+
+struct SequenceWriter::Files {
   fs::path directory;
   SequenceInfo info;
   int width_px = 0;

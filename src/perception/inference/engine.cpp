@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "inference/backend.hpp"
+#include "inference/model_checksum.hpp"
 #include "inference/onnx_graph.hpp"
 #include "inference/opencv_backend.hpp"
 #include "inference/xnnpack_backend.hpp"
@@ -55,6 +56,14 @@ class Engine::Impl {
     std::string bytes;
     if (!readFileBytes(path, &bytes, why))
       return false;
+    const ChecksumResult checksum = verifyModelChecksum(path, bytes, why);
+    if (checksum == ChecksumResult::Mismatch || checksum == ChecksumResult::Malformed)
+      return false;
+    return loadBytes(bytes, path, options, why);
+  }
+
+  bool loadBytes(const std::string& bytes, const std::string& path, const EngineOptions& options,
+                 std::string* why) {
     if (!parseQdqModel(bytes, path, &graph_, why))
       return false;
     if (options.threads < 1) {
@@ -181,6 +190,19 @@ bool Engine::load(const std::string& onnxPath, const EngineOptions& options, std
   std::string& message = why != nullptr ? *why : ignored;
   auto fresh = std::make_unique<Impl>();
   if (!fresh->load(onnxPath, options, &message)) {
+    impl_ = std::make_unique<Impl>();
+    return false;
+  }
+  impl_ = std::move(fresh);
+  return true;
+}
+
+bool Engine::loadFromMemory(const std::string& onnxBytes, const std::string& name,
+                            const EngineOptions& options, std::string* why) {
+  std::string ignored;
+  std::string& message = why != nullptr ? *why : ignored;
+  auto fresh = std::make_unique<Impl>();
+  if (!fresh->loadBytes(onnxBytes, name, options, &message)) {
     impl_ = std::make_unique<Impl>();
     return false;
   }

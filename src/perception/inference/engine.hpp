@@ -102,7 +102,13 @@ class Engine {
 
   // Start-up: parses, validates and builds the backend. On failure returns false, fills *why
   // ("model.onnx: node 'conv3' (Conv): ...") and leaves the engine unloaded.
+  // The model file's integrity is checked first against <onnxPath>.sha256 when it exists
+  // (inference/model_checksum.hpp): a mismatch fails the load, naming both digests.
   bool load(const std::string& onnxPath, const EngineOptions& options, std::string* why);
+  // The same from the file's bytes (no checksum file: the caller owns the bytes); `name` stands
+  // for the file in messages.
+  bool loadFromMemory(const std::string& onnxBytes, const std::string& name,
+                      const EngineOptions& options, std::string* why);
   bool loaded() const;
 
   TensorShape inputShape() const;  // [1, 3, H, W]

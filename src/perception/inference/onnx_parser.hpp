@@ -41,10 +41,18 @@ inline std::string formatQuant(const QuantParams& q) {
   return s.str();
 }
 
+// More elements than any tensor the engine can hold (and than a model file's values can be).
+inline constexpr std::int64_t kMaxTensorElements = std::int64_t{1} << 31;
+
+// The element count of t's dims; -1 when a dim is negative or the product exceeds
+// kMaxTensorElements (checked before multiplying: hostile dims must not overflow).
 inline std::int64_t elementCount(const onnx::TensorProto& t) {
   std::int64_t n = 1;
-  for (const auto d : t.dims())
+  for (const auto d : t.dims()) {
+    if (d < 0 || (d > 0 && n > kMaxTensorElements / d))
+      return -1;
     n *= d;
+  }
   return n;
 }
 

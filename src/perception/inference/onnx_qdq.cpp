@@ -284,6 +284,13 @@ std::vector<float> Parser::bias(const onnx::NodeProto& node, int channels) const
     failNode(node, "bias has " + std::to_string(b.size()) + " values, expected " +
                        std::to_string(channels) + " (output channels)");
   }
+  // A NaN or infinite bias has no int32 accumulator value (quantized at load, int8 backend).
+  for (std::size_t c = 0; c < b.size(); ++c) {
+    if (!std::isfinite(b[c])) {
+      failNode(node,
+               "bias '" + name + "' of output channel " + std::to_string(c) + " is not finite");
+    }
+  }
   return b;
 }
 

@@ -30,6 +30,9 @@ std::vector<float> Parser::floats(const onnx::NodeProto& node, const onnx::Tenso
     failNode(node, what + " '" + t.name() + "' uses external data (not supported)");
   }
   const auto n = elementCount(t);
+  if (n < 0) {
+    failNode(node, what + " '" + t.name() + "' has invalid dims (negative, or over 2^31 values)");
+  }
   std::vector<float> v;
   if (t.has_raw_data()) {
     if (t.raw_data().size() != static_cast<std::size_t>(n) * sizeof(float)) {
@@ -55,6 +58,9 @@ std::vector<std::int64_t> Parser::ints(const onnx::NodeProto& node, const onnx::
     failNode(node, what + " '" + t.name() + "' uses external data (not supported)");
   }
   const auto n = elementCount(t);
+  if (n < 0) {
+    failNode(node, what + " '" + t.name() + "' has invalid dims (negative, or over 2^31 values)");
+  }
   std::vector<std::int64_t> v;
   const std::string& raw = t.raw_data();
   const bool hasRaw = t.has_raw_data();

@@ -1,0 +1,257 @@
+#!/usr/bin/python3
+"""Writes the seed corpus of the fuzz targets, tests/fuzz/corpus/<target>/ (docs/fuzzing.md).
+
+    tests/fuzz/make_corpus.py          # rewrites the seeds (deterministic, byte-identical)
+
+Seeds are small valid inputs of each parser, built from the repository's fixtures and
+documentation examples; the campaign (scripts/fuzz.sh) mutates them. Findings fixed later are
+added beside them by hand as finding-<target>-<what> (never rewritten by this script). The
+ONNX seed is a tiny QDQ model made here with the onnx package (Debian's python3-onnx); the
+fixture model tests/fixtures/models/classifier.onnx and config/default.yaml (15 kB) are
+referenced in place (tests/fuzz/CMakeLists.txt, scripts/fuzz.sh).
+"""
+
+import os
+import struct
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CORPUS = os.path.join(ROOT, "tests", "fuzz", "corpus")
+FIXTURES = os.path.join(ROOT, "tests", "fixtures")
+
+
+def read(*parts):
+    with open(os.path.join(*parts), "rb") as f:
+        return f.read()
+
+
+def write(target, name, data):
+    os.makedirs(os.path.join(CORPUS, target), exist_ok=True)
+    with open(os.path.join(CORPUS, target, name), "wb") as f:
+        f.write(data)
+
+
+# ---- config_yaml ------------------------------------------------------------------------------
+
+MINIMAL_CONFIG = b"""origin: {latitude_deg: 43.0731, longitude_deg: -89.4012, height_m: 260.0}
+camera: {width_px: 32, height_px: 24, fx_px: 40.0, fy_px: 40.0}
+terrain: {dtm_path: dtm.tif, crs: utm:16N, max_samples: 4096}
+"""
+
+LOOP_CONFIG = MINIMAL_CONFIG + b"""mount:
+  roll_deg: 0.5
+  pitch_deg: -90
+  lever_arm_m: [0.1, 0.0, -0.05]
+pose: {capacity: 64}
+tracking: {}
+source: {kind: replay, sequence_dir: seq}
+telemetry: {source: recording}
+app: {queue_depth: 2}
+dds:
+  enabled: false
+  domain_id: 7
+perception:
+  detector_model: none.onnx
+  crop_model: none
+  backend: int8
+  threads: 2
+  white_balance_regions: [2, 3]
+"""
+
+
+def config_seeds():
+    write("config_yaml", "minimal.yaml", MINIMAL_CONFIG)
+    write("config_yaml", "loop_sections.yaml", LOOP_CONFIG)
+    write("config_yaml", "rig_of_sequence_min.yaml",
+          read(FIXTURES, "sequence_min", "rig.yaml"))
+
+
+# ---- sequence_files ---------------------------------------------------------------------------
+
+def sequence_seeds():
+    seq = os.path.join(FIXTURES, "sequence_min")
+    rig = read(seq, "rig.yaml").replace(b"../dtm/sloped_utm16n.tif", b"dtm.tif")
+    parts = [read(seq, "sequence.yaml"), rig, read(seq, "frames.csv"),
+             read(seq, "telemetry.csv")]
+    write("sequence_files", "sequence_min", b"\0".join(parts))
+    truth = [read(seq, "ground_truth", "objects.csv"), read(seq, "ground_truth", "keypoints.csv")]
+    write("sequence_files", "sequence_min_ground_truth", b"\0".join(parts + truth))
+
+
+# ---- dtm_file ---------------------------------------------------------------------------------
+
+def dtm_input(tiff, world=b"", configure_crs=False):
+    return bytes([1 if configure_crs else 0]) + struct.pack("<H", len(world)) + world + tiff
+
+
+def plain_float_tiff(cols, rows, compression=1):
+    """A minimal little-endian float32 TIFF, one strip, no GeoTIFF tags."""
+    pixels = b"".join(struct.pack("<f", 250.0 + 0.5 * c - 0.25 * r)
+                      for r in range(rows) for c in range(cols))
+    entries = [  # (tag, type, count, value); types: 3 SHORT, 4 LONG
+        (256, 4, 1, cols), (257, 4, 1, rows), (258, 3, 1, 32), (259, 3, 1, compression),
+        (262, 3, 1, 1), (273, 4, 1, 0), (277, 3, 1, 1), (278, 4, 1, rows),
+        (279, 4, 1, len(pixels)), (284, 3, 1, 1), (339, 3, 1, 3)]
+    ifd_offset = 8
+    ifd_size = 2 + 12 * len(entries) + 4
+    data_offset = ifd_offset + ifd_size
+    out = b"II*\0" + struct.pack("<I", ifd_offset) + struct.pack("<H", len(entries))
+    for tag, typ, count, value in entries:
+        if tag == 273:
+            value = data_offset
+        field = struct.pack("<H", value) + b"\0\0" if typ == 3 else struct.pack("<I", value)
+        out += struct.pack("<HHI", tag, typ, count) + field
+    return out + struct.pack("<I", 0) + pixels
+
+
+def dtm_seeds():
+    geotiff = read(FIXTURES, "dtm", "sloped_utm16n.tif")
+    write("dtm_file", "geotiff_utm16n", dtm_input(geotiff))
+    write("dtm_file", "geotiff_utm16n_configured_crs", dtm_input(geotiff, configure_crs=True))
+    world = b"5.0\n0.0\n0.0\n-5.0\n304410.0\n4771831.0\n"
+    write("dtm_file", "plain_with_world_file", dtm_input(plain_float_tiff(6, 5), world, True))
+    write("dtm_file", "plain_world_file_no_crs", dtm_input(plain_float_tiff(4, 4), world))
+
+
+# ---- mavlink_stream ---------------------------------------------------------------------------
+
+CRC_EXTRA = {30: 39, 31: 246, 33: 104, 285: 137}
+
+
+def crc_x25(data, crc=0xFFFF):
+    for byte in data:
+        tmp = byte ^ (crc & 0xFF)
+        tmp = (tmp ^ (tmp << 4)) & 0xFF
+        crc = ((crc >> 8) ^ (tmp << 8) ^ (tmp << 3) ^ (tmp >> 4)) & 0xFFFF
+    return crc
+
+
+def mavlink_frame(msgid, payload, seq=0, sysid=1, compid=1, signed=False):
+    payload = payload.rstrip(b"\0") or b"\0"  # MAVLink 2 trailing-zero truncation
+    header = bytes([len(payload), 0x01 if signed else 0, 0, seq, sysid, compid,
+                    msgid & 0xFF, (msgid >> 8) & 0xFF, (msgid >> 16) & 0xFF])
+    crc = crc_x25(header + payload)
+    crc = crc_x25(bytes([CRC_EXTRA[msgid]]), crc)
+    frame = b"\xfd" + header + payload + struct.pack("<H", crc)
+    if signed:
+        frame += bytes(range(13))
+    return frame
+
+
+def mavlink_seeds():
+    position = struct.pack("<IiiiihhhH", 1000, 430731000, -894012000, 260000, 100000, 50, -20, 0,
+                           9000)
+    quaternion = struct.pack("<I4f3f4f", 1010, 0.7071068, 0.0, 0.0, 0.7071068, 0, 0, 0, 0, 0, 0, 0)
+    attitude = struct.pack("<I6f", 1020, 0.01, -0.02, 1.57, 0, 0, 0)
+    gimbal = struct.pack("<I4f3fIHBBffB", 1030, 0.7071068, 0.0, -0.7071068, 0.0, 0, 0, 0, 0, 64,
+                         1, 1, float("nan"), 0.0, 1)
+    stream = (mavlink_frame(33, position, 0) + mavlink_frame(31, quaternion, 1) +
+              mavlink_frame(30, attitude, 2) + mavlink_frame(285, gimbal, 3, compid=154))
+    write("mavlink_stream", "serial_four_messages", b"\0" + stream)
+    noisy = b"\x55\xfe\x01" + stream[:20] + stream + mavlink_frame(33, position, 4, signed=True)
+    write("mavlink_stream", "serial_noise_cut_frame_signed", b"\0" + noisy)
+    # Datagrams of 40 bytes: frames straddle datagram ends (counted as truncated).
+    write("mavlink_stream", "datagrams_40", bytes([40]) + stream)
+
+
+# ---- onnx_model -------------------------------------------------------------------------------
+
+def onnx_seed():
+    import numpy as np
+    import onnx
+    from onnx import TensorProto, helper, numpy_helper
+
+    def scalar(name, value, dtype):
+        return numpy_helper.from_array(np.array(value, dtype=dtype), name)
+
+    inits = [scalar("s_in", 1.0 / 128, np.float32), scalar("z", 0, np.int8),
+             scalar("s_a", 0.05, np.float32), scalar("s_b", 0.04, np.float32),
+             scalar("s_c", 0.1, np.float32)]
+    rng = np.random.RandomState(3)
+    w1 = rng.randint(-100, 100, size=(4, 3, 3, 3)).astype(np.int8)
+    w2 = rng.randint(-100, 100, size=(2, 4, 1, 1)).astype(np.int8)
+    inits += [numpy_helper.from_array(w1, "w1_q"),
+              numpy_helper.from_array(np.full(4, 0.01, np.float32), "w1_s"),
+              numpy_helper.from_array(np.zeros(4, np.int8), "w1_z"),
+              numpy_helper.from_array(np.linspace(-0.1, 0.1, 4).astype(np.float32), "b1"),
+              numpy_helper.from_array(w2, "w2_q"),
+              numpy_helper.from_array(np.full(2, 0.02, np.float32), "w2_s"),
+              numpy_helper.from_array(np.zeros(2, np.int8), "w2_z"),
+              numpy_helper.from_array(np.zeros(2, np.float32), "b2")]
+    n = helper.make_node
+    nodes = [
+        n("QuantizeLinear", ["image", "s_in", "z"], ["image_q"], name="q_in"),
+        n("DequantizeLinear", ["image_q", "s_in", "z"], ["image_dq"], name="dq_in"),
+        n("DequantizeLinear", ["w1_q", "w1_s", "w1_z"], ["w1"], name="dq_w1", axis=0),
+        n("Conv", ["image_dq", "w1", "b1"], ["c1"], name="conv1", kernel_shape=[3, 3],
+          pads=[1, 1, 1, 1]),
+        n("Relu", ["c1"], ["r1"], name="relu1"),
+        n("QuantizeLinear", ["r1", "s_a", "z"], ["r1_q"], name="q_r1"),
+        n("DequantizeLinear", ["r1_q", "s_a", "z"], ["r1_dq"], name="dq_r1"),
+        n("MaxPool", ["r1_dq"], ["p1"], name="pool1", kernel_shape=[2, 2], strides=[2, 2]),
+        n("QuantizeLinear", ["p1", "s_a", "z"], ["p1_q"], name="q_p1"),
+        n("DequantizeLinear", ["p1_q", "s_a", "z"], ["p1_dq"], name="dq_p1"),
+        n("DequantizeLinear", ["w2_q", "w2_s", "w2_z"], ["w2"], name="dq_w2", axis=0),
+        n("Conv", ["p1_dq", "w2", "b2"], ["c2"], name="conv2", kernel_shape=[1, 1]),
+        n("QuantizeLinear", ["c2", "s_b", "z"], ["c2_q"], name="q_c2"),
+        n("DequantizeLinear", ["c2_q", "s_b", "z"], ["heads"], name="dq_c2"),
+        n("Sigmoid", ["heads"], ["sg"], name="sigmoid"),
+        n("QuantizeLinear", ["sg", "s_c", "z"], ["sg_q"], name="q_sg"),
+        n("DequantizeLinear", ["sg_q", "s_c", "z"], ["scores"], name="dq_sg"),
+    ]
+    graph = helper.make_graph(
+        nodes, "fuzz_seed",
+        [helper.make_tensor_value_info("image", TensorProto.FLOAT, [1, 3, 8, 8])],
+        [helper.make_tensor_value_info("heads", TensorProto.FLOAT, [1, 2, 4, 4]),
+         helper.make_tensor_value_info("scores", TensorProto.FLOAT, [1, 2, 4, 4])],
+        initializer=inits)
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)],
+                              producer_name="vp fuzz seed")
+    model.ir_version = 7
+    for key, value in (("vp.input.channel_order", "rgb"), ("vp.input.mean", "0,0,0"),
+                       ("vp.input.scale", "0.00392157,0.00392157,0.00392157")):
+        entry = model.metadata_props.add()
+        entry.key, entry.value = key, value
+    onnx.checker.check_model(model)
+    write("onnx_model", "tiny_qdq.onnx", model.SerializeToString())
+
+
+# ---- detections_file / trajectory_file -------------------------------------------------------
+
+def doc_block(doc, starts):
+    """The ```text block of docs/<doc> whose first line starts with `starts`."""
+    text = read(ROOT, "docs", doc).decode()
+    for block in text.split("```text\n")[1:]:
+        body = block.split("```")[0]
+        if body.startswith(starts):
+            return body.encode()
+    raise SystemExit(f"docs/{doc}: no example starting with {starts!r}")
+
+
+def output_file_seeds():
+    dets = doc_block("detections_file.md", "# format_version")
+    write("detections_file", "frames_doc_example.csv", dets)
+    header, *rows = dets.decode().split("\n")[3:]
+    image = ["image" + header[len("frame_id"):]]
+    for i, row in enumerate(r for r in rows if r):
+        image.append(f"IMG_{i:04d}" + row[row.index(","):])
+    write("detections_file", "images_no_metadata.csv", ("\n".join(image) + "\n").encode())
+    traj = doc_block("tracking.md", "frame_id,class_id")
+    write("trajectory_file", "doc_example.csv", traj)
+    lines = traj.decode().split("\n")
+    cut = [",".join(line.split(",")[:28]) for line in lines if line]  # no gamma columns
+    write("trajectory_file", "no_gamma_columns.csv", ("\n".join(cut) + "\n").encode())
+
+
+def main():
+    config_seeds()
+    sequence_seeds()
+    dtm_seeds()
+    mavlink_seeds()
+    output_file_seeds()
+    onnx_seed()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
