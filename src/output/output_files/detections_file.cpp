@@ -341,6 +341,10 @@ void parseMetadata(const std::string& file, int line, std::string_view text, Det
                       std::to_string(kDetectionsFormatVersion) + ")"};
     }
     out->formatVersion = version;
+  } else if ((key == "model" || key == "source") && value.find('\r') != std::string_view::npos) {
+    // The writer keeps metadata to one line of text; a carriage return inside it would not
+    // survive writing the file again.
+    throw ReadError{where + std::string(key) + ": carriage return inside the value"};
   } else if (key == "model") {
     out->info.model = std::string(value);
   } else if (key == "source") {
