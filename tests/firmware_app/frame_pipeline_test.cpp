@@ -19,23 +19,35 @@
 namespace vp::perception {
 namespace {
 
-TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
-  const std::string dir = test::loopSequence();
-  ASSERT_FALSE(dir.empty());
-  sequence::SequenceReader reader;
+// The loop fixture sequence's world: its rig, DTM, camera, the default configuration and ASM.
+class FramePipelineTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = test::loopSequence();
+    ASSERT_FALSE(dir.empty());
+    ASSERT_TRUE(reader.open(dir, &why)) << why;
+    const sequence::Rig& rig = reader.rig();
+    world = geodesy::LocalFrame(rig.origin);
+    terrain::TerrainGrid grid;
+    ASSERT_TRUE(io::loadDtm(rig.dtmPath, rig.crs, grid, &why)) << why;
+    ASSERT_TRUE(terrain.init(std::move(grid), world, &why)) << why;
+    ASSERT_TRUE(camera.init(rig.intrinsics, rig.distortion, &why)) << why;
+    defaults = test::defaultConfigFor(dir);
+    ASSERT_TRUE(shapeModel.load(defaults.asmPath, &why)) << why;
+  }
+
+  std::string dir;
   std::string why;
-  ASSERT_TRUE(reader.open(dir, &why)) << why;
-  const sequence::Rig& rig = reader.rig();
-  const geodesy::LocalFrame world(rig.origin);
-  terrain::TerrainGrid grid;
+  sequence::SequenceReader reader;
+  geodesy::LocalFrame world;
   terrain::TerrainModel terrain;
-  ASSERT_TRUE(io::loadDtm(rig.dtmPath, rig.crs, grid, &why)) << why;
-  ASSERT_TRUE(terrain.init(std::move(grid), world, &why)) << why;
   camera::CameraModel camera;
-  ASSERT_TRUE(camera.init(rig.intrinsics, rig.distortion, &why)) << why;
-  const config::AppConfig defaults = test::defaultConfigFor(dir);
+  config::AppConfig defaults;
   shape::ActiveShapeModel shapeModel;
-  ASSERT_TRUE(shapeModel.load(defaults.asmPath, &why)) << why;
+};
+
+TEST_F(FramePipelineTest, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
+  const sequence::Rig& rig = reader.rig();
   perception::PipelineOptions options = defaults.perception;
   options.preprocess.workingScale = 1.0;
   options.preprocess.workingGsd_m = 0.0;  // one scale with and without a pose
@@ -105,23 +117,8 @@ TEST(FramePipeline, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
 // With working_gsd_m (the default) the working scale follows the GSD the pose and the DTM give
 // at the image centre: the rung nearest GSD / 0.12, which for a near-nadir camera is about
 // height above ground / focal length; without a pose the scale stays at working_scale.
-TEST(FramePipeline, WorkingScaleFollowsTheHeightAboveTheDtm) {
-  const std::string dir = test::loopSequence();
-  ASSERT_FALSE(dir.empty());
-  sequence::SequenceReader reader;
-  std::string why;
-  ASSERT_TRUE(reader.open(dir, &why)) << why;
+TEST_F(FramePipelineTest, WorkingScaleFollowsTheHeightAboveTheDtm) {
   const sequence::Rig& rig = reader.rig();
-  const geodesy::LocalFrame world(rig.origin);
-  terrain::TerrainGrid grid;
-  terrain::TerrainModel terrain;
-  ASSERT_TRUE(io::loadDtm(rig.dtmPath, rig.crs, grid, &why)) << why;
-  ASSERT_TRUE(terrain.init(std::move(grid), world, &why)) << why;
-  camera::CameraModel camera;
-  ASSERT_TRUE(camera.init(rig.intrinsics, rig.distortion, &why)) << why;
-  const config::AppConfig defaults = test::defaultConfigFor(dir);
-  shape::ActiveShapeModel shapeModel;
-  ASSERT_TRUE(shapeModel.load(defaults.asmPath, &why)) << why;
   perception::PipelineOptions options = defaults.perception;
   ASSERT_GT(options.preprocess.workingGsd_m, 0.0);
   options.preprocess.workingScale = 0.5;
