@@ -64,6 +64,25 @@ struct VehicleState {
 
   float detectionConfidence = 0.0F;  // [0, 1], the detector's score fused over the track
   TrackStatus status = TrackStatus::Tentative;
+
+  // The reference point in UTM (seed 002's trajectories are UTM): the zone of its longitude
+  // (1..60; 0 = not computed), the hemisphere, easting and northing with the standard false
+  // easting (500 km) and, south of the equator, false northing (10 000 km).
+  std::uint8_t utmZone = 0;
+  bool utmNorthernHemisphere = true;
+  double utmEasting_m = 0.0;
+  double utmNorthing_m = 0.0;
+  // Centre of the rear axle on the ground: the reference point of kinematic bicycle models
+  // (Autoware, most planners) and of a vehicle's turning circle.
+  std::array<double, 3> rearAxleEnu_m{};
+  geodesy::GeodeticPoint rearAxlePosition{};
+  // Variances of the box length and width estimates, m^2.
+  float lengthVariance_m2 = 0.0F;
+  float widthVariance_m2 = 0.0F;
+  // The vehicle's 3D keypoints (its ASM wireframe) in the world ENU frame, m, in the order of
+  // shape::keypointNames(); keypointCount is kKeypointCount for cars with a shape, 0 otherwise.
+  std::uint8_t keypointCount = 0;
+  std::array<std::array<float, 3>, shape::kKeypointCount> keypointsEnu_m{};
 };
 
 // Health of the drone's perception, published at a configured rate.
