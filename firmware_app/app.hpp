@@ -31,9 +31,9 @@
 // (per episode for the pose), counted in LoopCounters, and the next frame goes on.
 //
 // Time: frame timestamps are the source's (V4L2: CLOCK_MONOTONIC; replay: the recording's
-// clock); DDS times are UTC: utc = frame time + an offset fixed at the first frame (camera:
-// CLOCK_REALTIME - CLOCK_MONOTONIC; replay: the wall-clock time the first frame was captured
-// minus its recorded time, so a replay looks live to subscribers).
+// clock); DDS times are UTC: camera: frame time + (CLOCK_REALTIME - CLOCK_MONOTONIC) fixed at
+// start-up; replay: the wall-clock time each frame was captured, so a replay looks live to
+// subscribers and their latency is the app's capture -> publish time plus transport.
 #pragma once
 
 #include <cstdint>

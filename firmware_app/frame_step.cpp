@@ -59,18 +59,22 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
   const std::int64_t start_ns = clock.now_ns();
   const std::int64_t t = frame.timestamp_ns;
   stats.record(Stage::Queue, start_ns - capture_ns);
-  if (!haveUtcOffset_) {
-    // Camera stamps are CLOCK_MONOTONIC; a replay's are the recording's, mapped so that its
-    // first frame is "now" (see the contract).
-    toUtcNs_ = wiring_.sourceOnMonotonicClock ? wiring_.monotonicToUtc_ns : realtimeNow_ns() - t;
-    haveUtcOffset_ = true;
-  } else if (t <= lastTimestampNs_) {
+  if (haveUtcOffset_ && t <= lastTimestampNs_) {
     ++counters.pipelineErrors;
     logLine("frame %lld skipped: timestamp %lld ns is not after the previous frame's %lld ns",
             static_cast<long long>(frame.frameId), static_cast<long long>(t),
             static_cast<long long>(lastTimestampNs_));
     return {};
   }
+  // The frame's time on the UTC clock (see the contract). Camera stamps are CLOCK_MONOTONIC: one
+  // offset. A replay's are the recording's: each frame is placed at the wall-clock time it was
+  // captured, so that a receiver's latency (reception - measurement time) is this frame's
+  // capture -> publish time plus transport, as with a camera. An offset fixed at the first
+  // frame's processing would not be: a replay faster than the recording, or a first frame that
+  // waited, puts later measurement times ahead of their capture (latencies below zero).
+  toUtcNs_ = wiring_.sourceOnMonotonicClock ? wiring_.monotonicToUtc_ns
+                                            : capture_ns + (realtimeNow_ns() - clock.now_ns()) - t;
+  haveUtcOffset_ = true;
   lastTimestampNs_ = t;
 
   poseInput_->poll(t, poses_);

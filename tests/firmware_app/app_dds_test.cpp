@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -18,6 +19,7 @@
 
 #include "app.hpp"
 #include "app_test_support.hpp"
+#include "loop_log.hpp"
 #include "state_format.hpp"
 
 namespace vp::app {
@@ -160,6 +162,57 @@ TEST(AppDds, SubscriberProcessReceivesEveryPublishedStateAndTheDisposals) {
       "(fields equal), %zu tracks disposed (%llu disposed while running)\n",
       log.states.size(), sentTracks.size(), received, disposedTracks.size(),
       static_cast<unsigned long long>(counters.tracksDisposed));
+}
+
+// Replay: a state's measurement time is its frame's capture time on the UTC clock, so the
+// latency a receiver computes (reception - measurement time) is positive and close to the
+// app's own capture -> publish figure. The replay here runs faster than the recording (not
+// paced, frames dropped while the loop works): with the UTC offset taken once at the first
+// frame, measurement times ran ahead of the wall clock and latencies went below zero.
+class PublishTimes final : public LoopObserver {
+ public:
+  PublishTimes() { latency_ns.reserve(20000); }
+  void onPublished(const messages::VehicleState& state) override {
+    latency_ns.push_back(realtimeNow_ns() - state.measurementTime_ns);
+  }
+  std::vector<std::int64_t> latency_ns;
+};
+
+TEST(AppDds, ReplayLatencyAtTheReceiverIsPositiveAndMatchesTheAppsEndToEnd) {
+  useLoopbackDds();
+  const std::string dir = test::loopSequence();
+  ASSERT_FALSE(dir.empty());
+  config::AppConfig config = test::defaultConfigFor(dir);
+  config.dds.domainId = static_cast<std::uint32_t>(1 + (getpid() * 11 + 5) % 200);
+  config.dds.partition = "latency_test_" + std::to_string(getpid());
+  config.app.statsPeriod_s = 3600.0;
+  config.source.paced = false;  // faster than the recording's 10 Hz
+
+  PublishTimes times;
+  App app;
+  AppSeams seams;
+  auto truth = std::make_unique<test::TruthPerception>();
+  std::string why;
+  ASSERT_TRUE(truth->init(dir, &why)) << why;
+  seams.perception = std::move(truth);
+  seams.observer = &times;
+  RunSettings run;
+  run.quiet = true;
+  run.maxFrames = 300;
+  ASSERT_TRUE(app.init(config, run, std::move(seams), &why)) << why;
+  ASSERT_TRUE(app.run(&why)) << why;
+  ASSERT_GT(times.latency_ns.size(), 20U) << "too few states published";
+
+  std::vector<std::int64_t> sorted = times.latency_ns;
+  std::sort(sorted.begin(), sorted.end());
+  const double median_ms = static_cast<double>(sorted[sorted.size() / 2]) / 1e6;
+  const double e2eMedian_ms =
+      static_cast<double>(app.stats().total(Stage::EndToEnd).median_ns()) / 1e6;
+  std::printf(
+      "latency at publish: min %.2f ms, median %.2f ms; app e2e median %.2f ms (%zu states)\n",
+      static_cast<double>(sorted.front()) / 1e6, median_ms, e2eMedian_ms, sorted.size());
+  EXPECT_GE(sorted.front(), 0) << "a state was published before its frame was captured";
+  EXPECT_NEAR(median_ms, e2eMedian_ms, 5.0);
 }
 
 }  // namespace
