@@ -29,7 +29,7 @@ Contract
   RUNDIR/split.json, RUNDIR/metrics.json (validation at the end), RUNDIR/args.json.
 * ``--resume`` continues from RUNDIR/checkpoint.pt: models, optimisers, step, RNG states and
   the elapsed training time (``--budget-minutes`` is the total over all runs;
-  ``--session-minutes`` ends one run earlier, checkpointed, for machines lent by the hour).
+  ``--session-minutes`` ends one run earlier, checkpointed, so a long run can go in time slices).
   Runs are deterministic for a seed on one device and thread count (data sampling happens in
   the main process from one numpy Generator). ``--workers N`` makes the batches in N worker
   processes instead (for a GPU, which the main process alone cannot feed): each worker draws

@@ -1,4 +1,4 @@
-// evaluation/tracking_measures: the tracking measures of issue 6 on recorded sequences: the
+// evaluation/tracking_measures: the tracking measures of recorded sequences: the
 // CLEAR MOT and identity measures of the confirmed tracks against the ground-truth vehicles,
 // speed and driving-direction errors of moving vehicles, and the vehicle type per track, each
 // beside the same figure of the detector alone where one exists.
