@@ -260,6 +260,26 @@ class EvaluateYolo : public EvaluateCli {
   }
 };
 
+// A vehicle cut by the image's edge is labelled as its visible part; a miss of one is counted
+// apart (fn_cut_by_border), the other misses not.
+TEST_F(EvaluateYolo, MissesOfVehiclesCutByTheImageBorderAreCountedApart) {
+  const cv::Mat image(48, 64, CV_8UC3, cv::Scalar(90, 90, 90));
+  ASSERT_TRUE(cv::imwrite((dir_ / "yolo/images/c_3.png").string(), image));
+  std::ofstream(dir_ / "yolo/labels/c_3.txt") << "0 0.1 0.5 0.2 0.25\n";  // from u = 0
+  std::ofstream(dir_ / "val.txt") << "b_2\nc_3\n";
+  const std::string out = (dir_ / "report").string();
+  const CommandResult result = run("--yolo " + (dir_ / "yolo").string() + " --detections " +
+                                   (dir_ / "yolo_dets.csv").string() + " --val-list " +
+                                   (dir_ / "val.txt").string() + " --out " + out);
+  ASSERT_EQ(result.exitCode, 0) << result.err;
+  const YAML::Node report = YAML::LoadFile(out + "/report.json");
+  EXPECT_EQ(report["measures"]["tp"].as<int>(), 1);
+  EXPECT_EQ(report["measures"]["fn"].as<int>(), 2);  // b_2's second car and c_3's
+  EXPECT_EQ(report["measures"]["fn_cut_by_border"].as<int>(), 1);
+  EXPECT_NE(readText(out + "/report.md").find("false negatives cut by the image border | 1"),
+            std::string::npos);
+}
+
 TEST_F(EvaluateYolo, ValidationListSelectsImages) {
   std::ofstream(dir_ / "val.txt") << "# validation stems\na_1\n";
   const std::string out = (dir_ / "report").string();

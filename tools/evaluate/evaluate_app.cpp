@@ -607,6 +607,11 @@ bool loadYoloImages(const EvaluateOptions& options, LoadedInput* out, std::strin
         // Normalised coordinates run from the image edges; pixel centres are at integers.
         ref.box = {v[0] * pixels.cols - 0.5, v[1] * pixels.rows - 0.5, v[2] * pixels.cols,
                    v[3] * pixels.rows, 0.0};
+        const double tolerance = evaluation::kImageBorderTolerance_px;
+        ref.cutByImageBorder = (v[0] - v[2] / 2) * pixels.cols < tolerance ||
+                               (v[1] - v[3] / 2) * pixels.rows < tolerance ||
+                               (v[0] + v[2] / 2) * pixels.cols > pixels.cols - tolerance ||
+                               (v[1] + v[3] / 2) * pixels.rows > pixels.rows - tolerance;
         image.references.push_back(ref);
       }
       out->images.push_back(std::move(image));

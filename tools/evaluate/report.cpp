@@ -121,6 +121,9 @@ std::vector<Row> measureRows(const ReportContext& context) {
        s.position_px.count},
   };
   if (yolo) {
+    // YOLO labels stop at the image's edge; the misses among vehicles cut by it, apart.
+    rows.push_back({"Detection", "false negatives cut by the image border", "fn_cut_by_border",
+                    static_cast<double>(s.falseNegativesCutByBorder), Unit::Count});
     return rows;
   }
   const std::vector<Row> more{

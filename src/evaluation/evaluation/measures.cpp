@@ -82,6 +82,9 @@ MatchResult Evaluator::addImage(std::span<const ReferenceObject> references,
   truePositives_ += static_cast<int>(match.pairs.size());
   falsePositives_ += static_cast<int>(match.falsePositives.size());
   falseNegatives_ += static_cast<int>(match.falseNegatives.size());
+  for (const int r : match.falseNegatives) {
+    falseNegativesCutByBorder_ += references[static_cast<std::size_t>(r)].cutByImageBorder ? 1 : 0;
+  }
   ignoredPredictions_ += static_cast<int>(match.ignoredPredictions.size());
   for (const auto& [p, r] : match.pairs) {
     const auto pi = static_cast<std::size_t>(p);
@@ -174,6 +177,7 @@ EvaluationSummary Evaluator::summary() const {
   s.truePositives = truePositives_;
   s.falsePositives = falsePositives_;
   s.falseNegatives = falseNegatives_;
+  s.falseNegativesCutByBorder = falseNegativesCutByBorder_;
   s.ignoredPredictions = ignoredPredictions_;
   // evaluate.py's convention: max(1, denominator), so nothing predicted gives 0, not NaN.
   s.precision = static_cast<double>(truePositives_) / std::max(1, truePositives_ + falsePositives_);

@@ -43,10 +43,16 @@ constexpr double kDefaultIouThreshold = 0.5;   // seed 000, sec. 5.1
 constexpr double kFlipThreshold_deg = 90.0;    // |d_theta| above this: front and back swapped
 constexpr int kCumulativeHistogramBins = 181;  // |d_theta| <= 0, 1, ..., 180 deg
 
+// A label box within this distance of the image's edge counts as cut by the border, px.
+constexpr double kImageBorderTolerance_px = 2.0;
+
 struct ReferenceObject {
   geometry::RotatedBox box{};  // image px; axis-aligned references: angle 0, length = w, width = h
   bool axisAligned = false;    // only the axis-aligned box is known (YOLO labels)
   bool ignore = false;         // heavily occluded / truncated: neither TP nor FP when matched
+  // The labelled box reaches the image's edge (within kImageBorderTolerance_px): a vehicle cut
+  // by the border, labelled as its visible part (YOLO labels). Counted apart among the misses.
+  bool cutByImageBorder = false;
   bool directionKnown = true;  // box.angle is the driving direction
   int type = -1;               // static_cast<int>(shape::VehicleType), -1 unknown
   shape::ShapeParams shape{};  // count 0: no shape (large vehicles, real images)
@@ -99,9 +105,10 @@ struct EvaluationSummary {
   int truePositives = 0;
   int falsePositives = 0;
   int falseNegatives = 0;
-  int ignoredPredictions = 0;  // matched to / overlapping an ignored reference
-  double precision = 0.0;      // TP / (TP + FP); 0 when nothing was predicted
-  double recall = 0.0;         // TP / (TP + FN)
+  int falseNegativesCutByBorder = 0;  // of falseNegatives: references with cutByImageBorder
+  int ignoredPredictions = 0;         // matched to / overlapping an ignored reference
+  double precision = 0.0;             // TP / (TP + FP); 0 when nothing was predicted
+  double recall = 0.0;                // TP / (TP + FN)
   double f1 = 0.0;
   double meanMatchedIou = 0.0;  // NaN without pairs
   // pose
@@ -156,6 +163,7 @@ class Evaluator {
   int truePositives_ = 0;
   int falsePositives_ = 0;
   int falseNegatives_ = 0;
+  int falseNegativesCutByBorder_ = 0;
   int ignoredPredictions_ = 0;
   int directionUnknown_ = 0;
   std::vector<double> iou_;
