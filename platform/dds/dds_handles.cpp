@@ -139,7 +139,8 @@ DdsResult Writer::open(const Participant& participant, const Topic& topic,
 }
 
 DdsResult Reader::open(const Participant& participant, const Topic& topic,
-                       const config::QosProfile& profile, const std::string& partition) {
+                       const config::QosProfile& profile, const std::string& partition,
+                       const dds_listener_t* listener) {
   Qos subscriberQos;
   const char* partitions[] = {partition.c_str()};
   if (!partition.empty()) {
@@ -153,7 +154,7 @@ DdsResult Reader::open(const Participant& participant, const Topic& topic,
   }
   Qos readerQos;
   applyProfile(profile, readerQos);
-  return reader_.adopt(dds_create_reader(subscriber_.get(), topic.get(), readerQos.get(), nullptr),
+  return reader_.adopt(dds_create_reader(subscriber_.get(), topic.get(), readerQos.get(), listener),
                        "dds_create_reader");
 }
 

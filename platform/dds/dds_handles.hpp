@@ -95,8 +95,11 @@ class Writer {
 
 class Reader {
  public:
+  // `listener` (optional, copied by Cyclone) is installed when the reader is created, so that
+  // no status change between creation and a later dds_set_listener is missed.
   DdsResult open(const Participant& participant, const Topic& topic,
-                 const config::QosProfile& profile, const std::string& partition);
+                 const config::QosProfile& profile, const std::string& partition,
+                 const dds_listener_t* listener = nullptr);
   dds_entity_t get() const { return reader_.get(); }
   bool isOpen() const { return reader_.isOpen(); }
 

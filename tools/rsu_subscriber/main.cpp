@@ -2,8 +2,11 @@
 // states, drone status and occupancy grid of the perception drones, prints every state (and
 // every disposed track) as a CSV row or a JSON line, measures the latency from the frame
 // capture time (DDS source timestamp) to reception, and periodically draws a bird's-eye PNG.
+// It also reports the vehicle-state reader's QoS events: a track whose deadline passed without
+// a state, and a drone whose writer lost its liveliness or left (qos_events.hpp).
 #include <dds/dds.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -22,6 +25,7 @@
 #include "config/config.hpp"
 #include "platform/dds/conversion.hpp"
 #include "platform/dds/dds_handles.hpp"
+#include "qos_events.hpp"
 #include "state_format.hpp"
 
 namespace {
@@ -76,7 +80,12 @@ Usage: vp_rsu_subscriber [options]
 
 Each event is one row: event (state|disposed), drone_id, track_id, measurement_time_ns,
 latency_ms (reception - capture time; needs synchronised clocks), then every field of the
-state with its unit in the column name. The network is configured as usual for Cyclone DDS
+state with its unit in the column name. QoS events are rows too, with only the first five
+columns: deadline_missed (a track got no state within dds.qos.vehicle_state.deadline_s; once
+per silence of the track), writer_alive and writer_lost (a drone's writer matched or regained
+its liveliness / its liveliness lease expired or it left); measurement_time_ns is then the
+newest state of that track or drone and latency_ms the time since it. They are also reported
+as a line on stderr. The network is configured as usual for Cyclone DDS
 (CYCLONEDDS_URI). Exit status: 0 on success, 2 on a usage error, 1 on a DDS error.
 )";
 }
@@ -199,6 +208,9 @@ int main(int argc, char** argv) {
   }
   std::ostream& out = options.outPath.empty() ? std::cout : file;
 
+  // Declared before the participant: the reader's listener calls into it until the reader is
+  // deleted with the participant.
+  vp::rsu::QosEventMonitor qosEvents;
   dds::Participant participant;
   dds::Topic stateTopic;
   dds::Topic statusTopic;
@@ -224,7 +236,15 @@ int main(int argc, char** argv) {
       !r.ok()) {
     return fail(r, "occupancy topic");
   }
-  if (auto r = stateReader.open(participant, stateTopic, config.vehicleState, config.partition);
+  const dds_entity_t waitset = dds_create_waitset(participant.get());
+  if (waitset < 0) {
+    return fail(dds::DdsResult::failure("dds_create_waitset", waitset), "waitset");
+  }
+  if (auto r = qosEvents.open(participant.get(), waitset); !r.ok()) {
+    return fail(r, "QoS event listener");
+  }
+  if (auto r = stateReader.open(participant, stateTopic, config.vehicleState, config.partition,
+                                qosEvents.listener());
       !r.ok()) {
     return fail(r, "vehicle state reader");
   }
@@ -237,10 +257,6 @@ int main(int argc, char** argv) {
     return fail(r, "occupancy reader");
   }
 
-  const dds_entity_t waitset = dds_create_waitset(participant.get());
-  if (waitset < 0) {
-    return fail(dds::DdsResult::failure("dds_create_waitset", waitset), "waitset");
-  }
   for (const dds_entity_t reader : {stateReader.get(), statusReader.get(), gridReader.get()}) {
     const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
     if (condition < 0) {
@@ -270,6 +286,11 @@ int main(int argc, char** argv) {
   msg::OccupancyGrid lastGrid;
   std::set<std::pair<std::uint32_t, std::uint32_t>> disposed;
   long long events = 0;
+  const std::size_t csvColumns =
+      static_cast<std::size_t>(
+          std::count(vp::rsu::csvHeader().begin(), vp::rsu::csvHeader().end(), ',')) +
+      1;
+  std::vector<std::string> qosErrors;
   constexpr int kBatch = 64;
   void* samples[kBatch];
   dds_sample_info_t infos[kBatch];
@@ -305,6 +326,7 @@ int main(int argc, char** argv) {
       const double ms = latency_ms(infos[k]);
       msg::VehicleState state = dds::fromSample(sample);  // key fields are valid for disposals
       const auto key = std::make_pair(state.droneId, state.trackId);
+      qosEvents.noteSample(infos[k], state.droneId, state.trackId, state.measurementTime_ns);
       if (infos[k].valid_data) {
         latency.add(ms);
         tracks[key] = state;
@@ -330,6 +352,22 @@ int main(int argc, char** argv) {
       out.flush();
       dds_return_loan(stateReader.get(), samples, n);
     }
+    // QoS events queued by the listener (after the states: an instance's newest state is known).
+    const std::vector<vp::rsu::QosEventRow> qosRows =
+        qosEvents.drain(stateReader.get(), &qosErrors);
+    for (const vp::rsu::QosEventRow& row : qosRows) {
+      std::cerr << "vp_rsu_subscriber: " << vp::rsu::describe(row) << "\n";
+      out << (options.json ? vp::rsu::formatJson(row) : vp::rsu::formatCsv(row, csvColumns))
+          << "\n";
+      ++events;
+    }
+    if (!qosRows.empty()) {
+      out.flush();
+    }
+    for (const std::string& error : qosErrors) {
+      std::cerr << "vp_rsu_subscriber: QoS events: " << error << "\n";
+    }
+    qosErrors.clear();
     // Drone status: reported on stderr, it is not part of the event stream.
     samples[0] = nullptr;
     n = dds_take(statusReader.get(), samples, infos, kBatch, kBatch);

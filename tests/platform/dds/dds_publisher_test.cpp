@@ -505,6 +505,9 @@ TEST(RsuSubscriberProcess, ReceivesStatesAndDisposals) {
     for (std::string column; std::getline(split, column, ',');) {
       columns.push_back(column);
     }
+    if (!columns.empty() && columns[0] != "state" && columns[0] != "disposed") {
+      continue;  // the reader's QoS events (writer_alive, writer_lost, deadline_missed)
+    }
     ASSERT_GT(columns.size(), 5U) << line;
     const auto trackId = static_cast<std::uint32_t>(std::stoul(columns[2]));
     ASSERT_EQ(sent.count(trackId), 1U) << line;
