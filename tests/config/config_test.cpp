@@ -1365,9 +1365,8 @@ TEST(ConfigDds, Ros2NativeAndAutowareKeys) {
   EXPECT_EQ(read.dds.autoware.topic, "/perception/objects");
   EXPECT_EQ(read.dds.autoware.frameId, "world");
   EXPECT_DOUBLE_EQ(read.dds.autoware.stationarySpeed_mps, 0.2);
-  EXPECT_EQ(parseDdsSection("dds:\n  ros2: {namespace: /}\n", "s.yaml", "/").dds.ros2
-                .topicNamespace,
-            "");
+  EXPECT_EQ(
+      parseDdsSection("dds:\n  ros2: {namespace: /}\n", "s.yaml", "/").dds.ros2.topicNamespace, "");
   const std::pair<const char*, const char*> bad[] = {
       {"dds:\n  ros2: {namespace: vp//a}\n",
        "site.yaml: dds.ros2.namespace: not a ROS namespace (letters, digits, _ in tokens joined "

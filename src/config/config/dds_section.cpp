@@ -175,8 +175,8 @@ Ros2Config readRos2(MapReader section) {
     ns.erase(0, 1);  // "/vp" and "vp" name the same namespace
   }
   if (!ns.empty() && !isRosName(ns)) {
-    section.fail("namespace", "not a ROS namespace (letters, digits, _ in tokens joined by /): '" +
-                                  ns + "'");
+    section.fail("namespace",
+                 "not a ROS namespace (letters, digits, _ in tokens joined by /): '" + ns + "'");
   }
   ros2.topicNamespace = ns;
   ros2.frameId = section.text("frame_id", defaults.frameId);
@@ -201,8 +201,8 @@ AutowareConfig readAutoware(MapReader section) {
   if (autoware.frameId.empty()) {
     section.fail("frame_id", "must not be empty");
   }
-  autoware.stationarySpeed_mps = section.number(
-      "stationary_speed_mps", kStationarySpeedRange_mps, defaults.stationarySpeed_mps);
+  autoware.stationarySpeed_mps = section.number("stationary_speed_mps", kStationarySpeedRange_mps,
+                                                defaults.stationarySpeed_mps);
   section.warnUnknownKeys();
   return autoware;
 }
