@@ -1,5 +1,7 @@
 #include "dds_link.hpp"
 
+#include "loop_log.hpp"
+
 namespace vp::app {
 
 namespace {
@@ -16,10 +18,81 @@ bool DdsWriters::open(const config::DdsConfig& config, std::string* why) {
     }
     return result.ok();
   };
-  return check(participant_.open(config), "participant") &&
-         check(states_.open(participant_, config), "vehicle states") &&
-         check(status_.open(participant_, config), "drone status") &&
-         check(occupancy_.open(participant_, config), "occupancy");
+  native_ = config.native.enabled;
+  ros2_ = config.ros2.enabled;
+  rosStatesOpen_ = config.ros2.enabled || config.autoware.enabled;
+  if (!check(participant_.open(config), "participant")) {
+    return false;
+  }
+  if (native_ && !(check(states_.open(participant_, config), "vehicle states") &&
+                   check(status_.open(participant_, config), "drone status") &&
+                   check(occupancy_.open(participant_, config), "occupancy"))) {
+    return false;
+  }
+  if (rosStatesOpen_ && !check(rosStates_.open(participant_, config), "ROS 2 vehicle states")) {
+    return false;
+  }
+  return !ros2_ || (check(rosStatus_.open(participant_, config), "ROS 2 drone status") &&
+                    check(rosOccupancy_.open(participant_, config), "ROS 2 occupancy"));
+}
+
+platform::dds::PublishResult DdsWriters::publish(const messages::VehicleState& state) {
+  platform::dds::PublishResult result;
+  if (native_) {
+    result = states_.publish(state);
+  }
+  if (rosStatesOpen_) {
+    const platform::dds::PublishResult ros = rosStates_.add(state);
+    if (result.ok()) {
+      result = ros;
+    }
+  }
+  return result;
+}
+
+platform::dds::FrameSummary DdsWriters::endFrame(std::int64_t time_ns) {
+  platform::dds::FrameSummary summary;
+  if (native_) {
+    summary = states_.endFrame(time_ns);
+  }
+  if (rosStatesOpen_) {
+    const platform::dds::Ros2FrameSummary ros = rosStates_.endFrame(time_ns);
+    summary.errors += ros.errors;
+    if (ros.errors > 0 && !rosErrorLogged_) {
+      rosErrorLogged_ = true;
+      logLine("writing the ROS 2 vehicle states failed: %s (further failures are only counted)",
+              platform::dds::describe(ros.firstError).c_str());
+    }
+  }
+  return summary;
+}
+
+platform::dds::DdsResult DdsWriters::writeStatus(const messages::DroneStatus& status) {
+  platform::dds::DdsResult result;
+  if (native_) {
+    result = status_.write(status);
+  }
+  if (ros2_) {
+    const platform::dds::DdsResult ros = rosStatus_.write(status);
+    if (result.ok()) {
+      result = ros;
+    }
+  }
+  return result;
+}
+
+platform::dds::DdsResult DdsWriters::writeOccupancy(const messages::OccupancyGrid& grid) {
+  platform::dds::DdsResult result;
+  if (native_) {
+    result = occupancy_.write(grid);
+  }
+  if (ros2_) {
+    const platform::dds::DdsResult ros = rosOccupancy_.write(grid);
+    if (result.ok()) {
+      result = ros;
+    }
+  }
+  return result;
 }
 
 bool DdsPoseInput::open(const config::TelemetryConfig& config, std::string* why) {

@@ -1,6 +1,7 @@
-// firmware_app/dds_link: the app's DDS side: the perception participant with its three writers
-// (vehicle states, drone status, occupancy grid) and, when the pose comes from the flight
-// stack's ROS 2 bridge, the telemetry subscriber as a PoseInput.
+// firmware_app/dds_link: the app's DDS side: the perception participant with its writers
+// (vehicle states, drone status, occupancy grid) as native keyed topics (dds.native) and as
+// ROS 2 topics (dds.ros2, plus Autoware's TrackedObjects with dds.autoware), and, when the pose
+// comes from the flight stack's ROS 2 bridge, the telemetry subscriber as a PoseInput.
 //
 // Contract: open() creates every entity (start-up; fails with Cyclone's message naming the
 // call). The writers are platform/dds's: preallocated samples, errors as values; Cyclone's own
@@ -20,23 +21,38 @@
 #include "loop_inputs.hpp"
 #include "mavlink/pose_assembler.hpp"
 #include "platform/dds/perception_publisher.hpp"
+#include "platform/dds/ros2_publisher.hpp"
 #include "platform/dds/telemetry_subscriber.hpp"
 
 namespace vp::app {
 
+// Every enabled output family gets each state, status and grid. The frame protocol is the
+// publishers': publish() every state of the frame, then endFrame() (native: disposes the
+// tracks that were not published; ROS 2: writes the frame's arrays). A failure is returned
+// (the first one of the call); the first failure of the ROS frame writes is also logged.
 class DdsWriters {
  public:
   bool open(const config::DdsConfig& config, std::string* why);
-  platform::dds::VehicleStatePublisher& states() { return states_; }
-  const platform::dds::VehicleStatePublisher& states() const { return states_; }
-  platform::dds::DroneStatusWriter& status() { return status_; }
-  platform::dds::OccupancyWriter& occupancy() { return occupancy_; }
+  platform::dds::PublishResult publish(const messages::VehicleState& state);
+  platform::dds::FrameSummary endFrame(std::int64_t time_ns);
+  platform::dds::DdsResult writeStatus(const messages::DroneStatus& status);
+  platform::dds::DdsResult writeOccupancy(const messages::OccupancyGrid& grid);
+
+  const platform::dds::VehicleStatePublisher& states() const { return states_; }  // native
+  const platform::dds::Ros2StatePublisher& rosStates() const { return rosStates_; }
 
  private:
+  bool native_ = false;
+  bool ros2_ = false;
+  bool rosStatesOpen_ = false;  // ros2 or autoware
+  bool rosErrorLogged_ = false;
   platform::dds::Participant participant_;
   platform::dds::VehicleStatePublisher states_;
   platform::dds::DroneStatusWriter status_;
   platform::dds::OccupancyWriter occupancy_;
+  platform::dds::Ros2StatePublisher rosStates_;
+  platform::dds::Ros2DroneStatusWriter rosStatus_;
+  platform::dds::Ros2OccupancyWriter rosOccupancy_;
 };
 
 class DdsPoseInput final : public PoseInput {

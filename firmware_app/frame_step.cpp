@@ -210,7 +210,7 @@ std::span<const messages::VehicleState> FrameStep::publish(std::int64_t timestam
   const std::span<const messages::VehicleState> states(states_.data(), count);
   if (DdsWriters* dds = wiring_.dds) {
     for (const messages::VehicleState& state : states) {
-      const platform::dds::PublishResult result = dds->states().publish(state);
+      const platform::dds::PublishResult result = dds->publish(state);
       if (!result.ok()) {
         if (counters.publishErrors++ == 0) {
           logLine("publishing track %u failed: %s (further failures are only counted)",
@@ -223,7 +223,7 @@ std::span<const messages::VehicleState> FrameStep::publish(std::int64_t timestam
         wiring_.observer->onPublished(state);
       }
     }
-    const platform::dds::FrameSummary summary = dds->states().endFrame(timestamp_ns + toUtcNs_);
+    const platform::dds::FrameSummary summary = dds->endFrame(timestamp_ns + toUtcNs_);
     counters.tracksDisposed += summary.disposed;
     counters.publishErrors += summary.errors;
   }
@@ -236,7 +236,7 @@ void FrameStep::finish() {
   LoopCounters& counters = *wiring_.counters;
   if (DdsWriters* dds = wiring_.dds) {
     // A frame without tracks: endFrame() disposes every published instance.
-    const platform::dds::FrameSummary summary = dds->states().endFrame(realtimeNow_ns());
+    const platform::dds::FrameSummary summary = dds->endFrame(realtimeNow_ns());
     counters.tracksDisposed += summary.disposed;
     counters.publishErrors += summary.errors;
   }

@@ -72,7 +72,7 @@ void PeriodicReports::publishStatus(std::int64_t nowUtc_ns, const FrameOutcome& 
   status.publishErrors = c.publishErrors;
   status.activeTracks = static_cast<std::uint32_t>(frame.states.size());
   status.setModelId(wiring_.modelId);
-  if (!wiring_.writers->status().write(status).ok()) {
+  if (!wiring_.writers->writeStatus(status).ok()) {
     ++wiring_.counters->publishErrors;
   }
   framesAtStatus_ = c.framesProcessed;
@@ -87,7 +87,7 @@ void PeriodicReports::publishOccupancy(const FrameOutcome& frame) {
   grid_.originNorth_m = spec.originNorth_m;
   grid_.resolution_m = static_cast<float>(spec.resolution_m);
   messages::rasterizeOccupancy(frame.footprint, frame.states, grid_);
-  if (!wiring_.writers->occupancy().write(grid_).ok()) {
+  if (!wiring_.writers->writeOccupancy(grid_).ok()) {
     ++wiring_.counters->publishErrors;
   }
 }

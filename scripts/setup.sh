@@ -9,7 +9,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  build-essential cmake ninja-build pkg-config git
+  build-essential cmake ninja-build pkg-config git python3
   libeigen3-dev libopencv-dev libyaml-cpp-dev libgeographiclib-dev
   libtiff-dev libgeotiff-dev
   libxnnpack-dev libpthreadpool-dev libonnx-dev libprotobuf-dev

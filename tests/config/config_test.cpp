@@ -1349,6 +1349,49 @@ TEST(ConfigDds, SectionAloneIgnoresTheOtherSections) {
   }
 }
 
+TEST(ConfigDds, Ros2NativeAndAutowareKeys) {
+  const DdsSection read = parseDdsSection(
+      "dds:\n  native: {enabled: false}\n"
+      "  ros2: {enabled: false, namespace: /drone_7/vp, frame_id: site_enu}\n"
+      "  autoware: {enabled: true, topic: /perception/objects, frame_id: world,\n"
+      "             stationary_speed_mps: 0.2}\n",
+      "site.yaml", "/cfg");
+  EXPECT_TRUE(read.warnings.empty());
+  EXPECT_FALSE(read.dds.native.enabled);
+  EXPECT_FALSE(read.dds.ros2.enabled);
+  EXPECT_EQ(read.dds.ros2.topicNamespace, "drone_7/vp");  // the leading '/' is dropped
+  EXPECT_EQ(read.dds.ros2.frameId, "site_enu");
+  EXPECT_TRUE(read.dds.autoware.enabled);
+  EXPECT_EQ(read.dds.autoware.topic, "/perception/objects");
+  EXPECT_EQ(read.dds.autoware.frameId, "world");
+  EXPECT_DOUBLE_EQ(read.dds.autoware.stationarySpeed_mps, 0.2);
+  EXPECT_EQ(
+      parseDdsSection("dds:\n  ros2: {namespace: /}\n", "s.yaml", "/").dds.ros2.topicNamespace, "");
+  const std::pair<const char*, const char*> bad[] = {
+      {"dds:\n  ros2: {namespace: vp//a}\n",
+       "site.yaml: dds.ros2.namespace: not a ROS namespace (letters, digits, _ in tokens joined "
+       "by /): 'vp//a'"},
+      {"dds:\n  ros2: {namespace: 7up}\n", "site.yaml: dds.ros2.namespace: not a ROS namespace"},
+      {"dds:\n  ros2: {frame_id: ''}\n", "site.yaml: dds.ros2.frame_id: must not be empty"},
+      {"dds:\n  autoware: {topic: perception/objects}\n",
+       "site.yaml: dds.autoware.topic: not an absolute ROS topic name"},
+      {"dds:\n  autoware: {topic: /a-b}\n",
+       "site.yaml: dds.autoware.topic: not an absolute ROS topic name"},
+      {"dds:\n  autoware: {stationary_speed_mps: -1}\n",
+       "site.yaml: dds.autoware.stationary_speed_mps: must be in [0, 10], got -1"},
+      {"dds:\n  native: {enabled: maybe}\n", "site.yaml: dds.native.enabled: expected true or"},
+  };
+  for (const auto& [yaml, message] : bad) {
+    SCOPED_TRACE(yaml);
+    try {
+      parseDdsSection(yaml, "site.yaml", "/cfg");
+      ADD_FAILURE() << "no error";
+    } catch (const ConfigError& error) {
+      EXPECT_EQ(std::string(error.what()).rfind(message, 0), 0U) << error.what();
+    }
+  }
+}
+
 TEST(ConfigLoop, FullSectionsReadEveryKey) {
   const AppConfig config = parse(kFullConfig);
   EXPECT_TRUE(config.warnings.empty());

@@ -172,6 +172,19 @@ TEST(DefaultYaml, TrackingIsTheTrackersDefaults) {
   EXPECT_EQ(noise.initialSteering_rad, noiseCode.initialSteering_rad);
 }
 
+TEST(DefaultYaml, DdsOutputsAreTheWritersDefaults) {
+  const AppConfig config = shippedDefaults();
+  const DdsConfig code;
+  EXPECT_EQ(config.dds.native.enabled, code.native.enabled);
+  EXPECT_EQ(config.dds.ros2.enabled, code.ros2.enabled);
+  EXPECT_EQ(config.dds.ros2.topicNamespace, code.ros2.topicNamespace);
+  EXPECT_EQ(config.dds.ros2.frameId, code.ros2.frameId);
+  EXPECT_EQ(config.dds.autoware.enabled, code.autoware.enabled);
+  EXPECT_EQ(config.dds.autoware.topic, code.autoware.topic);
+  EXPECT_EQ(config.dds.autoware.frameId, code.autoware.frameId);
+  EXPECT_EQ(config.dds.autoware.stationarySpeed_mps, code.autoware.stationarySpeed_mps);
+}
+
 // Every key of the file is one the loader reads (else it would keep a default the file only
 // pretends to set).
 TEST(DefaultYaml, EveryKeyIsRead) {

@@ -74,6 +74,31 @@ struct TelemetryConfig {
   std::int32_t historyDepth = 8;  // KEEP_LAST depth of each telemetry reader
 };
 
+// The native topics (vp_perception.idl, keyed per track, in `partition`): what the roadside
+// units read, with a DDS instance per track (disposed when the track is deleted).
+struct NativeTopicsConfig {
+  bool enabled = true;
+};
+
+// The same outputs as ROS 2 topics (docs/dds.md, "ROS 2 and Autoware"): DDS topics
+// rt/<namespace>/vehicle_states (vp_msgs/msg/VehicleStateArray, one per frame),
+// rt/<namespace>/drone_status (vp_msgs/msg/DroneStatus), rt/<namespace>/occupancy
+// (nav_msgs/msg/OccupancyGrid), in the default partition, with the QoS profiles above.
+struct Ros2Config {
+  bool enabled = true;
+  std::string topicNamespace = "vp";  // ROS namespace of the topics, without leading '/'
+  std::string frameId = "map";        // header.frame_id: the world ENU frame at the origin
+};
+
+// Autoware's tracked objects (autoware_perception_msgs/msg/TrackedObjects, one per frame):
+// Autoware's map frame must be our world ENU frame, i.e. its map origin the configured origin.
+struct AutowareConfig {
+  bool enabled = false;
+  std::string topic = "/perception/object_recognition/tracking/objects";  // absolute ROS name
+  std::string frameId = "map";
+  double stationarySpeed_mps = 0.5;  // |speed| below it: is_stationary
+};
+
 struct DdsConfig {
   bool enabled = true;
   std::uint32_t domainId = 0;
@@ -88,6 +113,9 @@ struct DdsConfig {
   OccupancyGridSpec grid{};
   SecurityConfig security{};
   TelemetryConfig telemetry{};
+  NativeTopicsConfig native{};
+  Ros2Config ros2{};
+  AutowareConfig autoware{};
 
   static QosProfile defaultVehicleStateQos();
   static QosProfile defaultDroneStatusQos();

@@ -139,6 +139,74 @@ TelemetryConfig readTelemetry(MapReader section) {
   return telemetry;
 }
 
+const Range kStationarySpeedRange_mps = Range::closed(0.0, 10.0);
+
+// A ROS name's tokens: letters, digits and underscores, not starting with a digit, joined by
+// single '/' (ROS 2 "Topic and Service name mapping to DDS").
+bool isRosName(std::string_view name) {
+  if (name.empty() || name.front() == '/' || name.back() == '/') {
+    return false;
+  }
+  bool tokenStart = true;
+  for (const char c : name) {
+    if (c == '/') {
+      if (tokenStart) {
+        return false;  // "//"
+      }
+      tokenStart = true;
+      continue;
+    }
+    const bool digit = c >= '0' && c <= '9';
+    const bool letter = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
+    if (!(digit || letter) || (tokenStart && digit)) {
+      return false;
+    }
+    tokenStart = false;
+  }
+  return true;
+}
+
+Ros2Config readRos2(MapReader section) {
+  const Ros2Config defaults;
+  Ros2Config ros2;
+  ros2.enabled = section.boolean("enabled", defaults.enabled);
+  std::string ns = section.text("namespace", defaults.topicNamespace);
+  if (!ns.empty() && ns.front() == '/') {
+    ns.erase(0, 1);  // "/vp" and "vp" name the same namespace
+  }
+  if (!ns.empty() && !isRosName(ns)) {
+    section.fail("namespace",
+                 "not a ROS namespace (letters, digits, _ in tokens joined by /): '" + ns + "'");
+  }
+  ros2.topicNamespace = ns;
+  ros2.frameId = section.text("frame_id", defaults.frameId);
+  if (ros2.frameId.empty()) {
+    section.fail("frame_id", "must not be empty");
+  }
+  section.warnUnknownKeys();
+  return ros2;
+}
+
+AutowareConfig readAutoware(MapReader section) {
+  const AutowareConfig defaults;
+  AutowareConfig autoware;
+  autoware.enabled = section.boolean("enabled", defaults.enabled);
+  autoware.topic = section.text("topic", defaults.topic);
+  if (autoware.topic.size() < 2 || autoware.topic.front() != '/' ||
+      !isRosName(std::string_view(autoware.topic).substr(1))) {
+    section.fail("topic", "not an absolute ROS topic name (/a/b, letters, digits, _): '" +
+                              autoware.topic + "'");
+  }
+  autoware.frameId = section.text("frame_id", defaults.frameId);
+  if (autoware.frameId.empty()) {
+    section.fail("frame_id", "must not be empty");
+  }
+  autoware.stationarySpeed_mps = section.number("stationary_speed_mps", kStationarySpeedRange_mps,
+                                                defaults.stationarySpeed_mps);
+  section.warnUnknownKeys();
+  return autoware;
+}
+
 }  // namespace
 
 DdsConfig readDds(MapReader section, const std::string& baseDir) {
@@ -173,6 +241,13 @@ DdsConfig readDds(MapReader section, const std::string& baseDir) {
   }
   dds.security = readSecurity(section.section("security"), baseDir);
   dds.telemetry = readTelemetry(section.section("telemetry"));
+  {
+    MapReader native = section.section("native");
+    dds.native.enabled = native.boolean("enabled", defaults.native.enabled);
+    native.warnUnknownKeys();
+  }
+  dds.ros2 = readRos2(section.section("ros2"));
+  dds.autoware = readAutoware(section.section("autoware"));
   section.warnUnknownKeys();
   return dds;
 }
