@@ -367,6 +367,49 @@ TEST(TrackManager, TrackKeepsItsBirthTimeFusedScoreAndPoseCovariance) {
   EXPECT_NE(why.find("scoreMemory"), std::string::npos) << why;
 }
 
+// Length and width variances: the weighted spread of the detected sizes about the fused size
+// (equal scores: the population variance of the detections), 0 after one detection, and the
+// same spread once the weight cap forgets old frames.
+TEST(TrackManager, SizeVariancesAreTheSpreadOfTheDetectedSizes) {
+  const TrackerConfig config = smallConfig();
+  TrackManager m;
+  ASSERT_TRUE(m.init(config));
+  const double lengths[] = {4.3, 4.9, 4.5, 4.4, 4.6, 4.1, 4.7, 4.5};
+  std::int64_t t = kFrame_ns;
+  double sum = 0.0;
+  double sumSq = 0.0;
+  int n = 0;
+  for (const double length : lengths) {
+    WorldDetection d = car(0.0, 0.0, 0.0, t);
+    d.length_m = length;
+    ASSERT_TRUE(m.step(t, std::vector{d}).hasValue());
+    ASSERT_EQ(m.tracks().size(), 1u);
+    sum += length;
+    sumSq += length * length;
+    ++n;
+    const double mean = sum / n;
+    const TrackState& s = m.tracks()[0];
+    EXPECT_NEAR(s.length_m, mean, 1e-9);
+    EXPECT_NEAR(s.lengthVariance_m2, sumSq / n - mean * mean, 1e-9) << n;
+    EXPECT_NEAR(s.widthVariance_m2, 0.0, 1e-12);  // every width 1.8
+    t += kFrame_ns;
+  }
+  EXPECT_GT(m.tracks()[0].lengthVariance_m2, 0.0);
+
+  // Long after the weight cap (shapeMaxWeight) started forgetting: lengths alternating 4.3 and
+  // 4.7 keep a spread near 0.04 m^2 (a little less: the weights favour recent frames).
+  for (int k = 0; k < 200; ++k) {
+    WorldDetection d = car(0.0, 0.0, 0.0, t);
+    d.length_m = k % 2 == 0 ? 4.3 : 4.7;
+    ASSERT_TRUE(m.step(t, std::vector{d}).hasValue());
+    t += kFrame_ns;
+  }
+  const TrackState& s = m.tracks()[0];
+  EXPECT_NEAR(s.length_m, 4.5, 0.01);
+  EXPECT_NEAR(s.lengthVariance_m2, 0.04, 0.004);
+  EXPECT_GT(config.shapeMaxWeight, 0.0);
+}
+
 TEST(TrackManager, ParkedCarReacquiredAfterLongOcclusionKeepsId) {
   TrackManager m;
   ASSERT_TRUE(m.init(smallConfig()));
