@@ -11,12 +11,13 @@
 // the track's fused detector score. UTM is that of the reference point (geodesy::tryUtm: the
 // standard zone, Norway/Svalbard exceptions applied; zone 0 and easting/northing 0 outside
 // UTM's band, latitude [-80, 84)). The rear axle and the keypoints come from the fused type and
-// shape placed on the track's footprint (shape::placeOnGround: the shape scaled in plan to the
-// fused length and width, every point on the DTM, or at the centre's height where the DTM has
-// none): for a car with an ASM, the road point under the middle of the rear wheel centres and
-// the 36 keypoints in world ENU (keypointCount 36); for a large vehicle or without an ASM,
-// shape::kRearAxleBehindCentrePerLength (0.28) of the length behind the centre and no
-// keypoints (count 0); a track without a positive size has its rear axle at the reference
+// shape placed at the track's centre and heading (shape::placeOnGround; every point on the DTM,
+// or at the centre's height where the DTM has none): for a car with an ASM, the shape at its own
+// size (not scaled to the fused box: M(gamma) measures a car's length better than the box),
+// its 36 keypoints in world ENU (keypointCount 36) and the road point under the middle of its
+// rear wheel centres; for a large vehicle or without an ASM, no keypoints (count 0) and the rear
+// axle shape::kRearAxleBehindCentrePerLength (0.28) of the fused length behind the centre; a
+// track without a positive size has its rear axle at the reference
 // point. Pure, no allocation.
 #pragma once
 
