@@ -27,6 +27,7 @@
 #include "app.hpp"
 #include "app_test_support.hpp"
 #include "geodesy/geodesy.hpp"
+#include "output_files/trajectory_file.hpp"
 #include "sequence/recorded_sequence.hpp"
 
 namespace vp::app {
@@ -122,6 +123,7 @@ TEST(VehicleStateTruth, UtmRearAxleAndKeypointsAgreeWithTheSimulatorsTruth) {
   config.dds.partition = "truth_test_" + std::to_string(getpid());
   config.source.paced = false;
   config.app.statsPeriod_s = 3600.0;
+  config.app.trajectoryCsv = test::scratchDir("vehicle_state_truth") + "/tracks.csv";
   RunSettings run;
   run.everyFrame = true;
   run.quiet = true;
@@ -136,6 +138,25 @@ TEST(VehicleStateTruth, UtmRearAxleAndKeypointsAgreeWithTheSimulatorsTruth) {
     EXPECT_EQ(app.counters().publishErrors, 0U);
   }
   ASSERT_EQ(log.frames, reader.frames().size());
+
+  // The trajectory file carries the published UTM and rear axle: one row per published state,
+  // the same values at the file's precision (mm, 1e-8 deg).
+  output_files::TrajectoryFile file;
+  ASSERT_TRUE(output_files::readTrajectoryFile(config.app.trajectoryCsv, &file, &why)) << why;
+  ASSERT_EQ(file.rows.size(), log.states.size());
+  for (std::size_t i = 0; i < file.rows.size(); ++i) {
+    const tracking::TrajectoryPlace& place = file.rows[i].place;
+    const messages::VehicleState& s = log.states[i].state;
+    EXPECT_EQ(file.rows[i].trackId, s.trackId);
+    EXPECT_EQ(place.utmZone, s.utmZone);
+    EXPECT_NEAR(place.utmEasting_m, s.utmEasting_m, 0.0005 + 1e-9);
+    EXPECT_NEAR(place.utmNorthing_m, s.utmNorthing_m, 0.0005 + 1e-9);
+    ASSERT_TRUE(place.hasRearAxle);
+    EXPECT_NEAR(place.rearAxle.latitude_deg, s.rearAxlePosition.latitude_deg, 5e-9 + 1e-12);
+    EXPECT_NEAR(place.rearAxle.longitude_deg, s.rearAxlePosition.longitude_deg, 5e-9 + 1e-12);
+    EXPECT_NEAR(file.rows[i].lengthVariance_m2, s.lengthVariance_m2,
+                5e-7 + 1e-6 * static_cast<double>(s.lengthVariance_m2));
+  }
 
   const auto& wheels = shape::wheelCentreKeypoints();
   const auto& evaluation = shape::evaluationKeypoints();

@@ -595,6 +595,23 @@ TEST(TrajectoryCsv, HeaderAndRowCarrySeedColumnsFirst) {
   trajectoryCsvHeader(header, 3);
   auto commas = [](const char* text) { return std::count(text, text + std::strlen(text), ','); };
   EXPECT_EQ(commas(line.data()), commas(header.data()));
+  // The type's name, the variances, UTM and the rear axle's WGS84 after the wheelbase.
+  s.lengthVariance_m2 = 0.0625;
+  s.widthVariance_m2 = 0.01;
+  TrajectoryPlace place;
+  place.utmZone = 32;
+  place.utmNorth = true;
+  place.utmEasting_m = 461344.25;
+  place.utmNorthing_m = 5216914.5;
+  place.hasRearAxle = true;
+  place.rearAxle = {47.09999, 8.49998, 419.875};
+  const int m = trajectoryCsvRow(line, 17, s, &p, 3, &place);
+  ASSERT_GT(m, 0);
+  const std::string placed(line.data(), static_cast<std::size_t>(m));
+  EXPECT_NE(placed.find(",suv,0.062500,0.010000,32,N,461344.250,5216914.500,47.09999000,"
+                        "8.49998000,419.875,"),
+            std::string::npos)
+      << placed;
   std::array<char, 16> tiny{};
   EXPECT_EQ(trajectoryCsvRow(tiny, 1, s, nullptr, 3), -1);
 }
