@@ -136,8 +136,17 @@ void LoopOutputs::writeTracks(std::int64_t frameId, std::span<const tracking::Tr
     const tracking::Wgs84Position wgs84{states[i].position.latitude_deg,
                                         states[i].position.longitude_deg,
                                         states[i].position.height_m};
+    const messages::VehicleState& state = states[i];
+    tracking::TrajectoryPlace place;
+    place.utmZone = state.utmZone;
+    place.utmNorth = state.utmNorthernHemisphere;
+    place.utmEasting_m = state.utmEasting_m;
+    place.utmNorthing_m = state.utmNorthing_m;
+    place.hasRearAxle = true;
+    place.rearAxle = {state.rearAxlePosition.latitude_deg, state.rearAxlePosition.longitude_deg,
+                      state.rearAxlePosition.height_m};
     const std::int64_t lost = trajectory_.rowsLost();
-    if (!trajectory_.writeRow(frameId, tracks[i], &wgs84, nullptr)) {
+    if (!trajectory_.writeRow(frameId, tracks[i], &wgs84, nullptr, &place)) {
       // Refused by the checks, or the pending rows were full and their write failed.
       if (trajectory_.rowsLost() != lost) {
         writeFailed(trajectoryErrors_, frameId, trajectory_.lastErrno());

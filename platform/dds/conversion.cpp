@@ -16,6 +16,7 @@ geodesy::GeodeticPoint fromWire(const vp_msg_Wgs84Position& p) {
 
 static_assert(shape::kVehicleTypeCount == vp_msg_kVehicleTypeCount);
 static_assert(shape::kMaxShapeComponents == vp_msg_kMaxShapeComponents);
+static_assert(shape::kKeypointCount == vp_msg_kKeypointCount);
 static_assert(messages::DroneStatus::kModelIdCapacity + 1 == sizeof(vp_msg_DroneStatus{}.model_id));
 
 }  // namespace
@@ -46,6 +47,18 @@ void toSample(const messages::VehicleState& s, vp_msg_VehicleState& out) {
   out.yaw_rate_variance_rad2ps2 = s.yawRateVariance_rad2ps2;
   out.detection_confidence = s.detectionConfidence;
   out.status = static_cast<vp_msg_TrackStatus>(s.status);
+  out.utm_zone = s.utmZone;
+  out.utm_north = s.utmNorthernHemisphere;
+  out.utm_easting_m = s.utmEasting_m;
+  out.utm_northing_m = s.utmNorthing_m;
+  std::copy(s.rearAxleEnu_m.begin(), s.rearAxleEnu_m.end(), out.rear_axle_enu_m);
+  out.rear_axle_position = toWire(s.rearAxlePosition);
+  out.length_variance_m2 = s.lengthVariance_m2;
+  out.width_variance_m2 = s.widthVariance_m2;
+  out.keypoint_count = static_cast<uint8_t>(std::min<int>(s.keypointCount, shape::kKeypointCount));
+  for (std::size_t k = 0; k < s.keypointsEnu_m.size(); ++k) {
+    std::copy(s.keypointsEnu_m[k].begin(), s.keypointsEnu_m[k].end(), out.keypoints_enu_m[k]);
+  }
 }
 
 messages::VehicleState fromSample(const vp_msg_VehicleState& in) {
@@ -79,6 +92,20 @@ messages::VehicleState fromSample(const vp_msg_VehicleState& in) {
   s.detectionConfidence = in.detection_confidence;
   s.status = in.status <= vp_msg_TRACK_LOST ? static_cast<messages::TrackStatus>(in.status)
                                             : messages::TrackStatus::Lost;
+  s.utmZone = in.utm_zone;
+  s.utmNorthernHemisphere = in.utm_north;
+  s.utmEasting_m = in.utm_easting_m;
+  s.utmNorthing_m = in.utm_northing_m;
+  std::copy(std::begin(in.rear_axle_enu_m), std::end(in.rear_axle_enu_m), s.rearAxleEnu_m.begin());
+  s.rearAxlePosition = fromWire(in.rear_axle_position);
+  s.lengthVariance_m2 = in.length_variance_m2;
+  s.widthVariance_m2 = in.width_variance_m2;
+  s.keypointCount =
+      static_cast<std::uint8_t>(std::min<int>(in.keypoint_count, shape::kKeypointCount));
+  for (std::size_t k = 0; k < s.keypointsEnu_m.size(); ++k) {
+    std::copy(std::begin(in.keypoints_enu_m[k]), std::end(in.keypoints_enu_m[k]),
+              s.keypointsEnu_m[k].begin());
+  }
   return s;
 }
 

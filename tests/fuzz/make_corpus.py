@@ -239,7 +239,7 @@ def output_file_seeds():
     traj = doc_block("tracking.md", "frame_id,class_id")
     write("trajectory_file", "doc_example.csv", traj)
     lines = traj.decode().split("\n")
-    cut = [",".join(line.split(",")[:28]) for line in lines if line]  # no gamma columns
+    cut = [",".join(line.split(",")[:38]) for line in lines if line]  # no gamma columns
     write("trajectory_file", "no_gamma_columns.csv", ("\n".join(cut) + "\n").encode())
 
 

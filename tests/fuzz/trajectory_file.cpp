@@ -30,7 +30,7 @@ std::string contents(const fs::path& path) {
 bool writeTrajectoryRow(vp::output_files::TrajectoryFileWriter& writer,
                         const vp::output_files::TrajectoryRecord& row, std::string* why) {
   return writer.writeRow(row.frameId, vp::output_files::toTrackState(row),
-                         row.centreWgs84 ? &*row.centreWgs84 : nullptr, why);
+                         row.centreWgs84 ? &*row.centreWgs84 : nullptr, why, &row.place);
 }
 
 // Writes `file` to `path`; every row must be accepted.

@@ -1,6 +1,7 @@
 #include "geodesy/geodesy.hpp"
 
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -92,6 +93,109 @@ TEST(Utm, SouthernHemisphere) {
   const UtmPoint utm = toUtm({-33.8688, 151.2093, 10.0});  // Sydney
   EXPECT_EQ(utm.zone, 56);
   EXPECT_FALSE(utm.northp);
+}
+
+// Published reference points. Their coordinates are given on GRS80 (the Australian ones) or
+// WGS84; the two ellipsoids differ by 0.1 mm in the semi-minor axis, far below these tolerances.
+double dms(double deg, double min, double sec) {
+  const double sign = deg < 0.0 ? -1.0 : 1.0;
+  return sign * (std::abs(deg) + min / 60.0 + sec / 3600.0);
+}
+
+struct ReferencePoint {
+  const char* name;
+  GeodeticPoint point;
+  int zone;
+  bool north;
+  double easting_m;
+  double northing_m;
+  double tolerance_m;  // half a unit of the last published digit
+};
+
+TEST(Utm, MatchesPublishedReferencePoints) {
+  const ReferencePoint points[] = {
+      // GDA94 Technical Manual, worked examples of the grid conversion (MGA = UTM on GRS80),
+      // published to the millimetre.
+      {"Buninyong",
+       {dms(-37, 39, 10.15610), dms(143, 55, 35.38390), 0.0},
+       54,
+       false,
+       758173.797,
+       5828674.340,
+       0.0005},
+      {"Flinders Peak",
+       {dms(-37, 57, 3.72030), dms(144, 25, 29.52440), 0.0},
+       55,
+       false,
+       273741.297,
+       5796489.777,
+       0.0005},
+      // GeographicLib's GeoConvert manual page: 33.3 N 44.4 E is 38n 444140.54 3684706.36.
+      {"GeoConvert example", {33.3, 44.4, 0.0}, 38, true, 444140.54, 3684706.36, 0.005},
+  };
+  for (const ReferencePoint& r : points) {
+    for (const std::optional<UtmPoint>& utm :
+         {std::optional<UtmPoint>(toUtm(r.point)), tryUtm(r.point)}) {
+      ASSERT_TRUE(utm.has_value()) << r.name;
+      EXPECT_EQ(utm->zone, r.zone) << r.name;
+      EXPECT_EQ(utm->northp, r.north) << r.name;
+      EXPECT_NEAR(utm->easting_m, r.easting_m, r.tolerance_m) << r.name;
+      EXPECT_NEAR(utm->northing_m, r.northing_m, r.tolerance_m) << r.name;
+    }
+    // And back: the published grid coordinates give the published geodetic point within their
+    // rounding (1 m is less than 1.5e-5 deg of latitude or longitude below 45 deg).
+    const GeodeticPoint back = fromUtm({r.zone, r.north, r.easting_m, r.northing_m, 0.0});
+    const double tolerance_deg = 1.5e-5 * r.tolerance_m;
+    EXPECT_NEAR(back.latitude_deg, r.point.latitude_deg, tolerance_deg) << r.name;
+    EXPECT_NEAR(back.longitude_deg, r.point.longitude_deg, tolerance_deg) << r.name;
+  }
+}
+
+TEST(Utm, FalseNorthingOnlySouthOfTheEquator) {
+  const std::optional<UtmPoint> north = tryUtm({1e-7, 9.0, 0.0});  // zone 32's central meridian
+  const std::optional<UtmPoint> south = tryUtm({-1e-7, 9.0, 0.0});
+  ASSERT_TRUE(north && south);
+  EXPECT_EQ(north->zone, 32);
+  EXPECT_TRUE(north->northp);
+  EXPECT_FALSE(south->northp);
+  EXPECT_NEAR(north->easting_m, 500000.0, 1e-6);
+  EXPECT_NEAR(north->northing_m, 0.0111, 0.001);  // 1e-7 deg = 11 mm
+  EXPECT_NEAR(south->northing_m, 10000000.0 - 0.0111, 0.001);
+}
+
+TEST(Utm, ZoneOfTheLongitudeWithTheNorwayAndSvalbardExceptions) {
+  EXPECT_EQ(tryUtm({50.0, 5.3, 0.0})->zone, 31);  // 0..6 deg E
+  EXPECT_EQ(tryUtm({60.4, 5.3, 0.0})->zone, 32);  // Bergen: zone 32 reaches 3 deg E there
+  EXPECT_EQ(tryUtm({60.4, 2.9, 0.0})->zone, 31);
+  EXPECT_EQ(tryUtm({78.2, 15.6, 0.0})->zone, 33);  // Longyearbyen: 9..21 deg E is zone 33
+  EXPECT_EQ(tryUtm({78.2, 8.9, 0.0})->zone, 31);
+  EXPECT_EQ(tryUtm({0.0, -180.0, 0.0})->zone, 1);
+  EXPECT_EQ(tryUtm({0.0, 179.999, 0.0})->zone, 60);
+}
+
+TEST(Utm, TryUtmIsEmptyOutsideTheBandAndForInvalidPoints) {
+  EXPECT_FALSE(tryUtm({84.0, 10.0, 0.0}).has_value());  // UPS north
+  EXPECT_FALSE(tryUtm({-80.5, 10.0, 0.0}).has_value());
+  EXPECT_TRUE(tryUtm({83.99, 10.0, 0.0}).has_value());
+  EXPECT_TRUE(tryUtm({-80.0, 10.0, 0.0}).has_value());
+  EXPECT_FALSE(tryUtm({std::nan(""), 10.0, 0.0}).has_value());
+  EXPECT_FALSE(tryUtm({95.0, 10.0, 0.0}).has_value());
+  EXPECT_FALSE(tryUtm({45.0, 10.0, INFINITY}).has_value());
+}
+
+TEST(Utm, RoundTripsAcrossAZone) {
+  for (double lat = -79.5; lat < 84.0; lat += 7.3) {
+    for (double dlon = -2.9; dlon <= 2.9; dlon += 0.58) {
+      const GeodeticPoint p{lat, -75.0 + dlon, 12.5};  // zone 18, central meridian 75 W
+      const std::optional<UtmPoint> utm = tryUtm(p);
+      ASSERT_TRUE(utm.has_value());
+      const GeodeticPoint back = fromUtm(*utm);
+      // 1e-10 deg is about 10 micrometres.
+      EXPECT_NEAR(back.latitude_deg, p.latitude_deg, 1e-10) << lat << " " << dlon;
+      EXPECT_NEAR(back.longitude_deg, p.longitude_deg, 1e-10) << lat << " " << dlon;
+      EXPECT_DOUBLE_EQ(back.height_m, p.height_m);
+    }
+  }
 }
 
 TEST(Azimuth, CardinalDirections) {

@@ -26,6 +26,40 @@ TEST(Messages, ValidateCatchesBadStates) {
   EXPECT_EQ(validate(s), ValidationError::ProbabilityOutOfRange);
 }
 
+TEST(Messages, ValidateCatchesBadUtmRearAxleKeypointsAndVariances) {
+  VehicleState s = test::makeState(3, 1);
+  ASSERT_EQ(validate(s), ValidationError::None);
+  s.utmZone = 0;  // not computed
+  EXPECT_EQ(validate(s), ValidationError::None);
+  s.utmZone = 61;
+  EXPECT_EQ(validate(s), ValidationError::UtmZoneOutOfRange);
+  s = test::makeState(3, 1);
+  s.utmNorthing_m = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(validate(s), ValidationError::NotFinite);
+  s = test::makeState(3, 1);
+  s.rearAxleEnu_m[2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(validate(s), ValidationError::NotFinite);
+  s = test::makeState(3, 1);
+  s.rearAxlePosition.longitude_deg = 200.0;
+  EXPECT_EQ(validate(s), ValidationError::InvalidPosition);
+  s = test::makeState(3, 1);
+  s.keypointsEnu_m[35][1] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(validate(s), ValidationError::NotFinite);
+  s = test::makeState(3, 1);
+  s.keypointCount = 0;  // a large vehicle
+  EXPECT_EQ(validate(s), ValidationError::None);
+  s.keypointCount = 12;
+  EXPECT_EQ(validate(s), ValidationError::KeypointCountOutOfRange);
+  s = test::makeState(3, 1);
+  s.widthVariance_m2 = -0.01F;
+  EXPECT_EQ(validate(s), ValidationError::NegativeVariance);
+  s = test::makeState(3, 1);
+  s.lengthVariance_m2 = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(validate(s), ValidationError::NotFinite);
+  EXPECT_STREQ(toString(ValidationError::UtmZoneOutOfRange),
+               "UTM zone outside 0 (not computed) .. 60");
+}
+
 TEST(Messages, ModelIdIsTruncatedAndTerminated) {
   DroneStatus status;
   status.setModelId(std::string(100, 'x'));

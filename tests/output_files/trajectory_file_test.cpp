@@ -77,6 +77,8 @@ TrackState makeTrack(std::mt19937_64& rng, std::uint32_t id, bool onGrid) {
   t.length_m = 3.0 + std::abs(value(4.0, 0.125));
   t.width_m = 1.5 + std::abs(value(1.0, 0.125));
   t.wheelbase_m = 0.6 * t.length_m;
+  t.lengthVariance_m2 = onGrid ? std::abs(value(0.5, 1.0 / 64.0)) : std::abs(value(0.5, 0.0));
+  t.widthVariance_m2 = onGrid ? std::abs(value(0.1, 1.0 / 64.0)) : std::abs(value(0.1, 0.0));
   if (onGrid) {
     t.typeProbabilities = {0.0625F, 0.0625F, 0.0625F, 0.0625F, 0.0625F, 0.0625F, 0.625F};
     std::rotate(t.typeProbabilities.begin(), t.typeProbabilities.begin() + id % 7,
@@ -114,7 +116,12 @@ TEST_F(TrajectoryFileTest, HeaderIsSeed002ColumnsThenOurs) {
       0U)
       << text;
   EXPECT_NE(text.find(",p_large,gamma_1,gamma_2\n"), std::string::npos) << text;
-  EXPECT_EQ(trajectoryColumns(2).size(), 30U);
+  EXPECT_NE(text.find(",wheelbase_m,class_name,length_variance_m2,width_variance_m2,utm_zone,"
+                      "utm_hemisphere,utm_easting_m,utm_northing_m,rear_axle_latitude_deg,"
+                      "rear_axle_longitude_deg,rear_axle_height_m,p_estate,"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(trajectoryColumns(2).size(), 40U);
   TrajectoryFile file;
   ASSERT_TRUE(readTrajectoryFile(path("t.csv"), &file, &why)) << why;
   EXPECT_EQ(file.info.gammaColumns, 2);
@@ -130,14 +137,29 @@ TEST_F(TrajectoryFileTest, RoundTripIsExact) {
     random.push_back(makeTrack(rng, id, false));
   }
   const Wgs84Position wgs84{43.07312345, -89.40123456, 261.125};
+  // UTM and the rear axle on every third row, on the print grid (mm, 1e-8 deg).
+  tracking::TrajectoryPlace place;
+  place.utmZone = 16;
+  place.utmNorth = true;
+  place.utmEasting_m = 304510.375;
+  place.utmNorthing_m = 4771730.875;
+  place.hasRearAxle = true;
+  place.rearAxle = {43.07310001, -89.40125002, 260.5};
+  tracking::TrajectoryPlace south = place;
+  south.utmZone = 56;
+  south.utmNorth = false;
+  south.hasRearAxle = false;
+  south.rearAxle = {};
   std::string why;
   for (const auto& [name, tracks] :
        {std::pair{"grid.csv", &grid}, std::pair{"random.csv", &random}}) {
     TrajectoryFileWriter writer;
     ASSERT_TRUE(writer.open(path(name), TrajectoryFileInfo{3}, &why)) << why;
     for (std::size_t i = 0; i < tracks->size(); ++i) {
+      const tracking::TrajectoryPlace* rowPlace =
+          i % 3 == 0 ? &place : (i % 3 == 1 ? &south : nullptr);
       ASSERT_TRUE(writer.writeRow(static_cast<std::int64_t>(i / 4), (*tracks)[i],
-                                  i % 2 == 0 ? &wgs84 : nullptr, &why))
+                                  i % 2 == 0 ? &wgs84 : nullptr, &why, rowPlace))
           << why;
     }
     ASSERT_TRUE(writer.close(&why)) << why;
@@ -163,6 +185,18 @@ TEST_F(TrajectoryFileTest, RoundTripIsExact) {
     EXPECT_EQ(r.accelerationSigma_mps2, t.accelerationSigma_mps2);
     EXPECT_EQ(r.length_m, t.length_m);
     EXPECT_EQ(r.width_m, t.width_m);
+    EXPECT_EQ(r.lengthVariance_m2, t.lengthVariance_m2);
+    EXPECT_EQ(r.widthVariance_m2, t.widthVariance_m2);
+    const tracking::TrajectoryPlace expected =
+        i % 3 == 0 ? place : (i % 3 == 1 ? south : tracking::TrajectoryPlace{});
+    EXPECT_EQ(r.place.utmZone, expected.utmZone);
+    EXPECT_EQ(r.place.utmNorth, expected.utmNorth);
+    EXPECT_EQ(r.place.utmEasting_m, expected.utmEasting_m);
+    EXPECT_EQ(r.place.utmNorthing_m, expected.utmNorthing_m);
+    ASSERT_EQ(r.place.hasRearAxle, expected.hasRearAxle);
+    EXPECT_EQ(r.place.rearAxle.latitude_deg, expected.rearAxle.latitude_deg);
+    EXPECT_EQ(r.place.rearAxle.longitude_deg, expected.rearAxle.longitude_deg);
+    EXPECT_EQ(r.place.rearAxle.height_m, expected.rearAxle.height_m);
     EXPECT_EQ(r.typeProbabilities, t.typeProbabilities);
     ASSERT_EQ(r.gamma.count, t.shape.count);
     for (int s = 0; s < t.shape.count; ++s) {
@@ -194,7 +228,9 @@ TEST_F(TrajectoryFileTest, RoundTripIsExact) {
     }
     EXPECT_EQ(r.type, t.type);
     const TrackState back = toTrackState(r);
-    ASSERT_TRUE(rewriter.writeRow(r.frameId, back, r.centreWgs84 ? &*r.centreWgs84 : nullptr, &why))
+    EXPECT_LE(std::abs(r.lengthVariance_m2 - t.lengthVariance_m2), 0.0000005 + 1e-12);
+    ASSERT_TRUE(rewriter.writeRow(r.frameId, back, r.centreWgs84 ? &*r.centreWgs84 : nullptr, &why,
+                                  &r.place))
         << why;
   }
   ASSERT_TRUE(rewriter.close(&why)) << why;
@@ -270,9 +306,25 @@ TEST_F(TrajectoryFileTest, WriterRejectsWhatTheReaderWould) {
   bad = t;
   bad.headingEnu_rad = -0.5;
   expectRejected(bad, 0, "heading_enu_deg");
+  bad = t;
+  bad.widthVariance_m2 = -0.01;
+  expectRejected(bad, 0, "width_variance_m2");
   Wgs84Position wgs84{95.0, 8.0, 400.0};
   EXPECT_FALSE(writer.writeRow(0, t, &wgs84, &why));
   EXPECT_NE(why.find("latitude_deg"), std::string::npos) << why;
+  tracking::TrajectoryPlace place;
+  place.utmZone = 61;
+  EXPECT_FALSE(writer.writeRow(0, t, nullptr, &why, &place));
+  EXPECT_NE(why.find(": utm_zone: "), std::string::npos) << why;
+  place.utmZone = 32;
+  place.utmEasting_m = -5.0;
+  EXPECT_FALSE(writer.writeRow(0, t, nullptr, &why, &place));
+  EXPECT_NE(why.find(": utm_easting_m: "), std::string::npos) << why;
+  place.utmEasting_m = 500000.0;
+  place.hasRearAxle = true;
+  place.rearAxle = {45.0, 190.0, 0.0};
+  EXPECT_FALSE(writer.writeRow(0, t, nullptr, &why, &place));
+  EXPECT_NE(why.find(": rear_axle_longitude_deg: "), std::string::npos) << why;
   EXPECT_EQ(writer.rowsWritten(), 0);
   ASSERT_TRUE(writer.writeRow(0, t, nullptr, &why)) << why;
   ASSERT_TRUE(writer.close(&why)) << why;
@@ -344,17 +396,25 @@ TEST_F(TrajectoryFileTest, MalformedRowsNameFileLineAndColumn) {
   expectFieldError(1, 13, "nan", 13, "heading_enu_deg: not finite 'nan'");
   expectFieldError(1, 13, "361", 13, "heading_enu_deg: must be in [0, 360], got '361'");
   expectFieldError(1, 18, "-4.5", 18, "length_m: must be >= 0 and finite, got '-4.5'");
-  expectFieldError(1, 21, "0.9", 21, "p_estate: probabilities p_estate..p_large do not sum to 1");
-  expectFieldError(2, 28, "", 29, "gamma_2: value after an empty gamma field");
+  expectFieldError(1, 21, "van", 21, "class_name: must name class_id's type");
+  expectFieldError(1, 22, "-0.5", 22, "length_variance_m2: must be >= 0 and finite, got '-0.5'");
+  expectFieldError(1, 24, "61", 24,
+                   "utm_zone: utm_zone, utm_hemisphere, utm_easting_m, utm_northing_m must be all "
+                   "set or all empty");
+  expectFieldError(1, 28, "43.1", 28,
+                   "rear_axle_latitude_deg: rear_axle_latitude_deg, rear_axle_longitude_deg, "
+                   "rear_axle_height_m must be all set or all empty");
+  expectFieldError(1, 31, "0.9", 31, "p_estate: probabilities p_estate..p_large do not sum to 1");
+  expectFieldError(2, 38, "", 39, "gamma_2: value after an empty gamma field");
   std::string header = lines[0];
   header.replace(field(header, 2).first, 8, "id");
   expectError(header + "\n" + lines[1] + "\n",
               bad + ":1: header: expected 'frame_id,class_id,track_id,");
-  expectError(lines[0] + "\n" + lines[1] + ",0.5\n", bad + ":2: expected 30 fields, got 31");
+  expectError(lines[0] + "\n" + lines[1] + ",0.5\n", bad + ":2: expected 40 fields, got 41");
   expectError(lines[0] + "\n\n" + lines[1] + "\n", bad + ":2: empty line");
   expectError("", bad + ":1: header: missing");
   expectError(lines[0] + ",gamma_3,gamma_4,gamma_5,gamma_6,gamma_7,gamma_8,gamma_9\n",
-              bad + ":1: header: expected 28 to 36 columns (0 to 8 gamma columns), got 37");
+              bad + ":1: header: expected 38 to 46 columns (0 to 8 gamma columns), got 47");
   EXPECT_FALSE(readTrajectoryFile(path("none.csv"), &file, &why));
   EXPECT_NE(why.find("none.csv: cannot open"), std::string::npos) << why;
 }

@@ -367,6 +367,49 @@ TEST(TrackManager, TrackKeepsItsBirthTimeFusedScoreAndPoseCovariance) {
   EXPECT_NE(why.find("scoreMemory"), std::string::npos) << why;
 }
 
+// Length and width variances: the weighted spread of the detected sizes about the fused size
+// (equal scores: the population variance of the detections), 0 after one detection, and the
+// same spread once the weight cap forgets old frames.
+TEST(TrackManager, SizeVariancesAreTheSpreadOfTheDetectedSizes) {
+  const TrackerConfig config = smallConfig();
+  TrackManager m;
+  ASSERT_TRUE(m.init(config));
+  const double lengths[] = {4.3, 4.9, 4.5, 4.4, 4.6, 4.1, 4.7, 4.5};
+  std::int64_t t = kFrame_ns;
+  double sum = 0.0;
+  double sumSq = 0.0;
+  int n = 0;
+  for (const double length : lengths) {
+    WorldDetection d = car(0.0, 0.0, 0.0, t);
+    d.length_m = length;
+    ASSERT_TRUE(m.step(t, std::vector{d}).hasValue());
+    ASSERT_EQ(m.tracks().size(), 1u);
+    sum += length;
+    sumSq += length * length;
+    ++n;
+    const double mean = sum / n;
+    const TrackState& s = m.tracks()[0];
+    EXPECT_NEAR(s.length_m, mean, 1e-9);
+    EXPECT_NEAR(s.lengthVariance_m2, sumSq / n - mean * mean, 1e-9) << n;
+    EXPECT_NEAR(s.widthVariance_m2, 0.0, 1e-12);  // every width 1.8
+    t += kFrame_ns;
+  }
+  EXPECT_GT(m.tracks()[0].lengthVariance_m2, 0.0);
+
+  // Long after the weight cap (shapeMaxWeight) started forgetting: lengths alternating 4.3 and
+  // 4.7 keep a spread near 0.04 m^2 (a little less: the weights favour recent frames).
+  for (int k = 0; k < 200; ++k) {
+    WorldDetection d = car(0.0, 0.0, 0.0, t);
+    d.length_m = k % 2 == 0 ? 4.3 : 4.7;
+    ASSERT_TRUE(m.step(t, std::vector{d}).hasValue());
+    t += kFrame_ns;
+  }
+  const TrackState& s = m.tracks()[0];
+  EXPECT_NEAR(s.length_m, 4.5, 0.01);
+  EXPECT_NEAR(s.lengthVariance_m2, 0.04, 0.004);
+  EXPECT_GT(config.shapeMaxWeight, 0.0);
+}
+
 TEST(TrackManager, ParkedCarReacquiredAfterLongOcclusionKeepsId) {
   TrackManager m;
   ASSERT_TRUE(m.init(smallConfig()));
@@ -552,6 +595,23 @@ TEST(TrajectoryCsv, HeaderAndRowCarrySeedColumnsFirst) {
   trajectoryCsvHeader(header, 3);
   auto commas = [](const char* text) { return std::count(text, text + std::strlen(text), ','); };
   EXPECT_EQ(commas(line.data()), commas(header.data()));
+  // The type's name, the variances, UTM and the rear axle's WGS84 after the wheelbase.
+  s.lengthVariance_m2 = 0.0625;
+  s.widthVariance_m2 = 0.01;
+  TrajectoryPlace place;
+  place.utmZone = 32;
+  place.utmNorth = true;
+  place.utmEasting_m = 461344.25;
+  place.utmNorthing_m = 5216914.5;
+  place.hasRearAxle = true;
+  place.rearAxle = {47.09999, 8.49998, 419.875};
+  const int m = trajectoryCsvRow(line, 17, s, &p, 3, &place);
+  ASSERT_GT(m, 0);
+  const std::string placed(line.data(), static_cast<std::size_t>(m));
+  EXPECT_NE(placed.find(",suv,0.062500,0.010000,32,N,461344.250,5216914.500,47.09999000,"
+                        "8.49998000,419.875,"),
+            std::string::npos)
+      << placed;
   std::array<char, 16> tiny{};
   EXPECT_EQ(trajectoryCsvRow(tiny, 1, s, nullptr, 3), -1);
 }

@@ -62,6 +62,20 @@ bool writeBev(const BevSettings& settings, std::span<const messages::VehicleStat
     const cv::Scalar colour =
         v.status == messages::TrackStatus::Lost ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 220, 0);
     cv::polylines(image, std::vector<cv::Point>(polygon, polygon + 4), true, colour, 2);
+    if (v.keypointCount == shape::kKeypointCount) {
+      // The ASM wireframe seen from above: the mesh's edges between the keypoints' plan
+      // positions (each inner edge twice; cheap at this size).
+      const auto plan = [&](std::uint16_t k) {
+        return toPixel(v.keypointsEnu_m[k][0], v.keypointsEnu_m[k][1]);
+      };
+      for (const shape::Triangle& t : shape::mesh()) {
+        for (int e = 0; e < 3; ++e) {
+          cv::line(image, plan(t.v[static_cast<std::size_t>(e)]),
+                   plan(t.v[static_cast<std::size_t>((e + 1) % 3)]), cv::Scalar(200, 120, 60), 1,
+                   cv::LINE_AA);
+        }
+      }
+    }
     const cv::Point2d centre = toPixel(v.enu_m[0], v.enu_m[1]);
     cv::line(image, centre, toPixel(v.enu_m[0] + c * hl, v.enu_m[1] + s * hl), colour, 2);
     cv::putText(image, std::to_string(v.trackId), centre + cv::Point2d(6, -6),

@@ -4,7 +4,8 @@
 // Contract: the view is a square of side 2 * range_m centred on `centre` (world ENU, m), drawn
 // at `size_px` pixels; east is right, north is up. Each vehicle is its footprint rectangle
 // (length x width, rotated by its ENU heading) with a line to its front and its track id;
-// confirmed tracks are green, lost ones orange. Occupied grid cells are grey, free cells
+// confirmed tracks are green, lost ones orange; a vehicle with keypoints also shows its ASM
+// wireframe (the mesh's edges in plan, blue). Occupied grid cells are grey, free cells
 // dark, unobserved cells black. write() returns false with a message when OpenCV cannot
 // write the file (written to a temporary name first, then renamed, so a viewer never sees a
 // half-written PNG).

@@ -2,6 +2,7 @@
 #include "state_format.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 
 namespace vp::rsu {
@@ -76,6 +77,31 @@ void forEachField(EventKind kind, const messages::VehicleState& s, double latenc
   f("yaw_rate_variance_rad2ps2", s.yawRateVariance_rad2ps2);
   f("detection_confidence", s.detectionConfidence);
   f("track_age_s", s.trackAge_s);
+  i("utm_zone", s.utmZone);
+  str("utm_hemisphere", s.utmNorthernHemisphere ? "N" : "S");
+  d("utm_easting_m", s.utmEasting_m);
+  d("utm_northing_m", s.utmNorthing_m);
+  d("rear_axle_east_m", s.rearAxleEnu_m[0]);
+  d("rear_axle_north_m", s.rearAxleEnu_m[1]);
+  d("rear_axle_up_m", s.rearAxleEnu_m[2]);
+  d("rear_axle_latitude_deg", s.rearAxlePosition.latitude_deg);
+  d("rear_axle_longitude_deg", s.rearAxlePosition.longitude_deg);
+  d("rear_axle_height_m", s.rearAxlePosition.height_m);
+  f("length_variance_m2", s.lengthVariance_m2);
+  f("width_variance_m2", s.widthVariance_m2);
+  i("keypoint_count", s.keypointCount);
+  // Every keypoint slot (fixed columns; beyond keypoint_count they are 0).
+  static const std::array<std::string, 3 * shape::kKeypointCount> kKeypointColumns = [] {
+    std::array<std::string, 3 * shape::kKeypointCount> names;
+    const char* const axes[3] = {"e", "n", "u"};
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      names[k] = "kp" + std::to_string(k / 3) + "_" + axes[k % 3] + "_m";
+    }
+    return names;
+  }();
+  for (std::size_t k = 0; k < kKeypointColumns.size(); ++k) {
+    f(kKeypointColumns[k].c_str(), s.keypointsEnu_m[k / 3][k % 3]);
+  }
 }
 
 }  // namespace

@@ -3,7 +3,8 @@
 //
 // Contract: doubles are printed with 17 significant digits and floats with 9, so that parsing
 // a row gives back exactly the published values (the integration test compares them with ==).
-// csvHeader() names the columns in the order formatCsv() writes them. An event is either a
+// csvHeader() names the columns in the order formatCsv() writes them: every field of the
+// state, the 36 keypoints last as kp<k>_{e,n,u}_m (0 beyond keypoint_count). An event is either a
 // state ("state") or the disposal of a track's instance ("disposed", only the key columns
 // and the latency are meaningful). Latency = reception time - DDS source timestamp (frame
 // capture time), in ms; it assumes drone and roadside clocks are synchronised (GNSS/PTP).

@@ -65,6 +65,29 @@ UtmPoint toUtm(const GeodeticPoint& point, std::optional<int> forcedZone) {
   return utm;
 }
 
+std::optional<UtmPoint> tryUtm(const GeodeticPoint& point) {
+  // UTM's band; UTMUPS::STANDARD would give UPS (zone 0) beyond it.
+  constexpr double kSouthLimit_deg = -80.0;
+  constexpr double kNorthLimit_deg = 84.0;
+  if (!isValid(point) || point.latitude_deg < kSouthLimit_deg ||
+      point.latitude_deg >= kNorthLimit_deg) {
+    return std::nullopt;
+  }
+  UtmPoint utm;
+  double gamma = 0.0;
+  double k = 0.0;
+  // A valid latitude in the band: GeographicLib's only throw (|latitude| > 90) cannot happen.
+  GeographicLib::UTMUPS::Forward(point.latitude_deg, point.longitude_deg, utm.zone, utm.northp,
+                                 utm.easting_m, utm.northing_m, gamma, k);
+  if (utm.zone < GeographicLib::UTMUPS::MINUTMZONE ||
+      utm.zone > GeographicLib::UTMUPS::MAXUTMZONE || !std::isfinite(utm.easting_m) ||
+      !std::isfinite(utm.northing_m)) {
+    return std::nullopt;
+  }
+  utm.height_m = point.height_m;
+  return utm;
+}
+
 GeodeticPoint fromUtm(const UtmPoint& point) {
   GeodeticPoint p;
   GeographicLib::UTMUPS::Reverse(point.zone, point.northp, point.easting_m, point.northing_m,

@@ -54,8 +54,17 @@ class LocalFrame {
 // Rotation whose columns are the east, north and up unit vectors at the point in ECEF.
 Eigen::Matrix3d enuToEcef(const GeodeticPoint& point);
 
-// UTM in the zone of the point (or a forced zone, e.g. the DTM's zone).
+// UTM (Transverse Mercator on WGS84, k0 0.9996, false easting 500 km, false northing 10 000 km
+// south of the equator), by GeographicLib's Krueger series to sixth order (accurate to a few
+// nanometres within a zone). toUtm() takes the standard zone of the point, the zone of its
+// longitude with the Norway (zone 32 extended to 3 deg E between 56 and 64 deg N) and Svalbard
+// (zones 31, 33, 35, 37 between 72 and 84 deg N) exceptions applied, and UPS (zone 0) beyond
+// UTM's latitude band; or a forced zone (e.g. the DTM's). It throws on a latitude outside
+// [-90, 90] (start-up callers only).
 UtmPoint toUtm(const GeodeticPoint& point, std::optional<int> forcedZone = std::nullopt);
+// The same standard-zone UTM for the real-time path: never throws, no allocation; empty for a
+// point that is not valid (isValid()) or lies outside UTM's band, latitude [-80, 84) (UPS).
+std::optional<UtmPoint> tryUtm(const GeodeticPoint& point);
 GeodeticPoint fromUtm(const UtmPoint& point);
 
 // Azimuth (deg, clockwise from true north, [0, 360)) of the geodesic from a to b.

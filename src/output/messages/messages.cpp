@@ -17,6 +17,8 @@ bool allFinite(const Array& values) {
   return std::all_of(values.begin(), values.end(), [](auto v) { return std::isfinite(v); });
 }
 
+constexpr std::uint8_t kMaxUtmZone = 60;
+
 }  // namespace
 
 const char* toString(ValidationError error) {
@@ -37,6 +39,12 @@ const char* toString(ValidationError error) {
       return "ASM component count outside [0, kMaxShapeComponents]";
     case ValidationError::GridSizeMismatch:
       return "occupancy grid cells do not match rows * cols";
+    case ValidationError::UtmZoneOutOfRange:
+      return "UTM zone outside 0 (not computed) .. 60";
+    case ValidationError::KeypointCountOutOfRange:
+      return "keypoint count neither 0 nor kKeypointCount";
+    case ValidationError::NegativeVariance:
+      return "negative length or width variance";
   }
   return "unknown";
 }
@@ -60,12 +68,18 @@ ValidationError validate(const VehicleState& s) {
                              finite(s.acceleration_mps2) && finite(s.length_m) &&
                              finite(s.width_m) && finite(s.height_m) && finite(s.trackAge_s) &&
                              finite(s.heightVariance_m2) && finite(s.speedVariance_m2ps2) &&
-                             finite(s.yawRateVariance_rad2ps2) && finite(s.detectionConfidence);
+                             finite(s.yawRateVariance_rad2ps2) && finite(s.detectionConfidence) &&
+                             finite(s.utmEasting_m) && finite(s.utmNorthing_m) &&
+                             finite(s.lengthVariance_m2) && finite(s.widthVariance_m2);
+  const bool keypointsFinite =
+      std::all_of(s.keypointsEnu_m.begin(), s.keypointsEnu_m.end(),
+                  [](const std::array<float, 3>& p) { return allFinite(p); });
   if (!scalarsFinite || !allFinite(s.enu_m) || !allFinite(s.velocityEnu_mps) ||
-      !allFinite(s.typeProbability) || !allFinite(s.shape.gamma) || !allFinite(s.poseCovariance)) {
+      !allFinite(s.typeProbability) || !allFinite(s.shape.gamma) || !allFinite(s.poseCovariance) ||
+      !allFinite(s.rearAxleEnu_m) || !keypointsFinite) {
     return ValidationError::NotFinite;
   }
-  if (!geodesy::isValid(s.position)) {
+  if (!geodesy::isValid(s.position) || !geodesy::isValid(s.rearAxlePosition)) {
     return ValidationError::InvalidPosition;
   }
   if (s.headingEnu_rad < 0.0 || s.headingEnu_rad >= 2.0 * std::numbers::pi ||
@@ -82,6 +96,15 @@ ValidationError validate(const VehicleState& s) {
   }
   if (s.shape.count < 0 || s.shape.count > shape::kMaxShapeComponents) {
     return ValidationError::ShapeCountOutOfRange;
+  }
+  if (s.utmZone > kMaxUtmZone) {
+    return ValidationError::UtmZoneOutOfRange;
+  }
+  if (s.keypointCount != 0 && s.keypointCount != shape::kKeypointCount) {
+    return ValidationError::KeypointCountOutOfRange;
+  }
+  if (s.lengthVariance_m2 < 0.0F || s.widthVariance_m2 < 0.0F) {
+    return ValidationError::NegativeVariance;
   }
   return ValidationError::None;
 }

@@ -144,6 +144,9 @@ enum class ValidationError : std::uint8_t {
   ProbabilityOutOfRange,
   ShapeCountOutOfRange,
   GridSizeMismatch,
+  UtmZoneOutOfRange,        // utmZone above 60 (0 = not computed, 1..60)
+  KeypointCountOutOfRange,  // keypointCount neither 0 nor kKeypointCount
+  NegativeVariance,         // a length or width variance < 0
 };
 const char* toString(ValidationError error);
 

@@ -21,6 +21,9 @@ constexpr double kProbabilitySumTolerance = 1e-3;  // |sum p - 1| allowed (4-dec
 // close runner-up may print up to 1e-4 above it.
 constexpr float kTypeTieTolerance = 1.5e-4F;
 constexpr double kDegPerRad = 180.0 / geometry::kPi;
+constexpr int kMaxUtmZone = 60;
+constexpr double kMaxUtmEasting_m = 1'000'000.0;
+constexpr double kMaxUtmNorthing_m = 10'000'000.0;
 
 // Column indices (trajectory_csv's order).
 enum Column : int {
@@ -45,6 +48,16 @@ enum Column : int {
   kLength,
   kWidth,
   kWheelbase,
+  kClassName,
+  kLengthVariance,
+  kWidthVariance,
+  kUtmZone,
+  kUtmHemisphere,
+  kUtmEasting,
+  kUtmNorthing,
+  kRearLatitude,
+  kRearLongitude,
+  kRearHeight,
   kProbabilities,
   kGamma = kProbabilities + shape::kVehicleTypeCount,
 };
@@ -63,7 +76,8 @@ std::optional<tracking::TrackStatus> statusFromString(std::string_view word) {
 
 // The row the writer would produce for this track, before rounding (no allocation).
 TrajectoryRecord recordOf(std::int64_t frameId, const tracking::TrackState& t,
-                          const tracking::Wgs84Position* wgs84) {
+                          const tracking::Wgs84Position* wgs84,
+                          const tracking::TrajectoryPlace* place) {
   TrajectoryRecord r;
   r.frameId = frameId;
   r.type = t.type;
@@ -84,9 +98,28 @@ TrajectoryRecord recordOf(std::int64_t frameId, const tracking::TrackState& t,
   r.length_m = t.length_m;
   r.width_m = t.width_m;
   r.wheelbase_m = t.wheelbase_m;
+  r.lengthVariance_m2 = t.lengthVariance_m2;
+  r.widthVariance_m2 = t.widthVariance_m2;
+  if (place != nullptr) {
+    r.place = *place;
+  }
   r.typeProbabilities = t.typeProbabilities;
   r.gamma = t.shape;
   return r;
+}
+
+// Latitude, longitude, height columns (first = latitude's) of one WGS84 point.
+std::optional<Problem> checkWgs84(const tracking::Wgs84Position& p, int first) {
+  if (!(std::abs(p.latitude_deg) <= 90.0)) {
+    return Problem{first, "must be in [-90, 90]"};
+  }
+  if (!(std::abs(p.longitude_deg) <= 180.0)) {
+    return Problem{first + 1, "must be in [-180, 180]"};
+  }
+  if (!std::isfinite(p.height_m)) {
+    return Problem{first + 2, "not finite"};
+  }
+  return std::nullopt;
 }
 
 // Semantic checks shared by the writer (before formatting) and the reader (after parsing).
@@ -113,15 +146,8 @@ std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) 
     return Problem{kStatus, "unknown track status"};
   }
   if (r.centreWgs84) {
-    const tracking::Wgs84Position& p = *r.centreWgs84;
-    if (!(std::abs(p.latitude_deg) <= 90.0)) {
-      return Problem{kLatitude, "must be in [-90, 90]"};
-    }
-    if (!(std::abs(p.longitude_deg) <= 180.0)) {
-      return Problem{kLongitude, "must be in [-180, 180]"};
-    }
-    if (!std::isfinite(p.height_m)) {
-      return Problem{kHeight, "not finite"};
+    if (const std::optional<Problem> problem = checkWgs84(*r.centreWgs84, kLatitude)) {
+      return problem;
     }
   }
   // 360 is allowed: a heading just below 2 pi prints as 360.00.
@@ -135,15 +161,35 @@ std::optional<Problem> checkRecord(const TrajectoryRecord& r, int gammaColumns) 
       return Problem{column, "not finite"};
     }
   }
-  const std::array<std::pair<int, double>, 5> nonNegative{
+  const std::array<std::pair<int, double>, 7> nonNegative{
       {{kSpeedSigma, r.speedSigma_mps},
        {kAccelerationSigma, r.accelerationSigma_mps2},
        {kLength, r.length_m},
        {kWidth, r.width_m},
-       {kWheelbase, r.wheelbase_m}}};
+       {kWheelbase, r.wheelbase_m},
+       {kLengthVariance, r.lengthVariance_m2},
+       {kWidthVariance, r.widthVariance_m2}}};
   for (const auto& [column, value] : nonNegative) {
     if (!(value >= 0.0 && std::isfinite(value))) {
       return Problem{column, "must be >= 0 and finite"};
+    }
+  }
+  const tracking::TrajectoryPlace& place = r.place;
+  if (place.utmZone < 0 || place.utmZone > kMaxUtmZone) {
+    return Problem{kUtmZone, "must be in [1, 60] (or empty)"};
+  }
+  if (place.utmZone > 0) {
+    // UTM's easting stays within ~170..830 km in its band, northing within 0..10 000 km.
+    if (!(place.utmEasting_m >= 0.0 && place.utmEasting_m <= kMaxUtmEasting_m)) {
+      return Problem{kUtmEasting, "must be in [0, 1 000 000] m"};
+    }
+    if (!(place.utmNorthing_m >= 0.0 && place.utmNorthing_m <= kMaxUtmNorthing_m)) {
+      return Problem{kUtmNorthing, "must be in [0, 10 000 000] m"};
+    }
+  }
+  if (place.hasRearAxle) {
+    if (const std::optional<Problem> problem = checkWgs84(place.rearAxle, kRearLatitude)) {
+      return problem;
     }
   }
   double sum = 0.0;
@@ -210,6 +256,41 @@ TrajectoryRecord parseRow(const RowParser& p, int gammaColumns) {
   r.length_m = p.real<double>(kLength);
   r.width_m = p.real<double>(kWidth);
   r.wheelbase_m = p.real<double>(kWheelbase);
+  if (p.field(kClassName) != shape::toString(r.type)) {
+    p.fail(kClassName, "must name class_id's type (" + quote(shape::toString(r.type)) + "), got " +
+                           quote(p.field(kClassName)));
+  }
+  r.lengthVariance_m2 = p.real<double>(kLengthVariance);
+  r.widthVariance_m2 = p.real<double>(kWidthVariance);
+  const int utmGiven =
+      (p.field(kUtmZone).empty() ? 0 : 1) + (p.field(kUtmHemisphere).empty() ? 0 : 1) +
+      (p.field(kUtmEasting).empty() ? 0 : 1) + (p.field(kUtmNorthing).empty() ? 0 : 1);
+  if (utmGiven == 4) {
+    r.place.utmZone = static_cast<int>(p.integer(kUtmZone, 1, kMaxUtmZone));
+    const std::string_view hemisphere = p.field(kUtmHemisphere);
+    if (hemisphere != "N" && hemisphere != "S") {
+      p.fail(kUtmHemisphere, "must be N or S, got " + quote(hemisphere));
+    }
+    r.place.utmNorth = hemisphere == "N";
+    r.place.utmEasting_m = p.real<double>(kUtmEasting);
+    r.place.utmNorthing_m = p.real<double>(kUtmNorthing);
+  } else if (utmGiven != 0) {
+    p.fail(kUtmZone,
+           "utm_zone, utm_hemisphere, utm_easting_m, utm_northing_m must be all set or "
+           "all empty");
+  }
+  const int rearGiven = (p.field(kRearLatitude).empty() ? 0 : 1) +
+                        (p.field(kRearLongitude).empty() ? 0 : 1) +
+                        (p.field(kRearHeight).empty() ? 0 : 1);
+  if (rearGiven == 3) {
+    r.place.hasRearAxle = true;
+    r.place.rearAxle = tracking::Wgs84Position{
+        p.real<double>(kRearLatitude), p.real<double>(kRearLongitude), p.real<double>(kRearHeight)};
+  } else if (rearGiven != 0) {
+    p.fail(kRearLatitude,
+           "rear_axle_latitude_deg, rear_axle_longitude_deg, rear_axle_height_m must be all set "
+           "or all empty");
+  }
   for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
     r.typeProbabilities[static_cast<std::size_t>(t)] = p.real<float>(kProbabilities + t);
   }
@@ -275,6 +356,8 @@ tracking::TrackState toTrackState(const TrajectoryRecord& r) {
   t.length_m = r.length_m;
   t.width_m = r.width_m;
   t.wheelbase_m = r.wheelbase_m;
+  t.lengthVariance_m2 = r.lengthVariance_m2;
+  t.widthVariance_m2 = r.widthVariance_m2;
   t.typeProbabilities = r.typeProbabilities;
   t.type = r.type;
   t.shape = r.gamma;
@@ -318,7 +401,8 @@ bool TrajectoryFileWriter::open(const std::string& path, const TrajectoryFileInf
 }
 
 bool TrajectoryFileWriter::writeRow(std::int64_t frameId, const tracking::TrackState& track,
-                                    const tracking::Wgs84Position* centreWgs84, std::string* why) {
+                                    const tracking::Wgs84Position* centreWgs84, std::string* why,
+                                    const tracking::TrajectoryPlace* place) {
   // Messages are built only on failure (they allocate; the success path does not).
   const auto failWith = [&](int column, const char* problem) {
     if (why != nullptr) {
@@ -336,11 +420,11 @@ bool TrajectoryFileWriter::writeRow(std::int64_t frameId, const tracking::TrackS
     return failWith(-1, "writer is not open");
   }
   if (const std::optional<Problem> problem =
-          checkRecord(recordOf(frameId, track, centreWgs84), info_.gammaColumns)) {
+          checkRecord(recordOf(frameId, track, centreWgs84, place), info_.gammaColumns)) {
     return failWith(problem->column, problem->what);
   }
   const int n = tracking::trajectoryCsvRow(writer_.rowBuffer(), frameId, track, centreWgs84,
-                                           info_.gammaColumns);
+                                           info_.gammaColumns, place);
   if (n <= 0) {
     return failWith(-1, "row longer than the row buffer");
   }

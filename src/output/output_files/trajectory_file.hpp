@@ -36,8 +36,8 @@
 
 namespace vp::output_files {
 
-// Columns before the gamma columns: 21 fixed + 7 type probabilities.
-constexpr int kTrajectoryFixedColumns = 28;
+// Columns before the gamma columns: 31 fixed + 7 type probabilities.
+constexpr int kTrajectoryFixedColumns = 38;
 
 struct TrajectoryFileInfo {
   int gammaColumns = 3;  // gamma_1 .. gamma_n, 0 .. shape::kMaxShapeComponents (the ASM's n_s)
@@ -59,9 +59,14 @@ struct TrajectoryRecord {
   double acceleration_mps2 = 0.0;
   double accelerationSigma_mps2 = 0.0;  // >= 0
   double yawRateDps = 0.0;
-  double length_m = 0.0;                                            // >= 0
-  double width_m = 0.0;                                             // >= 0
-  double wheelbase_m = 0.0;                                         // >= 0
+  double length_m = 0.0;     // >= 0
+  double width_m = 0.0;      // >= 0
+  double wheelbase_m = 0.0;  // >= 0
+  // class_name is shape::toString(type) (checked, not stored).
+  double lengthVariance_m2 = 0.0;  // >= 0
+  double widthVariance_m2 = 0.0;   // >= 0
+  // UTM of the centre (zone 0: empty fields) and WGS84 of the rear axle (hasRearAxle).
+  tracking::TrajectoryPlace place{};
   std::array<float, shape::kVehicleTypeCount> typeProbabilities{};  // sum 1 (1e-3)
   shape::ShapeParams gamma{};  // count <= the file's gammaColumns
 
@@ -69,7 +74,8 @@ struct TrajectoryRecord {
 };
 
 // The track state that trajectoryCsvRow() turns into this record's row (fields the file does
-// not hold keep their defaults): for tools that rewrite or generate trajectory files.
+// not hold keep their defaults), with centreWgs84 and place: for tools that rewrite or
+// generate trajectory files.
 tracking::TrackState toTrackState(const TrajectoryRecord& record);
 
 // The column names of a file with this many gamma columns, in order.
@@ -84,11 +90,12 @@ class TrajectoryFileWriter {
 
   // Creates (truncates) the file and writes the header. Start-up.
   bool open(const std::string& path, const TrajectoryFileInfo& info, std::string* why);
-  // One row: the track at frame frameId; centreWgs84 may be null (empty WGS84 fields). Checks
-  // the row as the reader would (except the order and uniqueness checks, which need the
-  // history). No heap allocation on success.
+  // One row: the track at frame frameId; centreWgs84 may be null (empty WGS84 fields), place
+  // too (empty UTM and rear-axle WGS84 fields). Checks the row as the reader would (except the
+  // order and uniqueness checks, which need the history). No heap allocation on success.
   bool writeRow(std::int64_t frameId, const tracking::TrackState& track,
-                const tracking::Wgs84Position* centreWgs84, std::string* why);
+                const tracking::Wgs84Position* centreWgs84, std::string* why,
+                const tracking::TrajectoryPlace* place = nullptr);
   // The pending rows to the file in one write(2) (after each frame). False on a write error
   // (errno in lastErrno()); those rows are lost (rowsLost()). No allocation.
   bool commit() { return writer_.commit(); }

@@ -221,10 +221,22 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   // Shape and size: score-weighted running means with a capped weight.
   const double w = std::max(1e-3, static_cast<double>(d.score)) *
                    (d.atFrameEdge ? config_.frameEdgeShapeWeight : 1.0);
-  const double keep = std::min(1.0, config_.shapeMaxWeight / (slot.sizeWeight + w));
-  out.length_m = (slot.sizeWeight * out.length_m + w * d.length_m) / (slot.sizeWeight + w);
-  out.width_m = (slot.sizeWeight * out.width_m + w * d.width_m) / (slot.sizeWeight + w);
-  slot.sizeWeight = (slot.sizeWeight + w) * keep;
+  const double total = slot.sizeWeight + w;
+  const double keep = std::min(1.0, config_.shapeMaxWeight / total);
+  const double lengthBefore = out.length_m;
+  const double widthBefore = out.width_m;
+  out.length_m = (slot.sizeWeight * out.length_m + w * d.length_m) / total;
+  out.width_m = (slot.sizeWeight * out.width_m + w * d.width_m) / total;
+  // West's weighted update: S += w (x - mean_before) (x - mean_after), then forgotten like the
+  // weight, so S / weight stays the weighted spread.
+  slot.lengthDeviationSq =
+      (slot.lengthDeviationSq + w * (d.length_m - lengthBefore) * (d.length_m - out.length_m)) *
+      keep;
+  slot.widthDeviationSq =
+      (slot.widthDeviationSq + w * (d.width_m - widthBefore) * (d.width_m - out.width_m)) * keep;
+  slot.sizeWeight = total * keep;
+  out.lengthVariance_m2 = std::max(0.0, slot.lengthDeviationSq / slot.sizeWeight);
+  out.widthVariance_m2 = std::max(0.0, slot.widthDeviationSq / slot.sizeWeight);
   if (d.shape.count > 0) {
     const double keepG = std::min(1.0, config_.shapeMaxWeight / (slot.gammaWeight + w));
     for (int s = 0; s < d.shape.count; ++s) {

@@ -31,8 +31,13 @@
 // Type: p(type) ~ prod_frames p_det(type)^typeEvidenceWeight (a tempered naive Bayes in log
 // space, floored at typeFloor: frames of one car are not independent). Shape gamma, length
 // and width: score-weighted means with the total weight capped at shapeMaxWeight, so a slow
-// change is still followed. The wheelbase and rear-axle offset come from the fused gamma
-// through the ASM (when one is given and the type is a car), else from the length.
+// change is still followed. Beside each size mean a running weighted variance (West's update
+// with the same weights and forgetting): the spread of the track's detected lengths (widths)
+// about the fused value, m^2, 0 while the track has a single detection. It is the spread of
+// one detection, not the variance of the mean: a car's frames share their bias, so dividing
+// by the number of frames would claim a precision the tracker does not have. The wheelbase and
+// rear-axle offset come from the fused gamma through the ASM (when one is given and the type is a
+// car), else from the length.
 #pragma once
 
 #include <array>
@@ -137,6 +142,10 @@ struct TrackState {
   double score = 0.0;
   double length_m = 0.0;
   double width_m = 0.0;
+  // Weighted spread of the matched detections' lengths / widths about length_m / width_m,
+  // m^2 (see the contract); 0 after the first detection.
+  double lengthVariance_m2 = 0.0;
+  double widthVariance_m2 = 0.0;
   double wheelbase_m = 0.0;
   std::array<float, shape::kVehicleTypeCount> typeProbabilities{};
   shape::VehicleType type = shape::VehicleType::Sedan;  // argmax of typeProbabilities
@@ -181,6 +190,10 @@ class TrackManager {
     std::array<double, shape::kMaxShapeComponents> gammaSum{};
     double gammaWeight = 0.0;
     double sizeWeight = 0.0;
+    // Weighted sums of squared deviations of the detected length and width from the running
+    // means, forgotten like sizeWeight (variance = sum / sizeWeight).
+    double lengthDeviationSq = 0.0;
+    double widthDeviationSq = 0.0;
     int wholeHits = 0;             // matched detections that were not partial
     bool lastAtFrameEdge = false;  // the last matched detection touched the frame's border
     std::int64_t lastUpdate_ns = 0;

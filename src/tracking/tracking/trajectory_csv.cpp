@@ -53,7 +53,9 @@ int trajectoryCsvHeader(std::span<char> out, int shapeComponents) {
         "frame_id,class_id,track_id,velocity,coordinate_world_x_opt,coordinate_world_y_opt,"
         "coordinate_world_x,coordinate_world_y,time_s,status,latitude_deg,longitude_deg,"
         "height_m,heading_enu_deg,velocity_sigma,acceleration,acceleration_sigma,yaw_rate_dps,"
-        "length_m,width_m,wheelbase_m");
+        "length_m,width_m,wheelbase_m,class_name,length_variance_m2,width_variance_m2,utm_zone,"
+        "utm_hemisphere,utm_easting_m,utm_northing_m,rear_axle_latitude_deg,"
+        "rear_axle_longitude_deg,rear_axle_height_m");
   for (const char* name : kTypeColumns) {
     w.add(",%s", name);
   }
@@ -65,7 +67,8 @@ int trajectoryCsvHeader(std::span<char> out, int shapeComponents) {
 }
 
 int trajectoryCsvRow(std::span<char> out, std::int64_t frameId, const TrackState& t,
-                     const Wgs84Position* centreWgs84, int shapeComponents) {
+                     const Wgs84Position* centreWgs84, int shapeComponents,
+                     const TrajectoryPlace* place) {
   const int ns = std::clamp(shapeComponents, 0, shape::kMaxShapeComponents);
   constexpr double kDeg = 180.0 / geometry::kPi;
   LineWriter w(out);
@@ -82,6 +85,19 @@ int trajectoryCsvRow(std::span<char> out, std::int64_t frameId, const TrackState
   w.add(",%.2f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f", t.headingEnu_rad * kDeg, t.speedSigma_mps,
         t.acceleration_mps2, t.accelerationSigma_mps2, t.yawRate_radps * kDeg, t.length_m,
         t.width_m, t.wheelbase_m);
+  w.add(",%s,%.6f,%.6f", shape::toString(t.type), t.lengthVariance_m2, t.widthVariance_m2);
+  if (place != nullptr && place->utmZone > 0) {
+    w.add(",%d,%s,%.3f,%.3f", place->utmZone, place->utmNorth ? "N" : "S", place->utmEasting_m,
+          place->utmNorthing_m);
+  } else {
+    w.add("%s", ",,,,");
+  }
+  if (place != nullptr && place->hasRearAxle) {
+    w.add(",%.8f,%.8f,%.3f", place->rearAxle.latitude_deg, place->rearAxle.longitude_deg,
+          place->rearAxle.height_m);
+  } else {
+    w.add("%s", ",,,");
+  }
   for (float p : t.typeProbabilities) {
     w.add(",%.4f", static_cast<double>(p));
   }

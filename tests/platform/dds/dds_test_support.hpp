@@ -64,6 +64,19 @@ inline messages::VehicleState makeState(std::uint32_t trackId, std::int64_t time
   s.yawRateVariance_rad2ps2 = 0.0004F;
   s.detectionConfidence = 0.93F;
   s.status = messages::TrackStatus::Confirmed;
+  s.utmZone = 16;
+  s.utmNorthernHemisphere = trackId % 2 == 0;
+  s.utmEasting_m = 304510.3816 + 0.125 * trackId;
+  s.utmNorthing_m = 4771730.8701 - 0.25 * trackId;
+  s.rearAxleEnu_m = {1.25 * trackId - 1.3, -2.5 * trackId, 0.05};
+  s.rearAxlePosition = {43.0731 + 1.1e-6 * trackId, -89.4012 - 0.9e-6 * trackId, 250.0 + trackId};
+  s.lengthVariance_m2 = 0.0625F;
+  s.widthVariance_m2 = 0.0049F + 1e-4F * t;
+  s.keypointCount = static_cast<std::uint8_t>(shape::kKeypointCount);
+  for (std::size_t k = 0; k < s.keypointsEnu_m.size(); ++k) {
+    const float f = static_cast<float>(k);
+    s.keypointsEnu_m[k] = {1.25F * t + 0.1F * f, -2.5F * t - 0.05F * f, 0.03F * f};
+  }
   return s;
 }
 
