@@ -76,7 +76,7 @@ bool Recorder::open(const RecorderSetup& setup, std::string* why) {
     std::snprintf(budget, sizeof(budget), "none");
   }
   logLine(
-      "recording to %s: JPEG quality %d, every %d. frame, %d buffers of %dx%d, disk budget "
+      "recording to %s: JPEG quality %d, one frame in %d, %d buffers of %dx%d, disk budget "
       "%s, keep %d MiB free, when full: %s",
       directory_.c_str(), options_.jpegQuality, options_.everyNthFrame, options_.queueFrames,
       camera.width_px, camera.height_px, budget, options_.minFreeDisk_mib,

@@ -592,6 +592,94 @@ TEST(AppRecord, OfferingFramesAndSamplesAllocatesNothing) {
   EXPECT_EQ(openSequence(setup.options.dir).frames().size(), c.recorded);
 }
 
+// The disk budget, with 1 MiB and frames of noise (JPEG compresses them poorly: ~70 KB each):
+// `stop` finishes a valid sequence of the frames that fit and skips the rest; `ring` records
+// every frame, deletes the oldest to stay within the budget, and its frames.csv lists exactly
+// the images that exist.
+RecordCounters recordNoise(config::RecordFullPolicy policy, const std::string& dir, int frames) {
+  const config::RigConfig rig =
+      config::loadRigConfig(std::string(VP_FIXTURE_DIR) + "/sequence_min/rig.yaml");
+  RecorderSetup setup;
+  setup.options.dir = dir;
+  setup.options.maxDisk_mib = 1;
+  setup.options.onFull = policy;
+  setup.options.queueFrames = static_cast<int>(FramePool::kMaxFrames);
+  setup.rig = rig;
+  setup.rig.camera.intrinsics.width_px = 320;
+  setup.rig.camera.intrinsics.height_px = 256;
+  setup.rig.camera.intrinsics.cx_px = 159.5;
+  setup.rig.camera.intrinsics.cy_px = 127.5;
+  setup.source = "noise";
+  Recorder recorder;
+  std::string why;
+  EXPECT_TRUE(recorder.open(setup, &why)) << why;
+  Frame frame;
+  frame.image.create(256, 320, CV_8UC3);
+  cv::RNG rng(7);
+  for (int i = 0; i < frames; ++i) {
+    rng.fill(frame.image, cv::RNG::UNIFORM, 0, 256);
+    frame.frameId = i;
+    frame.timestamp_ns = 1'000'000'000 + i * 100'000'000LL;
+    recorder.offerFrame(frame);
+  }
+  recorder.finish();
+  return recorder.counters();
+}
+
+std::uint64_t directoryBytes(const std::string& dir) {
+  std::uint64_t bytes = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (entry.is_regular_file()) {
+      bytes += entry.file_size();
+    }
+  }
+  return bytes;
+}
+
+TEST(AppRecord, DiskBudgetStopFinishesTheSequenceAndRingKeepsTheNewestFrames) {
+  constexpr int kNoiseFrames = 16;
+  constexpr std::uint64_t kBudget = 1U << 20;
+  const std::string out = test::scratchDir("record_budget");
+  const RecordCounters stop =
+      recordNoise(config::RecordFullPolicy::Stop, out + "/stop", kNoiseFrames);
+  const sequence::SequenceReader stopped = openSequence(out + "/stop");
+  EXPECT_GT(stop.recorded, 1U);
+  EXPECT_LT(stop.recorded, static_cast<std::uint64_t>(kNoiseFrames));
+  EXPECT_EQ(stop.recorded + stop.skipped + stop.dropped, static_cast<std::uint64_t>(kNoiseFrames));
+  EXPECT_EQ(stop.dropped, 0U);
+  EXPECT_EQ(stopped.frames().size(), stop.recorded);
+  EXPECT_EQ(stopped.frames().front().frameId, 0);  // the start of the flight is kept
+  EXPECT_LE(directoryBytes(out + "/stop"), kBudget);
+  EXPECT_NE(stopped.info().notes.find("ended early: disk budget"), std::string::npos)
+      << stopped.info().notes;
+
+  const RecordCounters ring =
+      recordNoise(config::RecordFullPolicy::Ring, out + "/ring", kNoiseFrames);
+  const sequence::SequenceReader kept = openSequence(out + "/ring");
+  EXPECT_EQ(ring.recorded, static_cast<std::uint64_t>(kNoiseFrames));
+  EXPECT_GT(ring.removed, 0U);
+  EXPECT_EQ(kept.frames().size(), ring.recorded - ring.removed);
+  EXPECT_EQ(kept.frames().back().frameId, kNoiseFrames - 1);  // the newest frames
+  EXPECT_EQ(kept.frames().front().frameId, static_cast<std::int64_t>(ring.removed));
+  EXPECT_LE(directoryBytes(out + "/ring"), kBudget);
+  std::size_t images = 0;
+  for (const auto& entry : fs::directory_iterator(out + "/ring/frames")) {
+    images += entry.is_regular_file() ? 1 : 0;
+  }
+  EXPECT_EQ(images, kept.frames().size());  // frames.csv lists exactly the images that exist
+  for (std::size_t i = 0; i < kept.frames().size(); ++i) {
+    cv::Mat image;
+    std::string why;
+    EXPECT_TRUE(kept.loadFrame(i, image, &why)) << why;
+  }
+  std::printf(
+      "budget 1 MiB, %d noise frames: stop recorded %llu (skipped %llu); ring recorded "
+      "%llu, removed %llu, kept %zu\n",
+      kNoiseFrames, static_cast<unsigned long long>(stop.recorded),
+      static_cast<unsigned long long>(stop.skipped), static_cast<unsigned long long>(ring.recorded),
+      static_cast<unsigned long long>(ring.removed), kept.frames().size());
+}
+
 // ---- a slow disk ----------------------------------------------------------------------------
 
 // A recorded paced replay (10 Hz) with a writer that needs 250 ms per frame (the seam
