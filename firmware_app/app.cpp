@@ -48,6 +48,12 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   if (!initSource(why) || !initWorld(why) || !initPose(why)) {
     return false;
   }
+  if (!config_.app.record.dir.empty()) {
+    // Opened last (openRecorder), once everything else started: a failed start-up leaves no
+    // recording behind. The pose input is handed to the step now, so its tap is set now.
+    recorder_ = std::make_unique<Recorder>();
+    poseInput_->setTap(recorder_.get());
+  }
   if (config_.dds.enabled) {
     dds_ = std::make_unique<DdsWriters>();  // opened below, after the tracker, as always
   }
@@ -107,7 +113,28 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   reports.modelId = step_.perception().modelId();
   reports.monotonicToUtc_ns = monotonicToUtcNs_;
   reports_.init(reports);
-  return true;
+  return openRecorder(why);
+}
+
+bool App::openRecorder(std::string* why) {
+  if (!recorder_) {
+    return true;
+  }
+  RecorderSetup setup;
+  setup.options = config_.app.record;
+  // The rig the loop runs with (a replay's is its recording's rig.yaml, copied by initSource).
+  setup.rig.origin = config_.origin;
+  setup.rig.camera = config_.camera;
+  setup.rig.mount = config_.mount;
+  setup.rig.terrain = config_.terrain;
+  const FrameSource& source = capture_.source();
+  setup.source = replay_ != nullptr ? "the replay of " + config_.source.sequenceDir
+                 : config_.source.v4l2.busInfo.empty()
+                     ? "camera " + config_.source.v4l2.device
+                     : "camera at bus " + config_.source.v4l2.busInfo;
+  setup.frameRate_hz = source.nominalFrameRate_hz();
+  setup.writeDelay_ns = seams_.recordWriteDelay_ns;
+  return recorder_->open(setup, why);
 }
 
 bool App::initSource(std::string* why) {
@@ -293,7 +320,7 @@ bool App::run(std::string* why) {
       step_.poseInput()->name(), dds_ ? "on" : "off", config_.app.queueDepth, pool.capacity(),
       pool.width_px(), pool.height_px());
   notifier_.ready();
-  capture_.start({run_.maxFrames, run_.everyFrame, config_.app.captureCpus});
+  capture_.start({run_.maxFrames, run_.everyFrame, config_.app.captureCpus, recorder_.get()});
 
   // The loop: take the freshest frame, do its step, report; sleep until the next one.
   for (;;) {
@@ -326,6 +353,9 @@ bool App::run(std::string* why) {
   notifier_.stopping();
   capture_.stop();  // the capture thread ends, every waiting frame back in the pool (dropped)
   step_.finish();   // every DDS instance disposed, the files closed
+  if (recorder_) {
+    recorder_->finish();  // the queued frames written, sequence.yaml last
+  }
   runWall_s_ = static_cast<double>(clock_->now_ns() - start_ns) / 1e9;
   return true;
 }
@@ -363,6 +393,17 @@ LoopCounters App::counters() const {
   if (const PoseInput* pose = step_.poseInput()) {
     c.telemetrySamples = pose->counters().received;
     c.telemetryRejected = pose->counters().linkRejected + pose->counters().bufferRejected;
+  }
+  if (recorder_) {
+    const RecordCounters r = recorder_->counters();
+    c.recording = true;
+    c.recordFrames = r.recorded;
+    c.recordDropped = r.dropped;
+    c.recordSkipped = r.skipped;
+    c.recordRemoved = r.removed;
+    c.recordTelemetry = r.telemetryRecorded;
+    c.recordTelemetryDropped = r.telemetryDropped;
+    c.recordErrors = r.writeErrors;
   }
   return c;
 }

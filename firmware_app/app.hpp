@@ -17,7 +17,8 @@
 // taken, or requestStop() / a stop signal (every wait of the loop, however long, ends within
 // platform::kStopPoll_ns of the request); it then stops the capture thread, returns every
 // queued frame to the pool (counted as dropped), disposes every published DDS instance and
-// closes the files. After
+// closes the files, and finishes the recording (app.record: every queued frame written,
+// sequence.yaml last; recorder.hpp). After
 // init(), the processing thread performs no heap allocation per frame with DDS off and the
 // annotated video off (tests count it); Cyclone's write path allocates 2 per sample
 // (docs/dds.md), the replay decoder allocates on the capture thread, cv::VideoWriter
@@ -51,6 +52,7 @@
 #include "perception_stage.hpp"
 #include "periodic_reports.hpp"
 #include "platform/system/systemd_notify.hpp"
+#include "recorder.hpp"
 #include "shape/vehicle_model.hpp"
 #include "terrain/terrain_model.hpp"
 
@@ -70,6 +72,7 @@ struct AppSeams {
   platform::v4l2::V4l2Device* v4l2Device = nullptr;  // default: the kernel
   platform::Clock* clock = nullptr;                  // default: CLOCK_MONOTONIC
   LoopObserver* observer = nullptr;
+  std::int64_t recordWriteDelay_ns = 0;  // app.record: the writer waits this long per frame
 };
 
 class App final : public CounterSource {
@@ -101,6 +104,7 @@ class App final : public CounterSource {
   bool initWorld(std::string* why);
   bool initPose(std::string* why);
   bool startRealtime(std::string* why);
+  bool openRecorder(std::string* why);
   void processFrame(FrameIndex index);
   void idleTick();
 
@@ -130,6 +134,7 @@ class App final : public CounterSource {
   std::unique_ptr<PoseInput> poseInput_;         // the same
   FrameStep step_;
   PeriodicReports reports_;
+  std::unique_ptr<Recorder> recorder_;  // app.record.dir set; declared last: stopped first
 
   double runWall_s_ = 0.0;
   bool ran_ = false;

@@ -48,6 +48,10 @@ Usage: vp_firmware_app --config FILE [options]
   --trajectory-csv F     write the trajectory CSV (docs/tracking.md) to F
   --detections-csv F     write the detections file (docs/detections_file.md) to F
   --annotated-video F    write the annotated frames to F (MJPG in AVI; allocates per frame)
+  --record DIR           record what the loop sees (frames as JPEG, their times, the pose
+                         samples as received, the rig and the DTM) as a recorded sequence in
+                         DIR (app.record.dir; DIR must not exist or be empty); see
+                         docs/field_data.md
   --no-dds               publish nothing over DDS (dds.enabled false)
   --threads N            perception threads, 1..16 (perception.threads)
   --quiet                no periodic statistics line (the final summary is still printed)
@@ -57,9 +61,9 @@ Outputs: DDS topics <prefix>/vehicle_state (confirmed and lost tracks; deleted t
 disposed), <prefix>/drone_status, <prefix>/occupancy (docs/dds.md); the files above; one
 statistics line on stderr every app.stats_period_s and a "summary:" line at the end.
 Signals: SIGINT/SIGTERM stop cleanly (queued frames returned, DDS instances disposed, files
-closed). Under systemd (Type=notify) it reports READY, WATCHDOG, STATUS and STOPPING.
+closed, a recording finished with its sequence.yaml). Under systemd (Type=notify) it reports READY, WATCHDOG, STATUS and STOPPING.
 Exit status: 0 ok, 1 runtime error (start-up; no frame processed before the source ended;
-a failed output write; frames not returned), 2 usage or configuration error.
+a failed output or recording write; frames not returned), 2 usage or configuration error.
 See docs/firmware_app.md.
 )";
 }
@@ -97,7 +101,8 @@ ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* ou
       line.quiet = true;
     } else if (arg == "--config" || arg == "--sequence" || arg == "--camera" ||
                arg == "--camera-bus" || arg == "--trajectory-csv" || arg == "--detections-csv" ||
-               arg == "--annotated-video" || arg == "--max-frames" || arg == "--threads") {
+               arg == "--annotated-video" || arg == "--record" || arg == "--max-frames" ||
+               arg == "--threads") {
       if (!value(&text)) {
         return fail(std::string(arg) + ": needs a value");
       }
@@ -115,6 +120,8 @@ ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* ou
         line.detectionsCsv = text;
       } else if (arg == "--annotated-video") {
         line.annotatedVideo = text;
+      } else if (arg == "--record") {
+        line.recordDir = text;
       } else if (arg == "--max-frames") {
         if (!parseInteger(text, &line.maxFrames) || line.maxFrames < 0) {
           return fail("--max-frames: expected an integer >= 0, got '" + text + "'");
@@ -182,6 +189,9 @@ void applyCommandLine(const CommandLine& line, config::AppConfig& config) {
   if (line.annotatedVideo) {
     config.app.annotatedVideo = absolute(*line.annotatedVideo);
   }
+  if (line.recordDir) {
+    config.app.record.dir = absolute(*line.recordDir);
+  }
 }
 
 RunSettings runSettings(const CommandLine& line) {
@@ -218,6 +228,11 @@ int runExitStatus(const LoopCounters& counters, bool stopRequested, std::size_t 
     lines += std::to_string(counters.outputErrors) +
              " output write(s) failed (the first one of each file is logged above): the output "
              "files are incomplete\n";
+    status = kExitRuntimeError;
+  }
+  if (counters.recordErrors > 0) {
+    lines += std::to_string(counters.recordErrors) +
+             " recording write(s) failed (logged above): the recording ended early\n";
     status = kExitRuntimeError;
   }
   if (counters.framesProcessed == 0 && !stopRequested) {

@@ -40,6 +40,7 @@ struct CommandLine {
   std::optional<std::string> trajectoryCsv;
   std::optional<std::string> detectionsCsv;
   std::optional<std::string> annotatedVideo;
+  std::optional<std::string> recordDir;
   std::optional<int> threads;
 };
 
@@ -53,9 +54,9 @@ const char* helpText();
 void applyCommandLine(const CommandLine& line, config::AppConfig& config);
 RunSettings runSettings(const CommandLine& line);
 // The exit status of a run that started (kExitOk or kExitRuntimeError) and, for each reason it
-// is not 0, one line in *why: frames not returned to the pool, a failed output write, or a
-// source that ended before any frame was processed (a stop requested before the first frame
-// is not a failure).
+// is not 0, one line in *why: frames not returned to the pool, a failed output or recording write,
+// or a source that ended before any frame was processed (a stop requested before the first frame is
+// not a failure).
 int runExitStatus(const LoopCounters& counters, bool stopRequested, std::size_t framesNotReturned,
                   std::size_t poolCapacity, std::string* why);
 

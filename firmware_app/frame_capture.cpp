@@ -10,6 +10,7 @@
 #include "loop_log.hpp"
 #include "platform/system/realtime.hpp"
 #include "platform/system/stop_signals.hpp"
+#include "recorder.hpp"
 
 namespace vp::app {
 
@@ -243,6 +244,9 @@ void FrameCapture::captureLoop() {
         captureNs_[*index] =
             source_->capturesOnMonotonicClock() ? frame.timestamp_ns : clock_->now_ns();
         counters_.framesIn.fetch_add(1, std::memory_order_relaxed);
+        if (settings_.recorder != nullptr) {
+          settings_.recorder->offerFrame(frame);  // before the processing thread may see it
+        }
         queue_->publish(*index);
         queue_->notify();
         continue;
@@ -251,6 +255,9 @@ void FrameCapture::captureLoop() {
         pool_.release(*index);
         counters_.framesIn.fetch_add(1, std::memory_order_relaxed);
         counters_.badFrames.fetch_add(1, std::memory_order_relaxed);
+        if (settings_.recorder != nullptr) {
+          settings_.recorder->offerBadFrame();
+        }
         logLine("bad frame skipped: %s", source_->message());
         queue_->notify();  // no frame, but the processing thread's periodic reports go on
         continue;

@@ -8,11 +8,13 @@
 // (in [1, 8]); it fails naming the key. start() runs the capture thread: a free pool frame ->
 // source.next() -> the channel (drop-oldest when the processing thread falls behind, counted;
 // with everyFrame it waits for room instead), until the source ends, maxFrames were taken or
-// a stop is requested (requestStop() or a stop signal). The processing thread takes frames
-// with take(), reads them with frame() and capture_ns() (capture time on the loop clock),
-// gives them back with release(), and sleeps on waitFor(wakeCount(), timeout) between frames
-// (woken by each frame, bad frame and source retry, or by the timeout); heartbeat() moves while
-// the capture thread lives, so the processing thread can feed the watchdog while no frame
+// a stop is requested (requestStop() or a stop signal). With a recorder (CaptureSettings), every
+// frame taken from the source is offered to it first (a copy into one of its buffers, or a
+// count), so that a recording holds the frames the channel later drops too. The processing thread
+// takes frames with take(), reads them with frame() and capture_ns() (capture time on the loop
+// clock), gives them back with release(), and sleeps on waitFor(wakeCount(), timeout) between
+// frames (woken by each frame, bad frame and source retry, or by the timeout); heartbeat() moves
+// while the capture thread lives, so the processing thread can feed the watchdog while no frame
 // comes (a silent camera) and stop feeding it when capture hangs; done()
 // says the capture thread has ended. stop() ends and joins the capture thread and returns
 // every waiting frame to the pool, counted as dropped (the destructor only ends and joins it).
@@ -49,6 +51,7 @@
 namespace vp::app {
 
 class FrameQueue;  // the FrameChannel of the configured depth (frame_capture.cpp)
+class Recorder;    // recorder.hpp
 
 // The source of source.kind: a ReplayFrameSource or a CameraFrameSource on device (used
 // only for a camera); nullptr
@@ -58,9 +61,10 @@ std::unique_ptr<FrameSource> openFrameSource(const config::SourceConfig& config,
                                              platform::v4l2::V4l2Device* device, std::string* why);
 
 struct CaptureSettings {
-  std::int64_t maxFrames = 0;  // frames taken from the source; 0 = unlimited
-  bool everyFrame = false;     // the source waits for the loop instead of dropping
-  std::vector<int> cpus;       // affinity of the capture thread; empty = any
+  std::int64_t maxFrames = 0;    // frames taken from the source; 0 = unlimited
+  bool everyFrame = false;       // the source waits for the loop instead of dropping
+  std::vector<int> cpus;         // affinity of the capture thread; empty = any
+  Recorder* recorder = nullptr;  // offered every frame taken from the source; null = none
 };
 
 class FrameCapture final : public platform::StopCondition {

@@ -98,6 +98,9 @@ SourceEvents CameraFrameSource::events() const {
 telemetry::PushResult PoseInput::push(const telemetry::PoseSample& sample,
                                       telemetry::PoseBuffer& buffer, const char* where) {
   ++counters_.received;
+  if (tap_ != nullptr) {
+    tap_->onSample(sample);
+  }
   const telemetry::PushResult result = buffer.push(sample);
   if (result == telemetry::PushResult::Accepted) {
     return result;

@@ -12,7 +12,9 @@
 // refusal of each kind is logged with where the sample came from (a recording: its
 // telemetry.csv line) and what was wrong, later ones only counted. A recording's telemetry is
 // also checked as a whole at open(): each row the buffer will refuse is a start-up warning
-// naming the file and line (the recording still plays; those samples are refused). Both are wired
+// naming the file and line (the recording still plays; those samples are refused). A
+// PoseSampleTap set on a PoseInput sees every sample the link delivered, as delivered, before
+// the buffer judges it (the recorder writes them). Both are wired
 // by the app from the configuration; tests substitute their own (the seams of app.hpp).
 #pragma once
 
@@ -102,6 +104,13 @@ struct PoseInputCounters {
   std::uint64_t readErrors = 0;      // failed reads of the link
 };
 
+// Sees each pose sample as the link delivered it (processing thread; must not allocate).
+class PoseSampleTap {
+ public:
+  virtual ~PoseSampleTap() = default;
+  virtual void onSample(const telemetry::PoseSample& sample) = 0;
+};
+
 class PoseInput {
  public:
   virtual ~PoseInput() = default;
@@ -110,6 +119,7 @@ class PoseInput {
   virtual void poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) = 0;
   virtual const char* name() const = 0;
   const PoseInputCounters& counters() const { return counters_; }
+  void setTap(PoseSampleTap* tap) { tap_ = tap; }  // borrowed; nullptr: none
 
  protected:
   // Pushes one sample into the buffer; `where` names its origin in the first log line of each
@@ -119,6 +129,7 @@ class PoseInput {
   PoseInputCounters counters_{};
 
  private:
+  PoseSampleTap* tap_ = nullptr;
   std::array<bool, static_cast<std::size_t>(telemetry::PushResult::NotInitialised) + 1> logged_{};
 };
 

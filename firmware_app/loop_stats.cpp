@@ -76,6 +76,11 @@ int formatStatsLine(std::span<char> out, const LoopCounters& c, const LoopStats&
       static_cast<unsigned long long>(c.statesPublished),
       static_cast<unsigned long long>(c.tracksDisposed),
       static_cast<unsigned long long>(c.publishErrors));
+  if (c.recording) {
+    append(out, &length, " | recorded %llu record_dropped %llu",
+           static_cast<unsigned long long>(c.recordFrames),
+           static_cast<unsigned long long>(c.recordDropped));
+  }
   for (std::size_t s = 0; s < kStageCount; ++s) {
     const auto stage = static_cast<Stage>(s);
     const diagnostics::LatencyHistogram& h = stats.period(stage);
@@ -117,6 +122,18 @@ int formatSummaryLine(std::span<char> out, const LoopCounters& c, const LoopStat
   append(out, &length, " telemetry_samples=%llu telemetry_rejected=%llu",
          static_cast<unsigned long long>(c.telemetrySamples),
          static_cast<unsigned long long>(c.telemetryRejected));
+  if (c.recording) {
+    append(out, &length,
+           " record_frames=%llu record_dropped=%llu record_skipped=%llu record_removed=%llu "
+           "record_telemetry=%llu record_telemetry_dropped=%llu record_errors=%llu",
+           static_cast<unsigned long long>(c.recordFrames),
+           static_cast<unsigned long long>(c.recordDropped),
+           static_cast<unsigned long long>(c.recordSkipped),
+           static_cast<unsigned long long>(c.recordRemoved),
+           static_cast<unsigned long long>(c.recordTelemetry),
+           static_cast<unsigned long long>(c.recordTelemetryDropped),
+           static_cast<unsigned long long>(c.recordErrors));
+  }
   for (std::size_t s = 0; s < kStageCount; ++s) {
     const auto stage = static_cast<Stage>(s);
     const diagnostics::LatencyHistogram& h = stats.total(stage);

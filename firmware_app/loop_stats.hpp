@@ -53,6 +53,16 @@ struct LoopCounters {
   std::uint64_t tracksDisposed = 0;
   std::uint64_t publishErrors = 0;
   std::uint64_t outputErrors = 0;  // CSV / video write failures
+  // The recording (app.record, recorder.hpp); at the end of a run that records:
+  // framesIn == recordFrames + recordDropped + recordSkipped.
+  bool recording = false;
+  std::uint64_t recordFrames = 0;   // written
+  std::uint64_t recordDropped = 0;  // no free buffer (the writer behind), or a failed write
+  std::uint64_t recordSkipped = 0;  // every_nth_frame, bad frames, after the recording ended
+  std::uint64_t recordRemoved = 0;  // on_full ring: oldest frames deleted
+  std::uint64_t recordTelemetry = 0;
+  std::uint64_t recordTelemetryDropped = 0;
+  std::uint64_t recordErrors = 0;  // failed writes (each ends the recording)
 };
 
 enum class Stage : std::uint8_t {

@@ -213,6 +213,14 @@ app:
   detections_csv: out/detections.csv
   annotated_video: out/annotated.avi
   annotated_video_fps: 5.0
+  record:
+    dir: out/flight1
+    jpeg_quality: 80
+    every_nth_frame: 2
+    queue_frames: 6
+    max_disk_mib: 4096
+    min_free_disk_mib: 512
+    on_full: ring
 )";
 
 // Only the required keys.
@@ -849,6 +857,20 @@ const MalformedCase kMalformedCases[] = {
      "expected a string, got a map"},
     {"annotated_video_fps: 5.0", "annotated_video_fps: 0", "app.annotated_video_fps",
      "must be in (0, 1000], got 0"},
+    {"  record:\n", "  record: rec\n  x:\n", "app.record", "expected a map, got 'rec'"},
+    {"dir: out/flight1", "dir: ''", "app.record.dir", "must not be empty"},
+    {"jpeg_quality: 80", "jpeg_quality: 101", "app.record.jpeg_quality",
+     "must be in [1, 100], got 101"},
+    {"every_nth_frame: 2", "every_nth_frame: 0", "app.record.every_nth_frame",
+     "must be in [1, 1000], got 0"},
+    {"queue_frames: 6", "queue_frames: 65", "app.record.queue_frames",
+     "must be in [1, 64], got 65"},
+    {"max_disk_mib: 4096", "max_disk_mib: -1", "app.record.max_disk_mib",
+     "must be in [0, 2147483647], got -1"},
+    {"min_free_disk_mib: 512", "min_free_disk_mib: 1.5", "app.record.min_free_disk_mib",
+     "expected an integer, got '1.5'"},
+    {"on_full: ring", "on_full: wrap", "app.record.on_full",
+     "unknown value 'wrap' (expected stop, ring)"},
 };
 
 TEST(ConfigMalformed, EachBrokenKeyIsReportedWithSourceAndFullPath) {
@@ -1033,7 +1055,15 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "app.trajectory_csv",
                                                "app.detections_csv",
                                                "app.annotated_video",
-                                               "app.annotated_video_fps"};
+                                               "app.annotated_video_fps",
+                                               "app.record",
+                                               "app.record.dir",
+                                               "app.record.jpeg_quality",
+                                               "app.record.every_nth_frame",
+                                               "app.record.queue_frames",
+                                               "app.record.max_disk_mib",
+                                               "app.record.min_free_disk_mib",
+                                               "app.record.on_full"};
   // Every key of the three QoS profiles.
   std::vector<std::string> keys = schemaKeys;
   for (const char* topic : {"vehicle_state", "drone_status", "occupancy"}) {
@@ -1506,6 +1536,13 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(app.detectionsCsv, "/data/site/out/detections.csv");
   EXPECT_EQ(app.annotatedVideo, "/data/site/out/annotated.avi");
   EXPECT_DOUBLE_EQ(app.annotatedVideoFps, 5.0);
+  EXPECT_EQ(app.record.dir, "/data/site/out/flight1");
+  EXPECT_EQ(app.record.jpegQuality, 80);
+  EXPECT_EQ(app.record.everyNthFrame, 2);
+  EXPECT_EQ(app.record.queueFrames, 6);
+  EXPECT_EQ(app.record.maxDisk_mib, 4096);
+  EXPECT_EQ(app.record.minFreeDisk_mib, 512);
+  EXPECT_EQ(app.record.onFull, RecordFullPolicy::Ring);
 }
 
 TEST(ConfigLoop, AbsentSectionsGiveTheDocumentedDefaults) {
@@ -1636,6 +1673,59 @@ TEST(RigConfig, LeavesTheLoopSectionsToTheApplicationAndWarnsOtherUnknownKeys) {
       full.substr(0, full.find("\ndds:\n") + 1) + "perception: 3\ntracking: {bad: 1}\napp:\n";
   EXPECT_TRUE(parseRig(loopAsides).warnings.empty());
   EXPECT_NE(errorOf(loopAsides), "");
+}
+
+// What a recorder writes as its sequence's rig.yaml reads back to the running rig exactly
+// (shortest round-trip numbers), with the DTM named as the recorder copies it.
+TEST(RigConfig, FormattedRigReadsBackToTheSameValues) {
+  RigConfig rig = parseRig(kFullConfig);
+  rig.origin.latitude_deg = 43.073100000000004;  // not short in decimal: written exactly
+  rig.mount.mount.leverArm_m = {0.1, -0.025, 1.0 / 3.0};
+  rig.mount.gimbal.angles.yaw_deg = -12.5;
+  rig.terrain.load.maxSamples = 1000;
+  const std::string text = formatRigYaml(rig, "dtm.tif", "recorded by a test");
+  EXPECT_EQ(text.rfind("# recorded by a test\norigin:\n", 0), 0U) << text;
+  const RigConfig back = parseRigConfig(text, "rig.yaml", "/seq");
+  EXPECT_TRUE(back.warnings.empty());
+  EXPECT_EQ(back.origin.latitude_deg, rig.origin.latitude_deg);
+  EXPECT_EQ(back.origin.longitude_deg, rig.origin.longitude_deg);
+  EXPECT_EQ(back.origin.height_m, rig.origin.height_m);
+  const camera::Intrinsics& k = back.camera.intrinsics;
+  EXPECT_EQ(k.width_px, rig.camera.intrinsics.width_px);
+  EXPECT_EQ(k.height_px, rig.camera.intrinsics.height_px);
+  EXPECT_EQ(k.fx_px, rig.camera.intrinsics.fx_px);
+  EXPECT_EQ(k.fy_px, rig.camera.intrinsics.fy_px);
+  EXPECT_EQ(k.cx_px, rig.camera.intrinsics.cx_px);
+  EXPECT_EQ(k.cy_px, rig.camera.intrinsics.cy_px);
+  const camera::Distortion& d = back.camera.distortion;
+  EXPECT_EQ(d.model, rig.camera.distortion.model);
+  EXPECT_EQ(d.k1, rig.camera.distortion.k1);
+  EXPECT_EQ(d.k2, rig.camera.distortion.k2);
+  EXPECT_EQ(d.p1, rig.camera.distortion.p1);
+  EXPECT_EQ(d.p2, rig.camera.distortion.p2);
+  EXPECT_EQ(d.k3, rig.camera.distortion.k3);
+  EXPECT_EQ(back.mount.mount.bodyToBase.roll_deg, rig.mount.mount.bodyToBase.roll_deg);
+  EXPECT_EQ(back.mount.mount.bodyToBase.pitch_deg, rig.mount.mount.bodyToBase.pitch_deg);
+  EXPECT_EQ(back.mount.mount.bodyToBase.yaw_deg, rig.mount.mount.bodyToBase.yaw_deg);
+  EXPECT_EQ(back.mount.mount.leverArm_m, rig.mount.mount.leverArm_m);
+  EXPECT_EQ(back.mount.gimbal.reference, rig.mount.gimbal.reference);
+  EXPECT_EQ(back.mount.gimbal.angles.roll_deg, rig.mount.gimbal.angles.roll_deg);
+  EXPECT_EQ(back.mount.gimbal.angles.pitch_deg, rig.mount.gimbal.angles.pitch_deg);
+  EXPECT_EQ(back.mount.gimbal.angles.yaw_deg, rig.mount.gimbal.angles.yaw_deg);
+  EXPECT_EQ(back.terrain.dtmPath, "/seq/dtm.tif");
+  ASSERT_EQ(back.terrain.crs.has_value(), rig.terrain.crs.has_value());
+  if (rig.terrain.crs) {
+    EXPECT_EQ(terrain::toString(*back.terrain.crs), terrain::toString(*rig.terrain.crs));
+  }
+  EXPECT_EQ(back.terrain.load.maxSamples, 1000U);
+  // A pinhole camera has no distortion block; crs auto stays auto.
+  rig.camera.distortion = camera::Distortion{};
+  rig.terrain.crs.reset();
+  const std::string pinhole = formatRigYaml(rig, "dtm.tif");
+  EXPECT_EQ(pinhole.find("distortion"), std::string::npos) << pinhole;
+  const RigConfig backPinhole = parseRigConfig(pinhole, "rig.yaml", "/seq");
+  EXPECT_EQ(backPinhole.camera.distortion.model, camera::LensModel::Pinhole);
+  EXPECT_FALSE(backPinhole.terrain.crs.has_value());
 }
 
 TEST(RigConfig, LoadReportsMissingFilesAsTheWholeConfiguration) {

@@ -187,6 +187,19 @@ TEST(DefaultYaml, DdsOutputsAreTheWritersDefaults) {
 
 // Every key of the file is one the loader reads (else it would keep a default the file only
 // pretends to set).
+TEST(DefaultYaml, RecordIsTheRecordersDefaults) {
+  const RecordConfig code;
+  const RecordConfig file = shippedDefaults().app.record;
+  EXPECT_EQ(file.dir, code.dir);  // off unless --record DIR or app.record.dir
+  EXPECT_TRUE(file.dir.empty());
+  EXPECT_EQ(file.jpegQuality, code.jpegQuality);
+  EXPECT_EQ(file.everyNthFrame, code.everyNthFrame);
+  EXPECT_EQ(file.queueFrames, code.queueFrames);
+  EXPECT_EQ(file.maxDisk_mib, code.maxDisk_mib);
+  EXPECT_EQ(file.minFreeDisk_mib, code.minFreeDisk_mib);
+  EXPECT_EQ(file.onFull, code.onFull);
+}
+
 TEST(DefaultYaml, EveryKeyIsRead) {
   EXPECT_TRUE(shippedDefaults().warnings.empty());
 }

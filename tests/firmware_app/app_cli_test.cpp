@@ -69,8 +69,8 @@ TEST(AppCli, HelpListsEveryOptionAndExitsZero) {
   EXPECT_EQ(help.exitCode, 0);
   for (const char* option :
        {"--config", "--sequence", "--camera", "--camera-bus", "--fast", "--every-frame", "--loop",
-        "--max-frames", "--trajectory-csv", "--detections-csv", "--annotated-video", "--no-dds",
-        "--threads", "--quiet", "--help", "Exit status"}) {
+        "--max-frames", "--trajectory-csv", "--detections-csv", "--annotated-video", "--record",
+        "--no-dds", "--threads", "--quiet", "--help", "Exit status"}) {
     EXPECT_NE(help.output.find(option), std::string::npos) << option;
   }
 }

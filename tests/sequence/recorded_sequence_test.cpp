@@ -852,5 +852,88 @@ TEST(RecordedSequence, RecordingCutShortIsRejected) {
   EXPECT_TRUE(reader.open(directory.string(), &why)) << why;  // the destructor closed it
 }
 
+// The recorder's mode: encode first (the size in hand), write through a temporary file, rows
+// flushed at once, the oldest frames removed to stay within a budget; frames.csv then lists
+// the kept frames only and sequence.yaml counts them.
+TEST(RecordedSequence, IncrementalWriterKeepsABudgetByRemovingTheOldestFrames) {
+  const TempDir temp;
+  const fs::path directory = temp.path() / "seq";
+  SequenceInfo info;
+  info.name = "ring";
+  SequenceWriter writer;
+  writer.imageExtension = ".jpg";
+  writer.jpegQuality = 90;
+  writer.flushRows = true;
+  std::string why;
+  ASSERT_TRUE(writer.open(directory.string(), info, kRigYaml, kSampleDtm.string(), &why)) << why;
+  const std::uint64_t start = writer.bytesOnDisk();
+  EXPECT_GE(start, fs::file_size(directory / "dtm.tif") + fs::file_size(directory / "rig.yaml"));
+  EncodedFrame encoded;
+  std::uint64_t imageBytes = 0;
+  for (int i = 0; i < 6; ++i) {
+    const cv::Mat image(24, 32, CV_8UC3, cv::Scalar(10 * i, 100, 200));
+    ASSERT_TRUE(writer.encodeFrame(FrameRecord{i, 1000 + i, ""}, image, encoded, &why)) << why;
+    EXPECT_EQ(encoded.record.file, "frames/00000" + std::to_string(i) + ".jpg");
+    EXPECT_FALSE(fs::exists(directory / encoded.record.file));  // encoding writes nothing
+    ASSERT_TRUE(writer.writeEncodedFrame(encoded, &why)) << why;
+    EXPECT_EQ(fs::file_size(directory / encoded.record.file), encoded.bytes.size());
+    EXPECT_FALSE(fs::exists(directory / (encoded.record.file + ".tmp")));
+    imageBytes += encoded.bytes.size();
+    // Flushed rows: the file holds every row written so far, whole.
+    const std::string rows = readText(directory / "frames.csv");
+    EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), i + 2);
+    EXPECT_EQ(rows.back(), '\n');
+  }
+  EXPECT_EQ(writer.framesKept(), 6U);
+  const std::uint64_t full = writer.bytesOnDisk();
+  EXPECT_GE(full, start + imageBytes);
+  const std::uint64_t oldest = fs::file_size(directory / "frames/000000.jpg");
+  ASSERT_TRUE(writer.removeOldestFrame(&why)) << why;
+  ASSERT_TRUE(writer.removeOldestFrame(&why)) << why;
+  EXPECT_FALSE(fs::exists(directory / "frames/000000.jpg"));
+  EXPECT_FALSE(fs::exists(directory / "frames/000001.jpg"));
+  EXPECT_LE(writer.bytesOnDisk(), full - oldest);
+  EXPECT_EQ(writer.framesKept(), 4U);
+  EXPECT_EQ(writer.framesRemoved(), 2U);
+  // A frame not after the last one written is refused before anything is written.
+  const cv::Mat image(24, 32, CV_8UC3, cv::Scalar(0, 0, 0));
+  EXPECT_FALSE(writer.encodeFrame(FrameRecord{5, 2000, ""}, image, encoded, &why));
+  EXPECT_TRUE(contains(why, "frames.csv:8: frame_id: not increasing (5 after 5)")) << why;
+  writer.setNotes("ring: 2 oldest frames removed");
+  ASSERT_TRUE(writer.close(&why)) << why;
+
+  SequenceReader reader;
+  ASSERT_TRUE(reader.open(directory.string(), &why)) << why;
+  ASSERT_EQ(reader.frames().size(), 4U);
+  EXPECT_EQ(reader.frames().front().frameId, 2);
+  EXPECT_EQ(reader.frames().front().timestamp_ns, 1002);
+  EXPECT_EQ(reader.frames().back().frameId, 5);
+  EXPECT_EQ(reader.info().notes, "ring: 2 oldest frames removed");
+  for (std::size_t i = 0; i < reader.frames().size(); ++i) {
+    cv::Mat decoded;
+    EXPECT_TRUE(reader.loadFrame(i, decoded, &why)) << why;
+  }
+  EXPECT_FALSE(fs::exists(directory / "frames.csv.tmp"));
+  EXPECT_FALSE(fs::exists(directory / "sequence.yaml.tmp"));
+}
+
+TEST(RecordedSequence, FramesCannotBeRemovedOnceGroundTruthNamesThem) {
+  const TempDir temp;
+  SequenceInfo info;
+  info.name = "truth";
+  SequenceWriter writer;
+  std::string why;
+  ASSERT_TRUE(
+      writer.open((temp.path() / "seq").string(), info, kRigYaml, kSampleDtm.string(), &why))
+      << why;
+  EXPECT_FALSE(writer.removeOldestFrame(&why));
+  EXPECT_TRUE(contains(why, "no frame left to remove")) << why;
+  const cv::Mat image(24, 32, CV_8UC3, cv::Scalar(0, 0, 0));
+  ASSERT_TRUE(writer.writeFrame(FrameRecord{0, 1, ""}, image, &why)) << why;
+  ASSERT_TRUE(writer.writeObjects({}, &why)) << why;
+  EXPECT_FALSE(writer.removeOldestFrame(&why));
+  EXPECT_TRUE(contains(why, "ground truth")) << why;
+}
+
 }  // namespace
 }  // namespace vp::sequence

@@ -1,6 +1,9 @@
 // config/app_section: `app:` (frame pool, queue, real-time settings, statistics, file
-// outputs) into the firmware app's LoopConfig (config/loop_config.hpp).
+// outputs, the recording `app.record:`) into the firmware app's LoopConfig
+// (config/loop_config.hpp).
+#include <array>
 #include <string>
+#include <string_view>
 
 #include "config/sections.hpp"
 #include "rig_config/section_reader.hpp"
@@ -14,6 +17,33 @@ const Range kPriorityRange = Range::closed(0.0, 99.0);
 const Range kCpuRange = Range::closed(0.0, 1023.0);
 const Range kStatsPeriodRangeS = Range::closed(0.1, 3600.0);
 const Range kVideoFpsRange = Range{0.0, 1000.0, true};
+const Range kJpegQualityRange = Range::closed(1.0, 100.0);
+const Range kEveryNthRange = Range::closed(1.0, 1000.0);
+const Range kRecordQueueRange = Range::closed(1.0, 64.0);  // FramePool::kMaxFrames
+// 2^31 - 1 MiB: the int's range (2 PiB, more than any disk).
+const Range kDiskRange_mib = Range::closed(0.0, 2147483647.0);
+
+constexpr std::string_view kRecordFullNames = "stop, ring";
+
+std::optional<RecordFullPolicy> recordFullFromString(const std::string& text) {
+  return enumFromString(text, std::array{RecordFullPolicy::Stop, RecordFullPolicy::Ring},
+                        [](RecordFullPolicy policy) { return toString(policy); });
+}
+
+RecordConfig readRecord(MapReader section, const std::string& baseDir) {
+  const RecordConfig d;
+  RecordConfig r;
+  r.dir = readOptionalPath(section, "dir", baseDir, "");
+  r.jpegQuality = section.integer("jpeg_quality", kJpegQualityRange, d.jpegQuality);
+  r.everyNthFrame = section.integer("every_nth_frame", kEveryNthRange, d.everyNthFrame);
+  r.queueFrames = section.integer("queue_frames", kRecordQueueRange, d.queueFrames);
+  r.maxDisk_mib = section.integer("max_disk_mib", kDiskRange_mib, d.maxDisk_mib);
+  r.minFreeDisk_mib = section.integer("min_free_disk_mib", kDiskRange_mib, d.minFreeDisk_mib);
+  r.onFull =
+      section.choice<RecordFullPolicy>("on_full", recordFullFromString, kRecordFullNames, d.onFull);
+  section.warnUnknownKeys();
+  return r;
+}
 
 }  // namespace
 
@@ -40,6 +70,7 @@ LoopConfig readLoop(MapReader section, const std::string& baseDir) {
   a.detectionsCsv = readOptionalPath(section, "detections_csv", baseDir, "");
   a.annotatedVideo = readOptionalPath(section, "annotated_video", baseDir, "");
   a.annotatedVideoFps = section.number("annotated_video_fps", kVideoFpsRange, d.annotatedVideoFps);
+  a.record = readRecord(section.section("record"), baseDir);
   section.warnUnknownKeys();
   return a;
 }

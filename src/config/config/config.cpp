@@ -75,6 +75,16 @@ const char* toString(FrameSourceKind kind) {
   return "unknown";
 }
 
+const char* toString(RecordFullPolicy policy) {
+  switch (policy) {
+    case RecordFullPolicy::Stop:
+      return "stop";
+    case RecordFullPolicy::Ring:
+      return "ring";
+  }
+  return "unknown";
+}
+
 const char* toString(CameraPixelFormat format) {
   switch (format) {
     case CameraPixelFormat::Yuyv:

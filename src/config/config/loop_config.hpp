@@ -1,6 +1,7 @@
 // config/loop_config: the firmware app's own sections of the configuration: `source:` (replay
 // or V4L2 camera), `telemetry:` (where the drone pose comes from) and `app:` (frame pool,
-// queue, real-time settings, statistics, file outputs). The sections that configure modules
+// queue, real-time settings, statistics, file outputs, `app.record:` the recording of what the
+// loop sees). The sections that configure modules
 // of src/ (perception, pose, tracking) are those modules' own options structs (config.hpp).
 //
 // Contract: plain values with the documented defaults (docs/configuration.md,
@@ -56,6 +57,25 @@ struct TelemetryLinkConfig {
   double replayLookahead_s = 0.2;  // recording: samples pushed up to frame time + this
 };
 
+// What to do when the recording reaches its disk budget (RecordConfig).
+enum class RecordFullPolicy : std::uint8_t {
+  Stop,  // finish the sequence (sequence.yaml written) and record nothing more
+  Ring,  // delete the oldest frame images to make room; frames.csv lists the kept ones
+};
+const char* toString(RecordFullPolicy policy);  // "stop", "ring"
+
+// `app.record:` the loop writes what it sees (frames as JPEG, their timestamps, the pose samples
+// as received, the rig) as a recorded sequence (docs/field_data.md, docs/recorded_sequence.md).
+struct RecordConfig {
+  std::string dir;            // absolute; empty = not recording (--record DIR sets it)
+  int jpegQuality = 90;       // [1, 100]
+  int everyNthFrame = 1;      // record one frame in n taken from the source, [1, 1000]
+  int queueFrames = 4;        // preallocated camera-size buffers waiting for the writer, [1, 64]
+  int maxDisk_mib = 0;        // disk budget of the recording (MiB, 2^20 bytes); 0 = none
+  int minFreeDisk_mib = 256;  // the file system keeps at least this much free (MiB); 0 = off
+  RecordFullPolicy onFull = RecordFullPolicy::Stop;
+};
+
 struct LoopConfig {
   int queueDepth = 1;               // frames waiting between capture and processing, [1, 8]
   int framePoolSize = 0;            // 0 = queueDepth + 2 (waiting + processing + capturing)
@@ -68,6 +88,7 @@ struct LoopConfig {
   std::string detectionsCsv;        // absolute; empty = not written
   std::string annotatedVideo;       // absolute; empty = not written (MJPG AVI)
   double annotatedVideoFps = 10.0;
+  RecordConfig record{};
 };
 
 }  // namespace vp::config

@@ -7,7 +7,10 @@
 // types of the foundation modules. The loop's sections of the same file (dds, perception, pose,
 // tracking, source, telemetry, app) are the application's: they are neither read nor reported
 // as unknown here; other unknown keys are warnings. The recorded-sequence reader reads a
-// recording's rig.yaml with it; config::AppConfig holds the same structs. Start-up only.
+// recording's rig.yaml with it; config::AppConfig holds the same structs. formatRigYaml() is the
+// inverse: the sections as YAML text that parseRigConfig() reads back to the same values
+// (numbers in their shortest exact form), which a recorder writes as its sequence's rig.yaml.
+// Start-up only.
 #pragma once
 
 #include <optional>
@@ -58,5 +61,11 @@ RigConfig loadRigConfig(const std::string& path);
 // Same from text; sourceName is used in messages, baseDir to resolve relative paths.
 RigConfig parseRigConfig(const std::string& yamlText, const std::string& sourceName,
                          const std::string& baseDir);
+
+// origin:, camera:, mount: and terrain: as YAML text (a comment line `header` first when not
+// empty); terrain.dtm_path is written as `dtmPath` (a recorder names its copy, dtm.tif), the
+// other fields from rig. parseRigConfig() of the text gives back rig's values exactly.
+std::string formatRigYaml(const RigConfig& rig, const std::string& dtmPath,
+                          const std::string& header = "");
 
 }  // namespace vp::config

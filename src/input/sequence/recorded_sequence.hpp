@@ -10,7 +10,11 @@
 // the file, line and field ("telemetry.csv:17: qw: not a number 'x'"; timestamps going back
 // or jumping more than kMaxTimestampGap_ns included); frame images are read
 // one at a time by loadFrame(), which reports a missing or corrupt image as an error value,
-// never an exception. SequenceWriter writes the same format (used by the simulator).
+// never an exception. SequenceWriter writes the same format (used by the simulator and by the
+// firmware app's recorder): incrementally (open, frames and telemetry rows as they come,
+// close writes sequence.yaml last), every image through a temporary file renamed into place,
+// optionally every CSV row flushed at once (flushRows), and with removeOldestFrame() for a
+// recorder that keeps within a disk budget (frames.csv then lists the kept frames only).
 // rig.yaml's rig sections are read with the configuration's own rig reader
 // (config::loadRigConfig: the same checks and messages as config::loadConfig) and handed out as
 // a Rig, so that a reader of recordings (the replay frame source) needs none of the loop's
@@ -135,6 +139,15 @@ class SequenceReader {
   std::vector<KeypointTruth> keypoints_;  // sorted by frame
 };
 
+// One frame encoded by SequenceWriter::encodeFrame() and written by writeEncodedFrame(): a
+// recorder encodes first and decides with the size in hand (its disk budget). `bytes` is reused
+// from frame to frame: once its capacity covers a frame, encoding the next one into it does
+// not grow it.
+struct EncodedFrame {
+  FrameRecord record;  // file resolved (frames/<id>.<ext> when it was left empty)
+  std::vector<unsigned char> bytes;
+};
+
 class SequenceWriter {
  public:
   SequenceWriter();  // defined in the .cpp, where Files is complete
@@ -144,11 +157,32 @@ class SequenceWriter {
   // that is copied beside it (rig.yaml must name it as terrain.dtm_path: dtm.tif).
   bool open(const std::string& directory, const SequenceInfo& info, const std::string& rigYaml,
             const std::string& dtmFile, std::string* why);
-  // imageExtension ".png" (lossless) or ".jpg" (jpegQuality 1..100).
+  // imageExtension ".png" (lossless) or ".jpg" (jpegQuality 1..100). = encodeFrame() then
+  // writeEncodedFrame().
   bool writeFrame(const FrameRecord& frame, const cv::Mat& image, std::string* why);
+  // Checks the record as the reader would (after the frames written so far) and the image
+  // (type, the rig's size), then encodes it into out. Writes nothing.
+  bool encodeFrame(const FrameRecord& frame, const cv::Mat& image, EncodedFrame& out,
+                   std::string* why);
+  // Writes the image as <file>.tmp and renames it into place (a stop or a crash never leaves a
+  // truncated image under its name), then its frames.csv row.
+  bool writeEncodedFrame(const EncodedFrame& frame, std::string* why);
+  // Deletes the oldest frame still kept (its image; its row goes when close() rewrites
+  // frames.csv). False when no frame is kept or ground truth was written (its rows name the
+  // frames).
+  bool removeOldestFrame(std::string* why);
+  // Replaces the notes written into sequence.yaml by close().
+  void setNotes(const std::string& notes);
+  // Bytes the writer has put on disk so far: rig.yaml, the DTM copy, the CSV files and the
+  // kept images (a removed image no longer counts).
+  std::uint64_t bytesOnDisk() const;
+  std::size_t framesKept() const;     // frames written and not removed
+  std::size_t framesRemoved() const;  // by removeOldestFrame()
   bool writeTelemetry(const TelemetryRecord& record, std::string* why);
   bool writeObjects(std::span<const ObjectTruth> objects, std::string* why);
   bool writeKeypoints(std::span<const KeypointTruth> keypoints, std::string* why);
+  // Writes sequence.yaml (with frame_count) last; when frames were removed, frames.csv is first
+  // rewritten (temporary file renamed into place) to list the kept frames only.
   bool close(std::string* why);
 
   std::string imageExtension = ".png";
@@ -156,6 +190,9 @@ class SequenceWriter {
   // gamma_i columns of ground_truth/objects.csv (0..8), fixed when the file is created by the
   // first writeObjects(); -1: the largest shape count of that call (8 if it holds no shape).
   int gammaColumns = -1;
+  // Flush every CSV row as it is written (one write(2) per row): a recorder that may be killed
+  // leaves whole rows only. Off for batch writers (the simulator), which close properly.
+  bool flushRows = false;
 
  private:
   struct Files;

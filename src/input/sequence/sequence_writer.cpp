@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -40,9 +41,20 @@ struct Csv {
 
 }  // namespace
 
+// A frame on disk: its row and its image's size (the disk budget of a recorder).
+struct KeptFrame {
+  FrameRecord record;
+  std::uint64_t bytes = 0;
+};
+
 struct SequenceWriter::Files {
   fs::path directory;
   SequenceInfo info;
+  bool flushRows = false;
+  std::uint64_t bytesOnDisk = 0;
+  std::deque<KeptFrame> kept;  // oldest first
+  std::size_t removed = 0;
+  EncodedFrame scratch;  // writeFrame()'s encoding buffer, reused
   int width_px = 0;
   int height_px = 0;
   int gammaColumns = 0;
@@ -58,6 +70,10 @@ struct SequenceWriter::Files {
     csv.name = (directory / relativePath).string();
     csv.stream.open(directory / relativePath, std::ios::binary | std::ios::trunc);
     csv.stream << header << '\n';
+    if (flushRows) {
+      csv.stream.flush();
+    }
+    bytesOnDisk += header.size() + 1;
     if (!csv.stream) {
       setWhy(why, csv.name + ": cannot write");
       return false;
@@ -66,8 +82,14 @@ struct SequenceWriter::Files {
   }
 
   bool appendRow(Csv& csv, const std::string& row, std::string* why) {
+    // The row and its line end in one insertion: with flushRows the stream's buffer holds just
+    // this row when it is flushed, so it reaches the file in one write(2).
     csv.stream << row << '\n';
+    if (flushRows) {
+      csv.stream.flush();
+    }
     ++csv.nextLine;
+    bytesOnDisk += row.size() + 1;
     if (!csv.stream) {
       setWhy(why, csv.name + ": write error");
       return false;
@@ -155,17 +177,23 @@ bool SequenceWriter::open(const std::string& directory, const SequenceInfo& info
                     quote((dir / kDtmFile).string()) + ": " + error.message());
     return false;
   }
+  std::uint64_t copied = rigYaml.size() + fs::file_size(dir / kDtmFile, error);
   for (const char* extension : kWorldFileExtensions) {
     const fs::path worldFile = fs::path(dtmFile).replace_extension(extension);
-    if (fileExists(worldFile) &&
-        !fs::copy_file(worldFile, dir / (std::string("dtm") + extension), error)) {
+    const fs::path copy = dir / (std::string("dtm") + extension);
+    if (fileExists(worldFile) && !fs::copy_file(worldFile, copy, error)) {
       setWhy(why,
              "cannot copy the world file " + quote(worldFile.string()) + ": " + error.message());
       return false;
     }
+    if (fileExists(copy)) {
+      copied += fs::file_size(copy, error);
+    }
   }
 
   auto files = std::make_unique<Files>();
+  files->flushRows = flushRows;
+  files->bytesOnDisk = copied;
   files->directory = dir;
   files->info = info;
   files->width_px = rig.camera.intrinsics.width_px;
@@ -183,6 +211,16 @@ bool SequenceWriter::open(const std::string& directory, const SequenceInfo& info
 bool SequenceWriter::writeFrame(const FrameRecord& frame, const cv::Mat& image, std::string* why) {
   if (!files_) {
     setWhy(why, "writeFrame: the writer is not open");
+    return false;
+  }
+  EncodedFrame& scratch = files_->scratch;
+  return encodeFrame(frame, image, scratch, why) && writeEncodedFrame(scratch, why);
+}
+
+bool SequenceWriter::encodeFrame(const FrameRecord& frame, const cv::Mat& image, EncodedFrame& out,
+                                 std::string* why) {
+  if (!files_) {
+    setWhy(why, "encodeFrame: the writer is not open");
     return false;
   }
   Files& files = *files_;
@@ -229,22 +267,105 @@ bool SequenceWriter::writeFrame(const FrameRecord& frame, const cv::Mat& image, 
     setWhy(why, files.where(files.frames, error));
     return false;
   }
+  bool encoded = false;
+  try {
+    encoded =
+        cv::imencode(fs::path(record.file).extension().string(), image, out.bytes, parameters);
+  } catch (const cv::Exception&) {
+    encoded = false;  // reported below like a failed encoding
+  }
+  if (!encoded) {
+    setWhy(why, (files.directory / record.file).string() + ": cannot encode image");
+    return false;
+  }
+  out.record = std::move(record);
+  return true;
+}
 
+bool SequenceWriter::writeEncodedFrame(const EncodedFrame& frame, std::string* why) {
+  if (!files_) {
+    setWhy(why, "writeEncodedFrame: the writer is not open");
+    return false;
+  }
+  Files& files = *files_;
+  const FrameRecord& record = frame.record;
+  try {
+    files.rules.checkFrame(record);  // frames written since it was encoded
+  } catch (const FieldError& error) {
+    setWhy(why, files.where(files.frames, error));
+    return false;
+  }
   const fs::path path = files.directory / record.file;
+  fs::path temporary = path;
+  temporary += ".tmp";
   std::error_code error;
   fs::create_directories(path.parent_path(), error);
   bool written = false;
-  try {
-    written = !error && cv::imwrite(path.string(), image, parameters);
-  } catch (const cv::Exception&) {
-    written = false;  // reported below like a failed write
+  if (!error) {
+    std::ofstream image(temporary, std::ios::binary | std::ios::trunc);
+    image.write(reinterpret_cast<const char*>(frame.bytes.data()),
+                static_cast<std::streamsize>(frame.bytes.size()));
+    image.close();
+    written = static_cast<bool>(image);
+  }
+  if (written) {
+    fs::rename(temporary, path, error);
+    written = !error;
   }
   if (!written) {
+    fs::remove(temporary, error);
     setWhy(why, path.string() + ": cannot write image");
     return false;
   }
   files.rules.addFrame(record);
+  files.bytesOnDisk += frame.bytes.size();
+  files.kept.push_back({record, frame.bytes.size()});
   return files.appendRow(files.frames, formatFrameRow(record), why);
+}
+
+bool SequenceWriter::removeOldestFrame(std::string* why) {
+  if (!files_) {
+    setWhy(why, "removeOldestFrame: the writer is not open");
+    return false;
+  }
+  Files& files = *files_;
+  if (files.kept.empty()) {
+    setWhy(why, files.frames.name + ": no frame left to remove");
+    return false;
+  }
+  if (files.objects || files.keypoints) {
+    setWhy(why, files.frames.name + ": frames cannot be removed once ground truth names them");
+    return false;
+  }
+  const KeptFrame& oldest = files.kept.front();
+  const fs::path path = files.directory / oldest.record.file;
+  std::error_code error;
+  if (!fs::remove(path, error) || error) {
+    setWhy(why, path.string() + ": cannot remove" + (error ? ": " + error.message() : ""));
+    return false;
+  }
+  files.bytesOnDisk -= std::min(files.bytesOnDisk, oldest.bytes);
+  files.kept.pop_front();
+  ++files.removed;
+  return true;
+}
+
+void SequenceWriter::setNotes(const std::string& notes) {
+  if (files_) {
+    files_->info.notes = notes;
+  }
+}
+
+std::uint64_t SequenceWriter::bytesOnDisk() const {
+  return files_ ? files_->bytesOnDisk : 0;
+}
+
+std::size_t SequenceWriter::framesKept() const {
+  return files_ ? files_->kept.size() : 0;
+}
+
+std::size_t SequenceWriter::framesRemoved() const {
+  return files_ ? files_->removed : 0;
 }
 
 bool SequenceWriter::writeTelemetry(const TelemetryRecord& record, std::string* why) {
@@ -363,11 +484,45 @@ bool SequenceWriter::close(std::string* why) {
   if (files->keypoints) {
     finish(files->keypoints->stream, files->keypoints->name);
   }
-  // Written last: a recording cut short has no sequence.yaml, and the reader rejects it.
+  if (ok && files->removed > 0) {
+    // Frames were removed (a recorder's disk budget): frames.csv lists the kept ones only,
+    // rewritten whole beside it and renamed into place.
+    const fs::path framesPath = files->directory / kFramesFile;
+    fs::path temporary = framesPath;
+    temporary += ".tmp";
+    std::ofstream rewritten(temporary, std::ios::binary | std::ios::trunc);
+    rewritten << joinColumns(toStrings(kFrameColumns)) << '\n';
+    for (const KeptFrame& frame : files->kept) {
+      rewritten << formatFrameRow(frame.record) << '\n';
+    }
+    finish(rewritten, temporary.string());
+    std::error_code error;
+    if (ok) {
+      fs::rename(temporary, framesPath, error);
+    }
+    if (ok && error) {
+      setWhy(why, framesPath.string() + ": cannot replace: " + error.message());
+      ok = false;
+    }
+  }
+  // Written last (beside it, then renamed into place): a recording cut short has no
+  // sequence.yaml, and the reader rejects it.
   const fs::path infoPath = files->directory / kSequenceFile;
-  std::ofstream info(infoPath, std::ios::binary | std::ios::trunc);
-  info << formatInfo(files->info, files->rules.frameCount());
-  finish(info, infoPath.string());
+  fs::path temporary = infoPath;
+  temporary += ".tmp";
+  std::ofstream info(temporary, std::ios::binary | std::ios::trunc);
+  info << formatInfo(files->info, files->kept.size());
+  info.close();
+  std::error_code error;
+  if (info) {
+    fs::rename(temporary, infoPath, error);
+  }
+  if (!info || error) {
+    if (ok) {
+      setWhy(why, infoPath.string() + ": write error" + (error ? ": " + error.message() : ""));
+    }
+    ok = false;
+  }
   return ok;
 }
 
