@@ -172,6 +172,13 @@ TEST(DefaultYaml, TrackingIsTheTrackersDefaults) {
   EXPECT_EQ(noise.initialSteering_rad, noiseCode.initialSteering_rad);
 }
 
+TEST(DefaultYaml, GeorefIsTheGroundViewsDefaults) {
+  const georef::GeorefOptions code;
+  const georef::GeorefOptions file = shippedDefaults().georef;
+  EXPECT_EQ(file.gcpFile, code.gcpFile);
+  EXPECT_EQ(file.maxResidual_m, code.maxResidual_m);
+}
+
 // Every key of the file is one the loader reads (else it would keep a default the file only
 // pretends to set).
 TEST(DefaultYaml, EveryKeyIsRead) {
