@@ -69,6 +69,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   wiring.shapeModel = &asm_;
   wiring.droneId = config_.dds.droneId;
   wiring.sourceOnMonotonicClock = capture_.source().capturesOnMonotonicClock();
+  wiring.fixedView = !config_.georef.gcpFile.empty();
   wiring.monotonicToUtc_ns = monotonicToUtcNs_;
   // The `tracking:` section is the tracker's own options; the app adds what it owns.
   tracking::TrackerConfig tracker = config_.tracking;
@@ -202,13 +203,16 @@ bool App::initWorld(std::string* why) {
     }
     return false;
   }
+  if (!initGroundView(why)) {
+    return false;
+  }
   if (seams_.perception) {
     perception_ = std::move(seams_.perception);
     return true;
   }
   auto pipeline = std::make_unique<PipelinePerception>();
   if (!pipeline->init(config_.perception, camera_, config_.mount.mount, terrain_, frame_, asm_,
-                      &problem)) {
+                      config_.georef.gcpFile.empty() ? nullptr : &groundView_, &problem)) {
     if (why) {
       *why = "perception: " + problem;
     }
@@ -216,6 +220,35 @@ bool App::initWorld(std::string* why) {
   }
   perception_ = std::move(pipeline);
   return true;
+}
+
+bool App::initGroundView(std::string* why) {
+  // Without telemetry, ground control points place the fixed view (docs/field_data.md).
+  const georef::GeorefOptions& georef = config_.georef;
+  if (georef.gcpFile.empty()) {
+    return true;
+  }
+  std::string problem;
+  if (config_.telemetry.source != config::TelemetrySourceKind::None) {
+    problem = std::string(
+                  "ground control points place a fixed view without telemetry: set "
+                  "telemetry.source: none (it is ") +
+              config::toString(config_.telemetry.source) + ")";
+  } else if (georef::loadGroundView(georef, camera_, frame_, &terrain_, &groundView_, &problem) &&
+             georef::checkResiduals(groundView_, georef.maxResidual_m, &problem)) {
+    const georef::GroundHomography& h = groundView_.homography;
+    logLine(
+        "georef: %zu ground control points from %s: RMS residual %.3f m, largest %.3f m (point "
+        "'%s'); camera %.1f m above the ground",
+        h.residuals.size(), csv::shortened(georef.gcpFile).c_str(), h.rms_m, h.max_m,
+        h.residuals[h.maxIndex].id.c_str(),
+        groundView_.camera ? groundView_.camera->heightAboveGround_m : 0.0);
+    return true;
+  }
+  if (why) {
+    *why = "georef.gcp_file: " + problem;
+  }
+  return false;
 }
 
 bool App::initPose(std::string* why) {

@@ -47,6 +47,7 @@
 #include "frame_capture.hpp"
 #include "frame_step.hpp"
 #include "geodesy/geodesy.hpp"
+#include "georef/georeference.hpp"
 #include "loop_inputs.hpp"
 #include "loop_stats.hpp"
 #include "perception_stage.hpp"
@@ -102,6 +103,7 @@ class App final : public CounterSource {
  private:
   bool initSource(std::string* why);
   bool initWorld(std::string* why);
+  bool initGroundView(std::string* why);
   bool initPose(std::string* why);
   bool startRealtime(std::string* why);
   bool openRecorder(std::string* why);
@@ -121,6 +123,7 @@ class App final : public CounterSource {
   terrain::TerrainModel terrain_;
   camera::CameraModel camera_;
   shape::ActiveShapeModel asm_;
+  georef::GroundView groundView_;  // with georef.gcp_file: the fixed view lifting uses
 
   // The loop's books, borrowed by the units (processing thread; capture's counts are its own).
   LoopCounters counters_{};

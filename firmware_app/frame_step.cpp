@@ -79,7 +79,8 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
 
   poseInput_->poll(t, poses_);
   const telemetry::PoseEstimate pose = poses_.poseAt(t);
-  switch (pose.status) {
+  // A georeferenced fixed view needs no pose: its absence is neither counted nor logged.
+  switch (wiring_.fixedView ? telemetry::PoseStatus::Ok : pose.status) {
     case telemetry::PoseStatus::Ok:
       break;
     case telemetry::PoseStatus::NoPose:
@@ -92,7 +93,9 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
       ++counters.invalidPose;
       break;
   }
-  logPoseEpisode(pose.status, frame.frameId, pose);
+  if (!wiring_.fixedView) {
+    logPoseEpisode(pose.status, frame.frameId, pose);
+  }
 
   const perception::PipelineStatus status = perception_->process(frame.image, t, pose);
   const perception::PipelineTimings& timings = perception_->timings();

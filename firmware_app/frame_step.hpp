@@ -68,6 +68,7 @@ struct FrameStepWiring {
   const shape::ActiveShapeModel* shapeModel = nullptr;
   std::uint32_t droneId = 0;
   bool sourceOnMonotonicClock = false;  // camera stamps: CLOCK_MONOTONIC
+  bool fixedView = false;               // georeferenced by ground control points: no pose is needed
   std::int64_t monotonicToUtc_ns = 0;
 };
 

@@ -44,11 +44,12 @@ class FramePerception {
 
 class PipelinePerception final : public FramePerception {
  public:
-  // options: the `perception:` section (config::AppConfig::perception).
+  // options: the `perception:` section (config::AppConfig::perception); groundView: the
+  // georeferenced fixed view when there is no telemetry (null: pose and DTM).
   bool init(const perception::PipelineOptions& options, const camera::CameraModel& rawCamera,
             const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
             const geodesy::LocalFrame& frame, const shape::ActiveShapeModel& shapeModel,
-            std::string* why);
+            const georef::GroundView* groundView, std::string* why);
 
   perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                      const telemetry::PoseEstimate& pose) override {

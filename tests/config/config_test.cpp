@@ -201,6 +201,9 @@ telemetry:
   geoid_separation_m: -33.5
   link_latency_s: 0.002
   replay_lookahead_s: 0.3
+georef:
+  gcp_file: none
+  max_residual_m: 2.5
 app:
   queue_depth: 2
   frame_pool_size: 6
@@ -830,6 +833,11 @@ const MalformedCase kMalformedCases[] = {
      "must be in [0, 1], got 2"},
     {"replay_lookahead_s: 0.3", "replay_lookahead_s: -1", "telemetry.replay_lookahead_s",
      "must be in [0, 10], got -1"},
+    // georef
+    {"georef:\n  gcp_file", "georef: 1\nx:\n  gcp_file", "georef", "expected a map, got '1'"},
+    {"gcp_file: none", "gcp_file: ''", "georef.gcp_file", "must not be empty"},
+    {"max_residual_m: 2.5", "max_residual_m: 0", "georef.max_residual_m",
+     "must be in (0, 100], got 0"},
     // app
     {"app:\n  queue_depth", "app: 1\nx:\n  queue_depth", "app", "expected a map, got '1'"},
     {"queue_depth: 2", "queue_depth: 9", "app.queue_depth", "must be in [1, 8], got 9"},
@@ -1044,6 +1052,9 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "telemetry.geoid_separation_m",
                                                "telemetry.link_latency_s",
                                                "telemetry.replay_lookahead_s",
+                                               "georef",
+                                               "georef.gcp_file",
+                                               "georef.max_residual_m",
                                                "app",
                                                "app.queue_depth",
                                                "app.frame_pool_size",
@@ -1598,6 +1609,20 @@ TEST(ConfigLoop, NoneSwitchesAnOptionalFileOffAndDdsTelemetryNeedsAFlightStack) 
   EXPECT_EQ(errorOf(text),
             "site.yaml: telemetry.source: dds needs dds.telemetry.source ardupilot or px4 (it is "
             "none)");
+}
+
+TEST(ConfigLoop, GroundControlPointsNeedTelemetryOffAndResolveTheirPath) {
+  const AppConfig full = parse(kFullConfig);
+  EXPECT_TRUE(full.georef.gcpFile.empty());  // `none`
+  EXPECT_EQ(full.georef.maxResidual_m, 2.5);
+  std::string text = edited("gcp_file: none", "gcp_file: survey/gcp.csv");
+  EXPECT_EQ(errorOf(text),
+            "site.yaml: georef.gcp_file: ground control points place a fixed view without "
+            "telemetry: set telemetry.source: none (it is mavlink_udp)");
+  text.replace(text.find("source: mavlink_udp"), 19, "source: none");
+  const AppConfig config = parse(text);
+  EXPECT_EQ(config.georef.gcpFile, "/data/site/survey/gcp.csv");
+  EXPECT_EQ(config.telemetry.source, TelemetrySourceKind::None);
 }
 
 // The rig reader (rig_config/rig_config.hpp): the rig sections exactly as parseConfig() reads

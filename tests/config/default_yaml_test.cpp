@@ -185,6 +185,13 @@ TEST(DefaultYaml, DdsOutputsAreTheWritersDefaults) {
   EXPECT_EQ(config.dds.autoware.stationarySpeed_mps, code.autoware.stationarySpeed_mps);
 }
 
+TEST(DefaultYaml, GeorefIsTheGroundViewsDefaults) {
+  const georef::GeorefOptions code;
+  const georef::GeorefOptions file = shippedDefaults().georef;
+  EXPECT_EQ(file.gcpFile, code.gcpFile);
+  EXPECT_EQ(file.maxResidual_m, code.maxResidual_m);
+}
+
 // Every key of the file is one the loader reads (else it would keep a default the file only
 // pretends to set).
 TEST(DefaultYaml, RecordIsTheRecordersDefaults) {

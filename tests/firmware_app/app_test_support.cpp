@@ -82,6 +82,12 @@ config::AppConfig defaultConfigFor(const std::string& sequenceDir) {
 }
 
 bool TruthPerception::init(const std::string& sequenceDir, std::string* why) {
+  // The truth boxes are footprints: lifted on the ground.
+  return init(sequenceDir, nullptr, perception::DetectionLifterOptions{.boxHeightShare = 0.0}, why);
+}
+
+bool TruthPerception::init(const std::string& sequenceDir, const georef::GeorefOptions* georef,
+                           const perception::DetectionLifterOptions& lift, std::string* why) {
   if (!reader_.open(sequenceDir, why)) {
     return false;
   }
@@ -92,10 +98,17 @@ bool TruthPerception::init(const std::string& sequenceDir, std::string* why) {
       !terrain_.init(std::move(grid), world_, why) ||
       !camera_.init(rig.intrinsics, rig.distortion, why) ||
       !asm_.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", why) ||
-      !lifter_.init(camera_, rig.mount, terrain_, world_, why) ||
-      // The truth boxes are footprints: lifted on the ground.
-      !detectionLifter_.init(terrain_, world_, asm_,
-                             perception::DetectionLifterOptions{.boxHeightShare = 0.0}, why)) {
+      !lifter_.init(camera_, rig.mount, terrain_, world_, why)) {
+    return false;
+  }
+  planar_ = georef != nullptr;
+  if (planar_) {
+    if (!georef::loadGroundView(*georef, camera_, world_, &terrain_, &groundView_, why) ||
+        !plane_.init(groundView_.homography, groundView_.camera, camera_, world_, why) ||
+        !detectionLifter_.init(plane_, world_, asm_, lift, why)) {
+      return false;
+    }
+  } else if (!detectionLifter_.init(terrain_, world_, asm_, lift, why)) {
     return false;
   }
   for (const sequence::FrameRecord& frame : reader_.frames()) {
@@ -145,7 +158,9 @@ perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
   summary_ = detectionLifter_.liftFrame(
       lifter_, timestamp_ns, pose, std::span<const detection::Detection>(detections_.data(), count),
       observations_);
-  footprint_ = perception::frameFootprint(lifter_, summary_, bgrFrame.cols, bgrFrame.rows);
+  footprint_ = planar_
+                   ? perception::frameFootprint(plane_, bgrFrame.cols, bgrFrame.rows)
+                   : perception::frameFootprint(lifter_, summary_, bgrFrame.cols, bgrFrame.rows);
   return perception::PipelineStatus::Ok;
 }
 

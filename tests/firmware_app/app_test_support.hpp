@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "app.hpp"
+#include "georef/georeference.hpp"
+#include "lifting/plane_lifter.hpp"
 #include "perception/detection_lifter.hpp"
 #include "sequence/recorded_sequence.hpp"
 
@@ -42,6 +44,11 @@ std::string scratchDir(const std::string& name);
 class TruthPerception final : public app::FramePerception {
  public:
   bool init(const std::string& sequenceDir, std::string* why);
+  // The same lifted with the given options and, with georef, through the ground control points'
+  // fixed view (georef::loadGroundView on the recorded rig, as the app loads it) instead of the
+  // recorded telemetry.
+  bool init(const std::string& sequenceDir, const georef::GeorefOptions* georef,
+            const perception::DetectionLifterOptions& lift, std::string* why);
 
   perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                      const telemetry::PoseEstimate& pose) override;
@@ -63,6 +70,9 @@ class TruthPerception final : public app::FramePerception {
   camera::CameraModel camera_;
   shape::ActiveShapeModel asm_;
   lifting::Lifter lifter_;
+  georef::GroundView groundView_;
+  lifting::PlaneLifter plane_;
+  bool planar_ = false;
   perception::DetectionLifter detectionLifter_;
   std::vector<std::int64_t> timestamps_;  // frames.csv order
   std::int64_t loopPeriodNs_ = 0;

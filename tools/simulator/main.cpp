@@ -16,7 +16,8 @@ void usage(std::ostream& out) {
          "                   [--width 2592 --height 2048] [--altitude-m 60..150] [--tilt-deg "
          "0..35]\n"
          "                   [--jpeg-quality Q | --png] [--threads N] [--supersampling 1..4]\n"
-         "                   [--asm PATH] [--telemetry-noise] [--instance-masks] [--help]\n"
+         "                   [--asm PATH] [--telemetry-noise] [--static-hover] [--instance-masks]\n"
+         "                   [--help]\n"
          "Renders N frames at 10 Hz of a scene drawn from the seed (same seed: byte-identical\n"
          "output) into DIR as a recorded sequence with ground truth. See docs/simulator.md.\n";
 }
@@ -98,6 +99,8 @@ int main(int argc, char** argv) {
       options.asmPath = value("--asm");
     } else if (arg == "--telemetry-noise") {
       options.telemetryNoise = true;
+    } else if (arg == "--static-hover") {
+      options.staticHover = true;
     } else if (arg == "--instance-masks") {
       options.instanceMasks = true;
     } else {

@@ -135,6 +135,11 @@ lifting::DronePose Simulator::hoverPose() {
     gimbalOffset_[i] = first ? r.gimbalSigma_deg * zGim
                              : aAtt * gimbalOffset_[i] + bAtt * r.gimbalSigma_deg * zGim;
   }
+  if (options_.staticHover) {
+    positionOffset_.setZero();
+    attitudeOffset_.setZero();
+    gimbalOffset_.setZero();
+  }
   const double az = r.viewAzimuth_deg * kPi / 180.0;
   const double tilt = r.tilt_deg * kPi / 180.0;
   const Eigen::Vector3d horizontal(std::sin(az), std::cos(az), 0.0);

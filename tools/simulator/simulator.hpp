@@ -48,7 +48,10 @@ struct SimOptions {
   int supersampling = 2;
   std::string asmPath;          // default: models/asm/default_asm.yaml of the source tree
   bool telemetryNoise = false;  // recorded pose = true pose + small noise
-  bool instanceMasks = false;   // also write instances/<frame>.png (16-bit object ids)
+  // The drone holds one pose (no hover sway of position, attitude and gimbal): a fixed view, as
+  // ground control points assume. The random draws are the same, so the scene is too.
+  bool staticHover = false;
+  bool instanceMasks = false;  // also write instances/<frame>.png (16-bit object ids)
   double warmUpS = 30.0;
 };
 

@@ -32,10 +32,17 @@ AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName
   config.tracking = detail::readTracking(root.section("tracking"));
   config.source = detail::readSource(root.section("source"), baseDir);
   config.telemetry = detail::readTelemetryLink(root.section("telemetry"));
+  config.georef = detail::readGeoref(root.section("georef"), baseDir);
   config.app = detail::readLoop(root.section("app"), baseDir);
   if (config.telemetry.source == TelemetrySourceKind::Dds &&
       config.dds.telemetry.source == TelemetrySource::None) {
     diag.fail("telemetry.source", "dds needs dds.telemetry.source ardupilot or px4 (it is none)");
+  }
+  if (!config.georef.gcpFile.empty() && config.telemetry.source != TelemetrySourceKind::None) {
+    diag.fail("georef.gcp_file",
+              std::string("ground control points place a fixed view without telemetry: set "
+                          "telemetry.source: none (it is ") +
+                  toString(config.telemetry.source) + ")");
   }
   root.warnUnknownKeys();
   return config;

@@ -7,8 +7,9 @@
 // `perception:`, `pose:` and `tracking:` as the options structs of the modules they configure
 // (perception::PipelineOptions, telemetry::PoseBufferConfig, tracking::TrackerConfig: one
 // definition of each knob and its default, beside the module's code), `source:`,
-// `telemetry:`, `app:` (config/loop_config.hpp) and `dds:` (config/dds_config.hpp).
-// Keys the schema does not know are not fatal: they are listed in AppConfig::warnings
+// `telemetry:`, `georef:` (georef::GeorefOptions), `app:` (config/loop_config.hpp) and `dds:`
+// (config/dds_config.hpp). Keys the schema does not know are not fatal: they are listed in
+// AppConfig::warnings
 // ("site.yaml: unknown key 'camera.fxx'"). Relative paths in the file are resolved
 // against the file's directory. The schema, with units, ranges and defaults, is
 // documented in docs/configuration.md and config/default.yaml. The optional `dds:` section
@@ -26,6 +27,7 @@
 #include "config/loop_config.hpp"
 #include "geodesy/attitude.hpp"
 #include "geodesy/geodesy.hpp"
+#include "georef/georeference.hpp"
 #include "perception/frame_pipeline.hpp"
 #include "rig_config/rig_config.hpp"
 #include "telemetry/pose_buffer.hpp"
@@ -55,6 +57,7 @@ struct AppConfig {
   tracking::TrackerConfig tracking{};  // the app borrows it the ASM and the detection capacity
   SourceConfig source{};
   TelemetryLinkConfig telemetry{};
+  georef::GeorefOptions georef{};  // ground control points of a fixed view (telemetry off)
   LoopConfig app{};
   std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
 };

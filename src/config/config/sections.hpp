@@ -22,6 +22,8 @@ telemetry::PoseBufferConfig readPose(MapReader section);                 // pose
 tracking::TrackerConfig readTracking(MapReader section);                 // tracking_section.cpp
 SourceConfig readSource(MapReader section, const std::string& baseDir);  // source_section.cpp
 TelemetryLinkConfig readTelemetryLink(MapReader section);                // telemetry_section
-LoopConfig readLoop(MapReader section, const std::string& baseDir);      // app_section.cpp
+georef::GeorefOptions readGeoref(MapReader section,                      // georef_section.cpp
+                                 const std::string& baseDir);
+LoopConfig readLoop(MapReader section, const std::string& baseDir);  // app_section.cpp
 
 }  // namespace vp::config::detail

@@ -111,9 +111,66 @@ bool DetectionLifter::init(const terrain::TerrainModel& terrain, const geodesy::
   }
   options_ = options;
   terrain_ = &terrain;
+  plane_ = nullptr;
   frame_ = &frame;
   shapeModel_ = &shapeModel;
   return true;
+}
+
+bool DetectionLifter::init(const lifting::PlaneLifter& plane, const geodesy::LocalFrame& frame,
+                           const shape::ActiveShapeModel& shapeModel,
+                           const DetectionLifterOptions& options, std::string* why) {
+  if (!plane.initialised()) {
+    if (why != nullptr) {
+      *why = "detection lifter: the plane lifter is not initialised";
+    }
+    return false;
+  }
+  // The same option checks as with a DTM (any terrain passes them here).
+  if (!(options.boxHeightShare >= 0.0 && options.boxHeightShare <= 1.0) ||
+      !(options.nominalHeight_m > 0.0 && options.nominalHeight_m <= 10.0)) {
+    if (why != nullptr) {
+      *why =
+          "detection lifter: box height share must be in [0, 1] and the nominal height in "
+          "(0, 10] m, got " +
+          std::to_string(options.boxHeightShare) + " and " +
+          std::to_string(options.nominalHeight_m);
+    }
+    return false;
+  }
+  options_ = options;
+  terrain_ = nullptr;
+  plane_ = &plane;
+  frame_ = &frame;
+  shapeModel_ = &shapeModel;
+  return true;
+}
+
+std::optional<double> DetectionLifter::groundHeightAt(const Eigen::Vector3d& pointEnu) const {
+  if (plane_ != nullptr) {
+    return plane_->groundHeightAt(pointEnu.x(), pointEnu.y());
+  }
+  const auto h = terrain_->heightAtEnu(pointEnu);
+  if (!h) {
+    return std::nullopt;
+  }
+  return *h;
+}
+
+FrameFootprint frameFootprint(const lifting::PlaneLifter& plane, int width_px, int height_px) {
+  FrameFootprint footprint;
+  const double w = width_px - 1.0;
+  const double h = height_px - 1.0;
+  for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0),
+                                       Eigen::Vector2d(w, h), Eigen::Vector2d(0, h)}) {
+    const auto ground = plane.pixelToGround(pixel);
+    if (!ground) {
+      footprint.count = 0;
+      return footprint;
+    }
+    footprint.cornersEnu[footprint.count++] = ground->head<2>();
+  }
+  return footprint;
 }
 
 FrameFootprint frameFootprint(const lifting::Lifter& lifter, const FrameLiftSummary& summary,
@@ -157,6 +214,12 @@ FrameCameraPose DetectionLifter::cameraPoseFor(const lifting::Lifter& lifter,
                                                telemetry::PoseStatus poseStatus,
                                                const lifting::DronePose& pose) const {
   FrameCameraPose camera;
+  if (plane_ != nullptr) {
+    // A fixed view: the camera is the one the ground control points give, whatever the pose.
+    camera.status = LiftStatus::Ok;
+    camera.pose = plane_->cameraPose();
+    return camera;
+  }
   camera.status = liftStatusFrom(poseStatus);
   if (terrain_ == nullptr) {
     camera.status = LiftStatus::NoPose;  // not initialised: nothing can be lifted
@@ -180,7 +243,7 @@ FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter,
   FrameLiftSummary summary;
   summary.written = std::min(detections.size(), out.size());
   summary.dropped = detections.size() - summary.written;
-  summary.poseStatus = terrain_ == nullptr ? LiftStatus::NoPose : camera.status;
+  summary.poseStatus = initialised() ? camera.status : LiftStatus::NoPose;
   if (summary.poseStatus == LiftStatus::Ok) {
     summary.cameraPose = camera.pose;
   }
@@ -217,8 +280,9 @@ void DetectionLifter::liftOne(const lifting::Lifter& lifter,
       shape::vehicleGeometry(*shapeModel_, type, observation.detection.gamma);
   const double vehicleHeight_m =
       geometry.hasKeypoints ? geometry.size_m.z() : options_.nominalHeight_m;
-  const auto ground =
-      lifter.boxToGround(cameraPose, box, options_.boxHeightShare * vehicleHeight_m);
+  const double boxHeight_m = options_.boxHeightShare * vehicleHeight_m;
+  const auto ground = plane_ != nullptr ? plane_->boxToGround(box, boxHeight_m)
+                                        : lifter.boxToGround(cameraPose, box, boxHeight_m);
   if (!ground) {
     observation.liftStatus = liftStatusFrom(ground.error());
     return;
@@ -245,14 +309,14 @@ void DetectionLifter::liftOne(const lifting::Lifter& lifter,
   // difference is d * 5 m / R: 0.8 mm at 1 km from the origin), and one geodetic conversion
   // per point is cheaper than groundPointEnu()'s iteration.
   const Eigen::Vector3d& centre = observation.ground.centreEnu;
-  const auto centreHeight = terrain_->heightAtEnu(centre);
+  const auto centreHeight = groundHeightAt(centre);
   if (!centreHeight) {
     return;  // the centre was lifted onto the DTM, so this cannot happen; stay conservative
   }
   const double zOffset = centre.z() - *centreHeight;
   const auto groundZ = [this, &centre,
                         zOffset](const Eigen::Vector2d& xy) -> std::optional<double> {
-    const auto h = terrain_->heightAtEnu({xy.x(), xy.y(), centre.z()});
+    const auto h = groundHeightAt({xy.x(), xy.y(), centre.z()});
     if (!h) {
       return std::nullopt;
     }

@@ -17,7 +17,11 @@
 // axle whose ground lies off the DTM are left out (hasKeypoints / hasRearAxle false) while
 // the footprint stays lifted. The terrain, frame and ASM given to init() must be the ones the
 // Lifter was built with; all are borrowed and must outlive the DetectionLifter.
-// liftFrame() is const, never allocates and never throws. frameFootprint() gives the ground
+// Without telemetry, a fixed view georeferenced by ground control points is lifted instead
+// through a lifting::PlaneLifter (the init() overload that takes one): the pose and its status
+// are then not used (every frame has the view's camera), boxes are lifted to the ground plane by
+// the homography, and keypoints and the rear axle stand on that plane; everything else is as
+// above. liftFrame() is const, never allocates and never throws. frameFootprint() gives the ground
 // the whole frame shows (its corner pixels lifted to the DTM), e.g. the observed area of an
 // occupancy grid; it is pure and allocation-free too.
 #pragma once
@@ -25,6 +29,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -33,6 +38,7 @@
 #include "detection/detection.hpp"
 #include "geodesy/geodesy.hpp"
 #include "lifting/lifting.hpp"
+#include "lifting/plane_lifter.hpp"
 #include "shape/vehicle_geometry.hpp"
 #include "shape/vehicle_model.hpp"
 #include "telemetry/pose_buffer.hpp"
@@ -93,6 +99,8 @@ struct FrameFootprint {
 // summary.poseStatus is not Ok). The Lifter is the one the summary was lifted with.
 FrameFootprint frameFootprint(const lifting::Lifter& lifter, const FrameLiftSummary& summary,
                               int width_px, int height_px);
+// The same for a fixed view lifted through the ground plane.
+FrameFootprint frameFootprint(const lifting::PlaneLifter& plane, int width_px, int height_px);
 
 // The camera's pose for one frame, or the status saying why there is none (computed once per
 // frame; the pipeline also uses it for the second stage's ground sample distance).
@@ -125,6 +133,12 @@ class DetectionLifter {
   bool init(const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
             const shape::ActiveShapeModel& shapeModel, const DetectionLifterOptions& options,
             std::string* why = nullptr);
+  // The fixed view of a planar ground (no pose, no DTM): borrows the plane lifter too.
+  bool init(const lifting::PlaneLifter& plane, const geodesy::LocalFrame& frame,
+            const shape::ActiveShapeModel& shapeModel, const DetectionLifterOptions& options,
+            std::string* why = nullptr);
+  // Lifting through a PlaneLifter (null: through the pose and the DTM).
+  const lifting::PlaneLifter* plane() const { return plane_; }
 
   FrameLiftSummary liftFrame(const lifting::Lifter& lifter, std::int64_t timestamp_ns,
                              telemetry::PoseStatus poseStatus, const lifting::DronePose& pose,
@@ -148,7 +162,11 @@ class DetectionLifter {
   void liftOne(const lifting::Lifter& lifter, const lifting::CameraPoseWorld& cameraPose,
                VehicleObservation& observation) const;
 
+  bool initialised() const { return terrain_ != nullptr || plane_ != nullptr; }
+  std::optional<double> groundHeightAt(const Eigen::Vector3d& pointEnu) const;
+
   const terrain::TerrainModel* terrain_ = nullptr;
+  const lifting::PlaneLifter* plane_ = nullptr;
   const geodesy::LocalFrame* frame_ = nullptr;
   const shape::ActiveShapeModel* shapeModel_ = nullptr;
   DetectionLifterOptions options_{};

@@ -43,6 +43,9 @@ double groundSampleDistanceAt_m(const lifting::Lifter& lifter, const lifting::Ca
 }
 
 double PoseGsdProvider::groundSampleDistance_m(const detection::Detection& detection) const {
+  if (plane_ != nullptr) {
+    return plane_->groundSampleDistance_m(Eigen::Vector2d(detection.box.cx, detection.box.cy));
+  }
   if (lifter_ == nullptr || pose_ == nullptr) {
     return 0.0;
   }
@@ -58,7 +61,16 @@ bool FramePipeline::init(const PipelineOptions& options, const camera::CameraMod
                          const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
                          const geodesy::LocalFrame& frame,
                          const shape::ActiveShapeModel& shapeModel, std::string* why) {
+  return init(options, rawCamera, mount, terrain, frame, shapeModel, nullptr, why);
+}
+
+bool FramePipeline::init(const PipelineOptions& options, const camera::CameraModel& rawCamera,
+                         const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
+                         const geodesy::LocalFrame& frame,
+                         const shape::ActiveShapeModel& shapeModel,
+                         const georef::GroundView* groundView, std::string* why) {
   initialised_ = false;
+  planar_ = groundView != nullptr;
   std::string detail;
   if (!detection_.init(options.detection, preprocess::kMaxTiles, &detail)) {
     if (why)
@@ -80,7 +92,16 @@ bool FramePipeline::init(const PipelineOptions& options, const camera::CameraMod
       *why = "lifting: " + detail;
     return false;
   }
-  if (!detectionLifter_.init(terrain, frame, shapeModel, options.lift, &detail)) {
+  // The ground view's homography is between ideal pixels: the plane lifter undistorts the
+  // corrected frame's pixels when that frame still has the lens's distortion.
+  if (planar_ && !plane_.init(groundView->homography, groundView->camera,
+                              preprocessor_.frameCamera(), frame, &detail)) {
+    if (why)
+      *why = "lifting: " + detail;
+    return false;
+  }
+  if (!(planar_ ? detectionLifter_.init(plane_, frame, shapeModel, options.lift, &detail)
+                : detectionLifter_.init(terrain, frame, shapeModel, options.lift, &detail))) {
     if (why)
       *why = "detection lifter: " + detail;
     return false;
@@ -108,7 +129,8 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
     // The working scale follows the height: the GSD where the optical axis meets the ground.
     const camera::Intrinsics& k = preprocessor_.frameCamera().intrinsics();
     const Eigen::Vector2d centre(0.5 * (k.width_px - 1), 0.5 * (k.height_px - 1));
-    frameGsd_m_ = groundSampleDistanceAt_m(lifter_, camera.pose, centre);
+    frameGsd_m_ = planar_ ? plane_.groundSampleDistance_m(centre)
+                          : groundSampleDistanceAt_m(lifter_, camera.pose, centre);
     if (preprocessor_.adaptToGsd(frameGsd_m_)) {
       ++workingScaleChanges_;
     }
@@ -123,7 +145,11 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
   const PoseGsdProvider* gsd = nullptr;
   if (camera.status == LiftStatus::Ok) {
     cameraPose_ = camera.pose;
-    gsd_.setPose(&lifter_, &cameraPose_);
+    if (planar_) {
+      gsd_.setPlane(&plane_);
+    } else {
+      gsd_.setPose(&lifter_, &cameraPose_);
+    }
     gsd = &gsd_;
   }
   std::size_t count = 0;
@@ -144,7 +170,8 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
   liftSummary_ = detectionLifter_.liftFrame(
       lifter_, timestamp_ns, camera,
       std::span<const detection::Detection>(detections_.data(), count), observations_);
-  footprint_ = frameFootprint(lifter_, liftSummary_, bgrFrame.cols, bgrFrame.rows);
+  footprint_ = planar_ ? frameFootprint(plane_, bgrFrame.cols, bgrFrame.rows)
+                       : frameFootprint(lifter_, liftSummary_, bgrFrame.cols, bgrFrame.rows);
   timings_.lift_ms = msSince(liftStart);
   timings_.total_ms = msSince(start);
   lastError_[0] = '\0';

@@ -15,8 +15,12 @@
 // (frameFootprint(): its corners on the DTM) is computed too. process() never throws and performs
 // no heap allocation after init(); a refused frame (wrong size/type, engine failure) returns a
 // status and lastError() names the problem, and the next frame is processed normally. The terrain,
-// world frame and ASM are borrowed and must outlive the pipeline; the pipeline itself must
-// not move after init() (its parts point at each other). Not thread-safe: one loop thread.
+// world frame and ASM are borrowed and must outlive the pipeline; so is the ground view when one
+// is given (telemetry off, ground control points: georef/georeference): the pipeline then lifts
+// through a lifting::PlaneLifter on the corrected frame's camera, every frame has the view's
+// camera (the pose is not used) and the GSDs and the footprint come from the ground plane; the
+// pipeline itself must not move after init() (its parts point at each other). Not thread-safe: one
+// loop thread.
 #pragma once
 
 #include <array>
@@ -32,7 +36,9 @@
 #include "detection/ground_sample_distance.hpp"
 #include "geodesy/attitude.hpp"
 #include "geodesy/geodesy.hpp"
+#include "georef/georeference.hpp"
 #include "lifting/lifting.hpp"
+#include "lifting/plane_lifter.hpp"
 #include "perception/detection_lifter.hpp"
 #include "preprocess/preprocessor.hpp"
 #include "shape/vehicle_model.hpp"
@@ -79,12 +85,20 @@ class PoseGsdProvider final : public detection::GsdProvider {
   void setPose(const lifting::Lifter* lifter, const lifting::CameraPoseWorld* pose) {
     lifter_ = lifter;
     pose_ = pose;
+    plane_ = nullptr;
+  }
+  // A fixed view: the GSD on the ground plane (null: none).
+  void setPlane(const lifting::PlaneLifter* plane) {
+    lifter_ = nullptr;
+    pose_ = nullptr;
+    plane_ = plane;
   }
   double groundSampleDistance_m(const detection::Detection& detection) const override;
 
  private:
   const lifting::Lifter* lifter_ = nullptr;
   const lifting::CameraPoseWorld* pose_ = nullptr;
+  const lifting::PlaneLifter* plane_ = nullptr;
 };
 
 class FramePipeline {
@@ -98,6 +112,11 @@ class FramePipeline {
             const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
             const geodesy::LocalFrame& frame, const shape::ActiveShapeModel& shapeModel,
             std::string* why);
+  // The same with a georeferenced fixed view (null: pose and DTM, as above).
+  bool init(const PipelineOptions& options, const camera::CameraModel& rawCamera,
+            const geodesy::CameraMount& mount, const terrain::TerrainModel& terrain,
+            const geodesy::LocalFrame& frame, const shape::ActiveShapeModel& shapeModel,
+            const georef::GroundView* groundView, std::string* why);
 
   // Real-time path. The pose estimate is the one at timestamp_ns (PoseBuffer::poseAt).
   PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
@@ -130,6 +149,8 @@ class FramePipeline {
   preprocess::Preprocessor preprocessor_;
   detection::DetectionStage detection_;
   lifting::Lifter lifter_;
+  lifting::PlaneLifter plane_;
+  bool planar_ = false;  // lifting through plane_
   DetectionLifter detectionLifter_;
   PoseGsdProvider gsd_;
   lifting::CameraPoseWorld cameraPose_{};
