@@ -58,4 +58,11 @@ disposed=$(grep -c '^disposed,' "$out/states.csv" || true)
 tracks=$(awk -F, '$1 == "state" { print $3 }' "$out/states.csv" | sort -u | wc -l)
 echo "run: vp_firmware_app exit $status; $(grep -o 'frames_in=[0-9]* processed=[0-9]* dropped=[0-9]*' "$out/app.log" | tail -1)"
 echo "run: the subscriber received $states vehicle states of $tracks tracks and $disposed disposals ($out/states.csv)"
+# Latency at the roadside unit (reception - measurement time) of each frame's last state, median
+# over the frames, beside the app's own capture -> publish median (docs/dds.md, "Timestamps").
+rsu_latency=$(awk -F, '$1 == "state" { if (!($4 in last) || $5 > last[$4]) last[$4] = $5 }
+  END { for (t in last) print last[t] }' "$out/states.csv" | sort -g |
+  awk '{ v[NR] = $1 } END { if (NR) printf "%.1f", (NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2) }')
+app_e2e=$(grep -o 'e2e_median_ms=[0-9.]*' "$out/app.log" | tail -1 | cut -d= -f2 || true)
+[ -n "$rsu_latency" ] && echo "run: latency at the subscriber ${rsu_latency} ms (median over frames of each frame's last state); the app's capture -> publish ${app_e2e:-?} ms"
 exit "$status"
