@@ -25,6 +25,14 @@ RigConfig parseRigConfig(const std::string& yamlText, const std::string& sourceN
   return rig;
 }
 
+CameraConfig loadCameraSection(const std::string& path) {
+  const auto [text, baseDir] = detail::readConfigFile(path);
+  std::vector<std::string> warnings;
+  const detail::Diagnostics diag(path, &warnings);
+  detail::MapReader root(detail::loadSections(text, diag), "", diag);
+  return detail::readCamera(root.requiredSection("camera"));
+}
+
 RigConfig loadRigConfig(const std::string& path) {
   const auto [text, baseDir] = detail::readConfigFile(path);
   return parseRigConfig(text, path, baseDir);

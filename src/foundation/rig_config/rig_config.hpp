@@ -59,4 +59,8 @@ RigConfig loadRigConfig(const std::string& path);
 RigConfig parseRigConfig(const std::string& yamlText, const std::string& sourceName,
                          const std::string& baseDir);
 
+// The `camera:` section alone of a file (a calibration kept apart from a site's rig), with the
+// same checks and messages; the file's other top-level keys are ignored. Throws ConfigError.
+CameraConfig loadCameraSection(const std::string& path);
+
 }  // namespace vp::config
