@@ -16,6 +16,9 @@
 
 #include <opencv2/videoio.hpp>
 
+#include <pthread.h>
+
+#include "alloc_counter.hpp"
 #include "app.hpp"
 #include "app_test_support.hpp"
 #include "geodesy/geodesy.hpp"
@@ -139,7 +142,31 @@ struct TruthRun {
   test::TruthPerception* truth = nullptr;
 };
 
-TruthRun runWithTruth(const config::AppConfig& config, const test::TruthReplay& replay) {
+// Counts the processing thread's allocations from the end of frame `from` to the end of frame
+// `to` (the warm-up before may allocate).
+class AllocationWindow final : public LoopObserver {
+ public:
+  AllocationWindow(std::uint64_t from, std::uint64_t to) : from_(from), to_(to) {}
+  void onFrameDone(std::uint64_t processed) override {
+    if (processed == from_) {
+      counter_.startOnThread(static_cast<unsigned long>(pthread_self()));
+    } else if (processed == to_) {
+      counter_.stop();
+      counted_ = true;
+    }
+  }
+  std::size_t count() const { return counter_.count(); }
+  bool counted() const { return counted_; }
+
+ private:
+  std::uint64_t from_;
+  std::uint64_t to_;
+  test::AllocationCounter counter_;
+  bool counted_ = false;
+};
+
+TruthRun runWithTruth(const config::AppConfig& config, const test::TruthReplay& replay,
+                      LoopObserver* observer = nullptr) {
   TruthRun run;
   auto perception = std::make_unique<test::TruthPerception>();
   run.truth = perception.get();
@@ -147,6 +174,7 @@ TruthRun runWithTruth(const config::AppConfig& config, const test::TruthReplay& 
   EXPECT_TRUE(perception->init(fixture().truthDir, &why, replay)) << why;
   AppSeams seams;
   seams.perception = std::move(perception);
+  seams.observer = observer;
   EXPECT_TRUE(run.app->init(quietConfig(config), everyFrame(), std::move(seams), &why)) << why;
   EXPECT_TRUE(run.app->run(&why)) << why;
   return run;
@@ -229,6 +257,69 @@ TEST(AppVideo, ImportedDroneVideoReplaysWithLiftedVehiclesWithinHalfAMetreOfTheT
       runWithTruth(test::defaultConfigFor(imported), {&reader.rig(), f.firstFrame_ns});
   EXPECT_EQ(run.app->counters().framesProcessed, static_cast<std::uint64_t>(test::kLoopFrames));
   expectWithinHalfAMetre(*run.truth, "imported video");
+}
+
+// The app replays the MP4 itself (source.kind video) with the subtitles as telemetry; camera,
+// mount and DTM come from the configuration (here the simulated rig's).
+config::AppConfig directVideoConfig(const VideoFixture& f) {
+  config::AppConfig config = test::defaultConfigFor("");
+  const config::RigConfig rig = config::loadRigConfig(f.truthDir + "/rig.yaml");
+  config.origin = rig.origin;
+  config.camera = rig.camera;
+  config.terrain.dtmPath = rig.terrain.dtmPath;
+  config.terrain.crs = rig.terrain.crs;
+  // The subtitles give the camera head's attitude in NED: an earth gimbal, no lever arm.
+  config.mount = config::MountConfig{};
+  config.mount.gimbal.reference = geodesy::GimbalReference::Earth;
+  config.source.kind = config::FrameSourceKind::Video;
+  config.source.sequenceDir.clear();
+  config.source.video.path = f.video;
+  config.source.video.srt = f.srt;
+  config.source.video.subtitles.geoidSeparation_m = kGeoidSeparation_m;
+  return config;
+}
+
+TEST(AppVideo, DirectlyReplayedVideoLiftsVehiclesWithinHalfAMetreOfTheTruth) {
+  const VideoFixture& f = fixture();
+  const config::AppConfig config = directVideoConfig(f);
+  sequence::Rig rig;
+  rig.origin = config.origin;
+  rig.intrinsics = config.camera.intrinsics;
+  rig.distortion = config.camera.distortion;
+  rig.mount = config.mount.mount;
+  rig.gimbal = config.mount.gimbal;
+  rig.dtmPath = config.terrain.dtmPath;
+  rig.crs = config.terrain.crs;
+  AllocationWindow window(4, test::kLoopFrames);
+  const TruthRun run = runWithTruth(config, {&rig, f.firstFrame_ns}, &window);
+  EXPECT_EQ(run.app->counters().framesProcessed, static_cast<std::uint64_t>(test::kLoopFrames));
+  EXPECT_EQ(run.app->counters().framesIn, static_cast<std::uint64_t>(test::kLoopFrames));
+  // The capture thread decodes (and allocates); the processing thread does not.
+  ASSERT_TRUE(window.counted());
+  EXPECT_EQ(window.count(), 0U) << "heap allocations on the processing thread";
+  expectWithinHalfAMetre(*run.truth, "video replayed directly");
+}
+
+TEST(AppVideo, DirectVideoStartUpErrorsNameTheKey) {
+  const VideoFixture& f = fixture();
+  config::AppConfig config = directVideoConfig(f);
+  config.source.video.path = f.video + ".missing";
+  App app;
+  std::string why;
+  EXPECT_FALSE(app.init(quietConfig(config), everyFrame(), {}, &why));
+  EXPECT_EQ(why, "source.video.path: " + f.video + ".missing: video file not found");
+
+  config = directVideoConfig(f);
+  config.source.video.srt.clear();
+  App app2;
+  EXPECT_FALSE(app2.init(quietConfig(config), everyFrame(), {}, &why));
+  EXPECT_EQ(why, "source.video: give one of srt (the drone's subtitle file) and telemetry_csv");
+
+  config = directVideoConfig(f);
+  config.camera.intrinsics.width_px = 640;
+  App app3;
+  EXPECT_FALSE(app3.init(quietConfig(config), everyFrame(), {}, &why));
+  EXPECT_NE(why.find("but the source delivers 320x256"), std::string::npos) << why;
 }
 
 TEST(AppVideo, MalformedSubtitlesAreNamedSkippedAndTheImportGoesOn) {
