@@ -40,27 +40,29 @@ SourceStatus ReplayFrameSource::next(Frame& out) {
 
 bool VideoFrameSource::open(const config::SourceConfig& config, std::string* why) {
   const config::VideoSourceConfig& v = config.video;
-  if (v.path.empty()) {
-    *why = "source.video.path: no video to replay";
+  const auto fail = [why](std::string message) {
+    if (why != nullptr) {
+      *why = std::move(message);
+    }
     return false;
+  };
+  if (v.path.empty()) {
+    return fail("source.video.path: no video to replay");
   }
   if (v.srt.empty() == v.telemetryCsv.empty()) {
-    *why = "source.video: give one of srt (the drone's subtitle file) and telemetry_csv";
-    return false;
+    return fail("source.video: give one of srt (the drone's subtitle file) and telemetry_csv");
   }
   platform::replay::ReplayOptions options;
   options.paced = config.paced;
   options.loop = config.loop;
   std::string problem;
   if (!video_.open(v.path, options, &problem)) {
-    *why = "source.video.path: " + problem;
-    return false;
+    return fail("source.video.path: " + problem);
   }
   if (!v.srt.empty()) {
     subtitle::SubtitleFile subtitles;
     if (!subtitle::readSubtitleFile(v.srt, subtitles, &problem)) {
-      *why = "source.video.srt: " + problem;
-      return false;
+      return fail("source.video.srt: " + problem);
     }
     subtitle::SubtitleTelemetry t = subtitle::toTelemetry(subtitles, v.subtitles, v.srt);
     warnings_ = subtitles.problems;
@@ -76,8 +78,7 @@ bool VideoFrameSource::open(const config::SourceConfig& config, std::string* why
     telemetryPath_ = v.srt;
   } else {
     if (!sequence::readTelemetryFile(v.telemetryCsv, telemetry_, &problem)) {
-      *why = "source.video.telemetry_csv: " + problem;
-      return false;
+      return fail("source.video.telemetry_csv: " + problem);
     }
     telemetryPath_ = v.telemetryCsv;
   }
