@@ -90,7 +90,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   outputs.frameSize = cv::Size(capture_.pool().width_px(), capture_.pool().height_px());
   outputs.gammaColumns = asm_.componentCount();
   outputs.model = step_.perception().modelId();
-  outputs.source = replay_ != nullptr ? config_.source.sequenceDir : config_.source.v4l2.device;
+  outputs.source = sourceName();
   if (!step_.openOutputs(outputs, why)) {
     return false;
   }
@@ -138,8 +138,15 @@ bool App::openRecorder(std::string* why) {
   return recorder_->open(setup, why);
 }
 
+const std::string& App::sourceName() const {
+  if (replay_ != nullptr) {
+    return config_.source.sequenceDir;
+  }
+  return video_ != nullptr ? config_.source.video.path : config_.source.v4l2.device;
+}
+
 bool App::initSource(std::string* why) {
-  if (seams_.v4l2Device == nullptr && config_.source.kind != config::FrameSourceKind::Replay) {
+  if (seams_.v4l2Device == nullptr && config_.source.kind == config::FrameSourceKind::V4l2) {
     ownDevice_ = std::make_unique<platform::v4l2::SystemV4l2Device>();
   }
   platform::v4l2::V4l2Device* device =
@@ -157,6 +164,13 @@ bool App::initSource(std::string* why) {
     config_.mount = {rig.mount, rig.gimbal};
     config_.terrain.dtmPath = rig.dtmPath;  // the DTM load options stay the application's
     config_.terrain.crs = rig.crs;
+  }
+  if (config_.source.kind == config::FrameSourceKind::Video) {
+    // A video has no rig: camera, mount and DTM are the configuration's.
+    video_ = static_cast<VideoFrameSource*>(source.get());
+    for (const std::string& warning : video_->warnings()) {
+      logLine("warning: %s", warning.c_str());
+    }
   }
   const camera::Intrinsics& in = config_.camera.intrinsics;
   if (in.width_px != source->width_px() || in.height_px != source->height_px()) {
@@ -263,17 +277,23 @@ bool App::initPose(std::string* why) {
   const config::TelemetryLinkConfig& link = config_.telemetry;
   switch (link.source) {
     case config::TelemetrySourceKind::Recording: {
-      if (replay_ == nullptr) {
+      if (replay_ == nullptr && video_ == nullptr) {
         if (why) {
           *why =
-              "telemetry.source: recording needs a replayed sequence (source.kind replay); "
-              "with a camera use mavlink_udp, mavlink_serial or dds";
+              "telemetry.source: recording needs a replayed sequence or video (source.kind "
+              "replay or video); with a camera use mavlink_udp, mavlink_serial or dds";
         }
         return false;
       }
       auto recording = std::make_unique<RecordingPoseInput>();
-      recording->open(replay_->replay(), config_.source.loop, link.replayLookahead_s,
-                      config_.pose.limits);
+      if (replay_ != nullptr) {
+        recording->open(replay_->replay(), config_.source.loop, link.replayLookahead_s,
+                        config_.pose.limits);
+      } else {
+        recording->open(video_->telemetry(), video_->telemetryPath(), config_.source.loop,
+                        video_->video().loopPeriod_ns(), link.replayLookahead_s,
+                        config_.pose.limits);
+      }
       for (const std::string& warning : recording->warnings()) {
         logLine("warning: %s", warning.c_str());
       }
@@ -346,12 +366,10 @@ bool App::run(std::string* why) {
   const std::int64_t start_ns = clock_->now_ns();
   reports_.start(start_ns);
   const FramePool& pool = capture_.pool();
-  logLine(
-      "running: %s %s, pose from %s, DDS %s, queue depth %d, %zu frames of %dx%d",
-      replay_ != nullptr ? "replay of" : "camera",
-      replay_ != nullptr ? config_.source.sequenceDir.c_str() : config_.source.v4l2.device.c_str(),
-      step_.poseInput()->name(), dds_ ? "on" : "off", config_.app.queueDepth, pool.capacity(),
-      pool.width_px(), pool.height_px());
+  logLine("running: %s %s, pose from %s, DDS %s, queue depth %d, %zu frames of %dx%d",
+          replay_ != nullptr ? "replay of" : (video_ != nullptr ? "video" : "camera"),
+          sourceName().c_str(), step_.poseInput()->name(), dds_ ? "on" : "off",
+          config_.app.queueDepth, pool.capacity(), pool.width_px(), pool.height_px());
   notifier_.ready();
   capture_.start({run_.maxFrames, run_.everyFrame, config_.app.captureCpus, recorder_.get()});
 

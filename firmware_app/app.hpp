@@ -133,6 +133,8 @@ class App final : public CounterSource {
   platform::SystemdNotifier notifier_;
   FrameCapture capture_;
   ReplayFrameSource* replay_ = nullptr;          // the capture's source when replaying (borrowed)
+  VideoFrameSource* video_ = nullptr;            // the same when replaying a video
+  const std::string& sourceName() const;         // sequence, video or camera device
   std::unique_ptr<FramePerception> perception_;  // until init() hands it to the step
   std::unique_ptr<PoseInput> poseInput_;         // the same
   FrameStep step_;

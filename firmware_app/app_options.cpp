@@ -208,8 +208,12 @@ std::string checkConsistency(const config::AppConfig& config) {
     return "source.sequence_dir: no recorded sequence to replay (give --sequence DIR, or "
            "--camera /dev/videoN for a camera)";
   }
-  if (!replay && config.telemetry.source == config::TelemetrySourceKind::Recording) {
-    return "telemetry.source: recording needs a replayed sequence; with a camera use "
+  const bool video = config.source.kind == config::FrameSourceKind::Video;
+  if (video && config.source.video.path.empty()) {
+    return "source.video.path: no video to replay";
+  }
+  if (!replay && !video && config.telemetry.source == config::TelemetrySourceKind::Recording) {
+    return "telemetry.source: recording needs a replayed sequence or video; with a camera use "
            "mavlink_udp, mavlink_serial, dds or none";
   }
   return "";

@@ -114,6 +114,13 @@ std::unique_ptr<FrameSource> openFrameSource(const config::SourceConfig& source,
     }
     return replay;
   }
+  if (source.kind == config::FrameSourceKind::Video) {
+    auto video = std::make_unique<VideoFrameSource>(clock);
+    if (!video->open(source, why)) {
+      return nullptr;
+    }
+    return video;
+  }
   auto camera = std::make_unique<CameraFrameSource>(*device, clock);
   if (!camera->open(source.v4l2, why)) {
     return nullptr;

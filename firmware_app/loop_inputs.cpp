@@ -38,6 +38,71 @@ SourceStatus ReplayFrameSource::next(Frame& out) {
   return SourceStatus::End;
 }
 
+bool VideoFrameSource::open(const config::SourceConfig& config, std::string* why) {
+  const config::VideoSourceConfig& v = config.video;
+  const auto fail = [why](std::string message) {
+    if (why != nullptr) {
+      *why = std::move(message);
+    }
+    return false;
+  };
+  if (v.path.empty()) {
+    return fail("source.video.path: no video to replay");
+  }
+  if (v.srt.empty() == v.telemetryCsv.empty()) {
+    return fail("source.video: give one of srt (the drone's subtitle file) and telemetry_csv");
+  }
+  platform::replay::ReplayOptions options;
+  options.paced = config.paced;
+  options.loop = config.loop;
+  std::string problem;
+  if (!video_.open(v.path, options, &problem)) {
+    return fail("source.video.path: " + problem);
+  }
+  if (!v.srt.empty()) {
+    subtitle::SubtitleFile subtitles;
+    if (!subtitle::readSubtitleFile(v.srt, subtitles, &problem)) {
+      return fail("source.video.srt: " + problem);
+    }
+    subtitle::SubtitleTelemetry t = subtitle::toTelemetry(subtitles, v.subtitles, v.srt);
+    warnings_ = subtitles.problems;
+    warnings_.insert(warnings_.end(), t.problems.begin(), t.problems.end());
+    if (t.nadirAssumed > 0) {
+      warnings_.push_back(v.srt + ": " + std::to_string(t.nadirAssumed) + " of " +
+                          std::to_string(t.records.size()) +
+                          " telemetry rows have no gimbal angles: the camera is assumed to look "
+                          "straight down, yaw along the motion (" +
+                          std::to_string(t.yawFromMotion) + " rows) or 0");
+    }
+    telemetry_ = std::move(t.records);
+    telemetryPath_ = v.srt;
+  } else {
+    if (!sequence::readTelemetryFile(v.telemetryCsv, telemetry_, &problem)) {
+      return fail("source.video.telemetry_csv: " + problem);
+    }
+    telemetryPath_ = v.telemetryCsv;
+  }
+  message_.reserve(512);
+  return true;
+}
+
+SourceStatus VideoFrameSource::next(Frame& out) {
+  using platform::replay::ReplayStatus;
+  switch (video_.next(out, &message_)) {
+    case ReplayStatus::Frame:
+      return SourceStatus::Frame;
+    case ReplayStatus::BadFrame:
+      return SourceStatus::BadFrame;
+    case ReplayStatus::End:
+      return SourceStatus::End;
+    case ReplayStatus::Stopped:
+      return SourceStatus::Retry;
+    case ReplayStatus::Error:
+      break;
+  }
+  return SourceStatus::End;
+}
+
 bool CameraFrameSource::open(const config::V4l2SourceConfig& config, std::string* why) {
   platform::v4l2::V4l2CameraConfig camera;
   camera.devicePath = config.busInfo.empty() ? config.device : "";
@@ -134,10 +199,17 @@ telemetry::PoseSample toPoseSample(const sequence::TelemetryRecord& record) {
 
 void RecordingPoseInput::open(const platform::replay::SequenceReplay& replay, bool loop,
                               double lookahead_s, const telemetry::PoseLimits& limits) {
-  const std::vector<sequence::TelemetryRecord>& records = replay.reader().telemetry();
-  telemetry_.open(records, loop, replay.loopPeriod_ns());
+  open(replay.reader().telemetry(),
+       (std::filesystem::path(replay.reader().directory()) / "telemetry.csv").string(), loop,
+       replay.loopPeriod_ns(), lookahead_s, limits);
+}
+
+void RecordingPoseInput::open(std::span<const sequence::TelemetryRecord> records,
+                              const std::string& path, bool loop, std::int64_t loopPeriod_ns,
+                              double lookahead_s, const telemetry::PoseLimits& limits) {
+  telemetry_.open(records, loop, loopPeriod_ns);
   lookaheadNs_ = static_cast<std::int64_t>(lookahead_s * 1e9);
-  path_ = (std::filesystem::path(replay.reader().directory()) / "telemetry.csv").string();
+  path_ = path;
   pass_ = 0;
   // The rows the buffer will refuse, found now with the same checks in the same order (the
   // newest accepted row is the one each row is judged against), so that a bad recording is

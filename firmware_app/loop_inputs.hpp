@@ -31,6 +31,7 @@
 #include "platform/clock/monotonic_clock.hpp"
 #include "platform/mavlink/mavlink_link.hpp"
 #include "platform/replay/sequence_replay.hpp"
+#include "platform/replay/video_replay.hpp"
 #include "platform/v4l2/v4l2_camera.hpp"
 #include "telemetry/pose_buffer.hpp"
 
@@ -75,6 +76,32 @@ class ReplayFrameSource final : public FrameSource {
 
  private:
   platform::replay::SequenceReplay replay_;
+  std::string message_;
+};
+
+// A drone video replayed directly (source.kind video) and its telemetry on the video's clock,
+// read at open() from the subtitles (source.video.srt) or a telemetry.csv.
+class VideoFrameSource final : public FrameSource {
+ public:
+  explicit VideoFrameSource(platform::Clock& clock) : video_(clock) {}
+  bool open(const config::SourceConfig& config, std::string* why);
+  SourceStatus next(Frame& out) override;
+  const char* message() const override { return message_.c_str(); }
+  bool capturesOnMonotonicClock() const override { return false; }
+  double nominalFrameRate_hz() const override { return video_.frameRate_hz(); }
+  int width_px() const override { return video_.width_px(); }
+  int height_px() const override { return video_.height_px(); }
+  const platform::replay::VideoReplay& video() const { return video_; }
+  std::span<const sequence::TelemetryRecord> telemetry() const { return telemetry_; }
+  const std::string& telemetryPath() const { return telemetryPath_; }
+  // Subtitles skipped and the nadir assumption, for the start-up log.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+ private:
+  platform::replay::VideoReplay video_;
+  std::vector<sequence::TelemetryRecord> telemetry_;
+  std::string telemetryPath_;
+  std::vector<std::string> warnings_;
   std::string message_;
 };
 
@@ -133,12 +160,16 @@ class PoseInput {
   std::array<bool, static_cast<std::size_t>(telemetry::PushResult::NotInitialised) + 1> logged_{};
 };
 
-// The recorded telemetry.csv of the sequence being replayed.
+// The recorded telemetry.csv of the sequence being replayed (or a replayed video's telemetry).
 class RecordingPoseInput final : public PoseInput {
  public:
   // limits: the pose buffer's, to find at start-up the rows it will refuse (warnings()).
   void open(const platform::replay::SequenceReplay& replay, bool loop, double lookahead_s,
             const telemetry::PoseLimits& limits);
+  // The same for telemetry records that outlive this (a directly replayed video's); path names
+  // them in the messages.
+  void open(std::span<const sequence::TelemetryRecord> records, const std::string& path, bool loop,
+            std::int64_t loopPeriod_ns, double lookahead_s, const telemetry::PoseLimits& limits);
   void poll(std::int64_t frameTime_ns, telemetry::PoseBuffer& buffer) override;
   const char* name() const override { return "recording"; }
   // "<dir>/telemetry.csv:17: gimbal_pitch_deg 999 outside [-120, 30]: sample refused", at

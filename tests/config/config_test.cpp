@@ -191,6 +191,13 @@ source:
     formats: [nv12, yuyv]
     buffers: 6
     dequeue_timeout_ms: 500
+  video:
+    path: flights/DJI_0001.MP4
+    srt: flights/DJI_0001.SRT
+    altitude: rel
+    geoid_separation_m: -31.75
+    home_height_m: 251.25
+    yaw_min_speed_mps: 2.5
 telemetry:
   source: mavlink_udp
   udp_bind_address: 127.0.0.1
@@ -796,7 +803,14 @@ const MalformedCase kMalformedCases[] = {
      "tracking.partial_along_noise_factor", "must be in [1, 1000], got 0.5"},
     // source
     {"source:\n  kind", "source: camera\nx:\n  kind", "source", "expected a map, got 'camera'"},
-    {"kind: v4l2", "kind: file", "source.kind", "unknown value 'file' (expected replay, v4l2)"},
+    {"kind: v4l2", "kind: file", "source.kind",
+     "unknown value 'file' (expected replay, v4l2, video)"},
+    {"altitude: rel", "altitude: msl", "source.video.altitude",
+     "unknown value 'msl' (expected abs, rel)"},
+    {"geoid_separation_m: -31.75", "geoid_separation_m: 300", "source.video.geoid_separation_m",
+     "must be in [-200, 200], got 300"},
+    {"yaw_min_speed_mps: 2.5", "yaw_min_speed_mps: 0", "source.video.yaw_min_speed_mps",
+     "must be in (0, 100], got 0"},
     {"sequence_dir: seq/run1", "sequence_dir: ''", "source.sequence_dir", "must not be empty"},
     {"paced: false", "paced: fast", "source.paced", "expected true or false, got 'fast'"},
     {"loop: true", "loop: 2", "source.loop", "expected true or false, got '2'"},
@@ -1525,6 +1539,13 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
             (std::vector<CameraPixelFormat>{CameraPixelFormat::Nv12, CameraPixelFormat::Yuyv}));
   EXPECT_EQ(src.v4l2.buffers, 6);
   EXPECT_EQ(src.v4l2.dequeueTimeout_ms, 500);
+  EXPECT_TRUE(src.video.path.ends_with("/flights/DJI_0001.MP4")) << src.video.path;
+  EXPECT_TRUE(src.video.srt.ends_with("/flights/DJI_0001.SRT")) << src.video.srt;
+  EXPECT_TRUE(src.video.telemetryCsv.empty());
+  EXPECT_EQ(src.video.subtitles.altitude, subtitle::AltitudeSource::Relative);
+  EXPECT_DOUBLE_EQ(src.video.subtitles.geoidSeparation_m, -31.75);
+  EXPECT_DOUBLE_EQ(src.video.subtitles.homeHeight_m, 251.25);
+  EXPECT_DOUBLE_EQ(src.video.subtitles.yawMinSpeed_mps, 2.5);
   const TelemetryLinkConfig& link = config.telemetry;
   EXPECT_EQ(link.source, TelemetrySourceKind::MavlinkUdp);
   EXPECT_EQ(link.udpBindAddress, "127.0.0.1");

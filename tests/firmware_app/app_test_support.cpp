@@ -81,17 +81,22 @@ config::AppConfig defaultConfigFor(const std::string& sequenceDir) {
   return config;
 }
 
-bool TruthPerception::init(const std::string& sequenceDir, std::string* why) {
+bool TruthPerception::init(const std::string& sequenceDir, std::string* why,
+                           const TruthReplay& replay) {
   // The truth boxes are footprints: lifted on the ground.
-  return init(sequenceDir, nullptr, perception::DetectionLifterOptions{.boxHeightShare = 0.0}, why);
+  return init(sequenceDir, nullptr, perception::DetectionLifterOptions{.boxHeightShare = 0.0}, why,
+              replay);
 }
 
 bool TruthPerception::init(const std::string& sequenceDir, const georef::GeorefOptions* georef,
-                           const perception::DetectionLifterOptions& lift, std::string* why) {
+                           const perception::DetectionLifterOptions& lift, std::string* why,
+                           const TruthReplay& replay) {
   if (!reader_.open(sequenceDir, why)) {
     return false;
   }
-  const sequence::Rig& rig = reader_.rig();
+  truthWorld_ = geodesy::LocalFrame(reader_.rig().origin);
+  timeOffsetNs_ = replay.timeOffset_ns;
+  const sequence::Rig& rig = replay.rig != nullptr ? *replay.rig : reader_.rig();
   world_ = geodesy::LocalFrame(rig.origin);
   terrain::TerrainGrid grid;
   if (!io::loadDtm(rig.dtmPath, rig.crs, grid, why) ||
@@ -116,6 +121,9 @@ bool TruthPerception::init(const std::string& sequenceDir, const georef::GeorefO
   }
   loopPeriodNs_ = platform::replay::loopPeriod_ns(reader_);
   detections_.resize(detection::kMaxDetectionsPerFrame);
+  objectOf_.resize(detection::kMaxDetectionsPerFrame);
+  liftedCentres_.resize(timestamps_.size() * detection::kMaxDetectionsPerFrame);
+  lifted_.assign(liftedCentres_.size(), 0);
   observations_.resize(detection::kMaxDetectionsPerFrame);
   return true;
 }
@@ -130,7 +138,7 @@ perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
     return perception::PipelineStatus::DetectionFailed;
   }
   // A looping replay shifts every timestamp by whole loop periods.
-  std::int64_t t = timestamp_ns;
+  std::int64_t t = timestamp_ns + timeOffsetNs_;
   const std::int64_t first = timestamps_.front();
   if (t > timestamps_.back() && loopPeriodNs_ > 0) {
     t = first + (t - first) % loopPeriodNs_;
@@ -139,13 +147,16 @@ perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
   if (at == timestamps_.end() || *at != t) {
     return perception::PipelineStatus::DetectionFailed;
   }
-  const std::int64_t frameId =
-      reader_.frames()[static_cast<std::size_t>(at - timestamps_.begin())].frameId;
+  const std::size_t frameIndex = static_cast<std::size_t>(at - timestamps_.begin());
+  const std::int64_t frameId = reader_.frames()[frameIndex].frameId;
   std::size_t count = 0;
-  for (const sequence::ObjectTruth& object : reader_.objects(frameId)) {
+  const std::span<const sequence::ObjectTruth> objects = reader_.objects(frameId);
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const sequence::ObjectTruth& object = objects[i];
     if (object.truncation > kMaxTruncation || count >= detections_.size()) {
       continue;
     }
+    objectOf_[count] = i;
     detection::Detection& d = detections_[count++];
     d = detection::Detection{};
     d.box = object.imageBox;
@@ -161,7 +172,39 @@ perception::PipelineStatus TruthPerception::process(const cv::Mat& bgrFrame,
   footprint_ = planar_
                    ? perception::frameFootprint(plane_, bgrFrame.cols, bgrFrame.rows)
                    : perception::frameFootprint(lifter_, summary_, bgrFrame.cols, bgrFrame.rows);
+  for (std::size_t k = 0; k < summary_.written; ++k) {
+    if (observations_[k].liftStatus != perception::LiftStatus::Ok) {
+      continue;
+    }
+    // The true centre, from the truth's world into the lifter's (they differ for an import).
+    const Eigen::Vector3d truth =
+        world_.toEnu(truthWorld_.toGeodetic(objects[objectOf_[k]].positionEnu));
+    const double error_m = (observations_[k].ground.centreEnu - truth).head<2>().norm();
+    maxLiftError_m_ = std::max(maxLiftError_m_, error_m);
+    const std::size_t slot = frameIndex * detection::kMaxDetectionsPerFrame + objectOf_[k];
+    if (objectOf_[k] < detection::kMaxDetectionsPerFrame) {
+      liftedCentres_[slot] = observations_[k].ground.centreWgs84;
+      lifted_[slot] = 1;
+    }
+    sumLiftError_m_ += error_m;
+    ++liftChecked_;
+  }
   return perception::PipelineStatus::Ok;
+}
+
+const geodesy::GeodeticPoint* TruthPerception::liftedCentre(std::size_t frameIndex,
+                                                            std::size_t object) const {
+  const std::size_t slot = frameIndex * detection::kMaxDetectionsPerFrame + object;
+  if (object >= detection::kMaxDetectionsPerFrame || slot >= lifted_.size() || !lifted_[slot]) {
+    return nullptr;
+  }
+  return &liftedCentres_[slot];
+}
+
+std::size_t TruthPerception::objectCount(std::size_t frameIndex) const {
+  return frameIndex < timestamps_.size()
+             ? reader_.objects(reader_.frames()[frameIndex].frameId).size()
+             : 0;
 }
 
 }  // namespace vp::test

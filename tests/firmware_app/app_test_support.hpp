@@ -41,14 +41,31 @@ std::string scratchDir(const std::string& name);
 // Ground-truth vehicles of each frame as detections (score 0.9, direction known, the true type
 // at probability 0.94, the true ASM gamma), lifted with the recorded rig. process() never
 // allocates after init(): the frames' truth is indexed at init.
+// Where the truth is replayed from when it is not the truth sequence itself (an imported or
+// directly replayed video of it): lift with that rig, and match frames by time + offset.
+struct TruthReplay {
+  const sequence::Rig* rig = nullptr;  // lift with this rig (default: the truth sequence's)
+  std::int64_t timeOffset_ns = 0;      // truth frame time = replayed frame time + this
+};
+
 class TruthPerception final : public app::FramePerception {
  public:
-  bool init(const std::string& sequenceDir, std::string* why);
+  bool init(const std::string& sequenceDir, std::string* why, const TruthReplay& replay = {});
   // The same lifted with the given options and, with georef, through the ground control points'
   // fixed view (georef::loadGroundView on the recorded rig, as the app loads it) instead of the
   // recorded telemetry.
   bool init(const std::string& sequenceDir, const georef::GeorefOptions* georef,
-            const perception::DetectionLifterOptions& lift, std::string* why);
+            const perception::DetectionLifterOptions& lift, std::string* why,
+            const TruthReplay& replay = {});
+  // Lifted truth vehicles compared with their true footprint centres (horizontal, m).
+  double maxLiftError_m() const { return maxLiftError_m_; }
+  double meanLiftError_m() const { return liftChecked_ ? sumLiftError_m_ / liftChecked_ : 0.0; }
+  std::size_t liftChecked() const { return liftChecked_; }
+  // Where truth object `object` of the truth's frame `frameIndex` (frames.csv order) was lifted
+  // last (WGS84 footprint centre), or nullptr when it was not lifted.
+  const geodesy::GeodeticPoint* liftedCentre(std::size_t frameIndex, std::size_t object) const;
+  std::size_t frameCount() const { return timestamps_.size(); }
+  std::size_t objectCount(std::size_t frameIndex) const;
 
   perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                      const telemetry::PoseEstimate& pose) override;
@@ -65,14 +82,22 @@ class TruthPerception final : public app::FramePerception {
 
  private:
   sequence::SequenceReader reader_;
+  georef::GroundView groundView_;
+  lifting::PlaneLifter plane_;
+  bool planar_ = false;
+  geodesy::LocalFrame truthWorld_;  // the truth's positions are in its rig's world
+  std::int64_t timeOffsetNs_ = 0;
+  std::vector<std::size_t> objectOf_;  // truth object index of each detection
+  double maxLiftError_m_ = 0.0;
+  double sumLiftError_m_ = 0.0;
+  std::size_t liftChecked_ = 0;
+  std::vector<geodesy::GeodeticPoint> liftedCentres_;  // frame index x kMaxDetectionsPerFrame
+  std::vector<char> lifted_;                           // the same, 1 when set
   geodesy::LocalFrame world_;
   terrain::TerrainModel terrain_;
   camera::CameraModel camera_;
   shape::ActiveShapeModel asm_;
   lifting::Lifter lifter_;
-  georef::GroundView groundView_;
-  lifting::PlaneLifter plane_;
-  bool planar_ = false;
   perception::DetectionLifter detectionLifter_;
   std::vector<std::int64_t> timestamps_;  // frames.csv order
   std::int64_t loopPeriodNs_ = 0;

@@ -78,6 +78,8 @@ const char* toString(FrameSourceKind kind) {
       return "replay";
     case FrameSourceKind::V4l2:
       return "v4l2";
+    case FrameSourceKind::Video:
+      return "video";
   }
   return "unknown";
 }

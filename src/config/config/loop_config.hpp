@@ -1,7 +1,7 @@
-// config/loop_config: the firmware app's own sections of the configuration: `source:` (replay
-// or V4L2 camera), `telemetry:` (where the drone pose comes from) and `app:` (frame pool,
-// queue, real-time settings, statistics, file outputs, `app.record:` the recording of what the
-// loop sees). The sections that configure modules
+// config/loop_config: the firmware app's own sections of the configuration: `source:` (replay,
+// V4L2 camera or a drone video), `telemetry:` (where the drone pose comes from) and `app:` (frame
+// pool, queue, real-time settings, statistics, file outputs, `app.record:` the recording of what
+// the loop sees). The sections that configure modules
 // of src/ (perception, pose, tracking) are those modules' own options structs (config.hpp).
 //
 // Contract: plain values with the documented defaults (docs/configuration.md,
@@ -15,10 +15,12 @@
 #include <string>
 #include <vector>
 
+#include "subtitle_telemetry/subtitle_telemetry.hpp"
+
 namespace vp::config {
 
-enum class FrameSourceKind : std::uint8_t { Replay, V4l2 };
-const char* toString(FrameSourceKind kind);  // "replay", "v4l2"
+enum class FrameSourceKind : std::uint8_t { Replay, V4l2, Video };
+const char* toString(FrameSourceKind kind);  // "replay", "v4l2", "video"
 
 enum class CameraPixelFormat : std::uint8_t { Yuyv, Nv12, Mjpeg };
 const char* toString(CameraPixelFormat format);         // "yuyv", "nv12", "mjpeg"
@@ -34,12 +36,22 @@ struct V4l2SourceConfig {
   int dequeueTimeout_ms = 1000;
 };
 
+// A drone video replayed directly (platform/replay/video_replay.hpp); the camera and the DTM
+// are the configuration's own sections.
+struct VideoSourceConfig {
+  std::string path;          // the video file (absolute); empty: none given
+  std::string srt;           // its telemetry subtitles (absolute), or
+  std::string telemetryCsv;  // a telemetry.csv on the video's clock (absolute); one of the two
+  subtitle::SubtitleTelemetryOptions subtitles{};  // heights and the nadir yaw of the SRT
+};
+
 struct SourceConfig {
   FrameSourceKind kind = FrameSourceKind::Replay;
   std::string sequenceDir;  // replay: the recorded sequence (absolute); empty: --sequence
   bool paced = true;        // replay at the recorded frame rate
   bool loop = false;        // replay: start over after the last frame
   V4l2SourceConfig v4l2{};
+  VideoSourceConfig video{};
 };
 
 enum class TelemetrySourceKind : std::uint8_t { Recording, MavlinkUdp, MavlinkSerial, Dds, None };

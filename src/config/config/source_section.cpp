@@ -12,12 +12,17 @@ namespace {
 const Range kCameraBuffersRange = Range::closed(2.0, 16.0);
 const Range kDequeueTimeoutRange_ms = Range::closed(1.0, 60000.0);
 
-constexpr std::string_view kSourceKindNames = "replay, v4l2";
+constexpr std::string_view kSourceKindNames = "replay, v4l2, video";
+constexpr std::string_view kAltitudeNames = "abs, rel";
+const Range kGeoidSeparationRange_m = Range::closed(-200.0, 200.0);
+const Range kHomeHeightRange_m = Range::closed(-500.0, 9000.0);
+const Range kYawMinSpeedRange_mps = Range{0.0, 100.0, true};  // (0, 100]
 constexpr std::string_view kPixelFormatNames = "yuyv, nv12, mjpeg";
 
 std::optional<FrameSourceKind> sourceKindFromString(const std::string& text) {
-  return enumFromString(text, std::array{FrameSourceKind::Replay, FrameSourceKind::V4l2},
-                        [](FrameSourceKind kind) { return toString(kind); });
+  return enumFromString(
+      text, std::array{FrameSourceKind::Replay, FrameSourceKind::V4l2, FrameSourceKind::Video},
+      [](FrameSourceKind kind) { return toString(kind); });
 }
 std::optional<CameraPixelFormat> pixelFormatFromString(const std::string& text) {
   return enumFromString(
@@ -43,6 +48,25 @@ V4l2SourceConfig readV4l2(MapReader section) {
   return v;
 }
 
+VideoSourceConfig readVideo(MapReader section, const std::string& baseDir) {
+  const VideoSourceConfig d;
+  VideoSourceConfig v;
+  v.path = readOptionalPath(section, "path", baseDir, "");
+  v.srt = readOptionalPath(section, "srt", baseDir, "");
+  v.telemetryCsv = readOptionalPath(section, "telemetry_csv", baseDir, "");
+  v.subtitles.altitude = section.choice<subtitle::AltitudeSource>(
+      "altitude", [](const std::string& text) { return subtitle::altitudeSourceFromString(text); },
+      kAltitudeNames, d.subtitles.altitude);
+  v.subtitles.geoidSeparation_m =
+      section.number("geoid_separation_m", kGeoidSeparationRange_m, d.subtitles.geoidSeparation_m);
+  v.subtitles.homeHeight_m =
+      section.number("home_height_m", kHomeHeightRange_m, d.subtitles.homeHeight_m);
+  v.subtitles.yawMinSpeed_mps =
+      section.number("yaw_min_speed_mps", kYawMinSpeedRange_mps, d.subtitles.yawMinSpeed_mps);
+  section.warnUnknownKeys();
+  return v;
+}
+
 }  // namespace
 
 SourceConfig readSource(MapReader section, const std::string& baseDir) {
@@ -53,6 +77,7 @@ SourceConfig readSource(MapReader section, const std::string& baseDir) {
   s.paced = section.boolean("paced", d.paced);
   s.loop = section.boolean("loop", d.loop);
   s.v4l2 = readV4l2(section.section("v4l2"));
+  s.video = readVideo(section.section("video"), baseDir);
   section.warnUnknownKeys();
   return s;
 }

@@ -89,6 +89,14 @@ std::string formatRigYaml(const RigConfig& rig, const std::string& dtmPath,
   return y;
 }
 
+CameraConfig loadCameraSection(const std::string& path) {
+  const auto [text, baseDir] = detail::readConfigFile(path);
+  std::vector<std::string> warnings;
+  const detail::Diagnostics diag(path, &warnings);
+  detail::MapReader root(detail::loadSections(text, diag), "", diag);
+  return detail::readCamera(root.requiredSection("camera"));
+}
+
 RigConfig loadRigConfig(const std::string& path) {
   const auto [text, baseDir] = detail::readConfigFile(path);
   return parseRigConfig(text, path, baseDir);

@@ -68,4 +68,8 @@ RigConfig parseRigConfig(const std::string& yamlText, const std::string& sourceN
 std::string formatRigYaml(const RigConfig& rig, const std::string& dtmPath,
                           const std::string& header = "");
 
+// The `camera:` section alone of a file (a calibration kept apart from a site's rig), with the
+// same checks and messages; the file's other top-level keys are ignored. Throws ConfigError.
+CameraConfig loadCameraSection(const std::string& path);
+
 }  // namespace vp::config

@@ -109,6 +109,11 @@ struct KeypointTruth {
   Eigen::Vector3d worldEnu{0, 0, 0};
 };
 
+// A telemetry.csv on its own (e.g. beside a video replayed directly), with the reader's checks
+// and messages; false and *why naming the file and line.
+bool readTelemetryFile(const std::string& path, std::vector<TelemetryRecord>& out,
+                       std::string* why);
+
 class SequenceReader {
  public:
   SequenceReader() = default;

@@ -76,8 +76,9 @@ std::vector<FrameRecord> readFrames(const fs::path& directory, SequenceRules& ru
   return frames;
 }
 
-std::vector<TelemetryRecord> readTelemetry(const fs::path& directory, SequenceRules& rules) {
-  CsvFile file(directory, kTelemetryFile);
+std::vector<TelemetryRecord> readTelemetry(const fs::path& directory, SequenceRules& rules,
+                                           const char* fileName = kTelemetryFile) {
+  CsvFile file(directory, fileName);
   expectHeader(file, toStrings(kTelemetryColumns));
   std::vector<TelemetryRecord> records;
   while (file.nextRow()) {
@@ -218,6 +219,19 @@ std::span<const T> framesSpan(const std::vector<T>& records, std::int64_t frameI
 }  // namespace
 
 // ---- SequenceReader ------------------------------------------------------------------------
+
+bool readTelemetryFile(const std::string& path, std::vector<TelemetryRecord>& out,
+                       std::string* why) {
+  try {
+    const fs::path file(path);
+    SequenceRules rules;
+    out = readTelemetry(file.parent_path(), rules, file.filename().c_str());
+    return true;
+  } catch (const SequenceError& error) {
+    setWhy(why, error.what());
+    return false;
+  }
+}
 
 bool SequenceReader::open(const std::string& directory, std::string* why) {
   *this = SequenceReader{};
