@@ -128,13 +128,6 @@ config::AppConfig hoverConfig(const HoverScene& scene, const std::string& out) {
   return config;
 }
 
-RunSettings everyFrame() {
-  RunSettings run;
-  run.everyFrame = true;
-  run.quiet = true;
-  return run;
-}
-
 struct Accuracy {
   evaluation::TrackingSummary summary;
   double positionRms_m = 0.0;
@@ -219,7 +212,7 @@ TEST(AppGeoref, WithoutTelemetryGroundControlPointsGiveTruePositionsAndSpeeds) {
     std::string why;
     ASSERT_TRUE(perception->init(scene.dir, &config.georef, lift, &why)) << why;
     seams.perception = std::move(perception);
-    ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+    ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
     ASSERT_TRUE(app.run(&why)) << why;
     const LoopCounters c = app.counters();
     EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames));
@@ -240,7 +233,7 @@ TEST(AppGeoref, WithoutTelemetryGroundControlPointsGiveTruePositionsAndSpeeds) {
     std::string why;
     ASSERT_TRUE(perception->init(scene.dir, nullptr, lift, &why)) << why;
     seams.perception = std::move(perception);
-    ASSERT_TRUE(app.init(poseConfig, everyFrame(), std::move(seams), &why)) << why;
+    ASSERT_TRUE(app.init(poseConfig, test::everyFrame(), std::move(seams), &why)) << why;
     ASSERT_TRUE(app.run(&why)) << why;
   }
   const Accuracy pose = measure(scene.dir, poseOut + "/tracks.csv");
@@ -278,7 +271,7 @@ TEST(AppGeoref, BadGroundControlFilesStopTheStartWithTheirNames) {
     both.telemetry.source = config::TelemetrySourceKind::Recording;
     both.georef.gcpFile = scene.gcpFile;
     App app;
-    EXPECT_FALSE(app.init(both, everyFrame(), AppSeams{}, &why));
+    EXPECT_FALSE(app.init(both, test::everyFrame(), AppSeams{}, &why));
     EXPECT_NE(why.find("georef.gcp_file: ground control points place a fixed view without "
                        "telemetry: set telemetry.source: none (it is recording)"),
               std::string::npos)
@@ -296,7 +289,7 @@ TEST(AppGeoref, BadGroundControlFilesStopTheStartWithTheirNames) {
     std::ofstream(path) << text;
     config.georef.gcpFile = path;
     App app;
-    EXPECT_FALSE(app.init(config, everyFrame(), AppSeams{}, &why));
+    EXPECT_FALSE(app.init(config, test::everyFrame(), AppSeams{}, &why));
     EXPECT_NE(why.find("georef.gcp_file: " + path +
                        ": 3 ground control point(s) ('GCP1', 'GCP2', 'GCP3'): at least 4"),
               std::string::npos)
@@ -306,33 +299,11 @@ TEST(AppGeoref, BadGroundControlFilesStopTheStartWithTheirNames) {
     // A missing file.
     config.georef.gcpFile = out + "/missing.csv";
     App app;
-    EXPECT_FALSE(app.init(config, everyFrame(), AppSeams{}, &why));
+    EXPECT_FALSE(app.init(config, test::everyFrame(), AppSeams{}, &why));
     EXPECT_NE(why.find("georef.gcp_file: " + out + "/missing.csv: cannot open"), std::string::npos)
         << why;
   }
 }
-
-// Counts the processing thread's allocations between two frames.
-class AllocationWindow final : public LoopObserver {
- public:
-  AllocationWindow(std::uint64_t from, std::uint64_t to) : from_(from), to_(to) {}
-  void onFrameDone(std::uint64_t processed) override {
-    if (processed == from_) {
-      counter_.startOnThread(static_cast<unsigned long>(pthread_self()));
-    } else if (processed == to_) {
-      counter_.stop();
-      counted_ = true;
-    }
-  }
-  std::size_t count() const { return counter_.count(); }
-  bool counted() const { return counted_; }
-
- private:
-  std::uint64_t from_;
-  std::uint64_t to_;
-  test::AllocationCounter counter_;
-  bool counted_ = false;
-};
 
 TEST(AppGeoref, TheRealPipelineLiftsThroughTheGroundControlPointsWithoutAllocating) {
   const HoverScene& scene = hoverScene();
@@ -342,11 +313,11 @@ TEST(AppGeoref, TheRealPipelineLiftsThroughTheGroundControlPointsWithoutAllocati
   config.telemetry.source = config::TelemetrySourceKind::None;
   config.georef.gcpFile = scene.gcpFile;
   constexpr int kRunFrames = 16;
-  AllocationWindow window(5, kRunFrames);
+  test::AllocationWindow window(5, kRunFrames);
   App app;
   AppSeams seams;
   seams.observer = &window;
-  RunSettings run = everyFrame();
+  RunSettings run = test::everyFrame();
   run.maxFrames = kRunFrames;
   std::string why;
   ASSERT_TRUE(app.init(config, run, std::move(seams), &why)) << why;

@@ -51,39 +51,6 @@ config::AppConfig loopConfig(const std::string& sequenceDir) {
   return config;
 }
 
-RunSettings everyFrame() {
-  RunSettings run;
-  run.everyFrame = true;
-  run.quiet = true;
-  return run;
-}
-
-// Counts the processing thread's allocations from the end of frame `from` to the end of the
-// last frame (the warm-up before it may allocate: first-touch caches, stdio).
-class AllocationWindow final : public LoopObserver {
- public:
-  AllocationWindow(std::uint64_t from, std::uint64_t to) : from_(from), to_(to) {}
-  void onFrameDone(std::uint64_t processed) override {
-    if (processed == from_) {
-      counter_.startOnThread(static_cast<unsigned long>(pthread_self()));
-    } else if (processed == to_) {
-      counter_.stop();
-      counted_ = true;
-    }
-  }
-  void onPublished(const messages::VehicleState&) override { ++published_; }
-  std::size_t count() const { return counter_.count(); }
-  bool counted() const { return counted_; }
-  std::uint64_t published() const { return published_; }
-
- private:
-  std::uint64_t from_;
-  std::uint64_t to_;
-  test::AllocationCounter counter_;
-  bool counted_ = false;
-  std::uint64_t published_ = 0;
-};
-
 std::unique_ptr<test::TruthPerception> truth(const std::string& sequenceDir) {
   auto perception = std::make_unique<test::TruthPerception>();
   std::string why;
@@ -98,13 +65,13 @@ TEST(AppLoop, ZeroAllocationsPerFrameOnTheProcessingThreadWithThePipeline) {
   config::AppConfig config = loopConfig(dir);
   config.app.trajectoryCsv = out + "/tracks.csv";
   config.app.detectionsCsv = out + "/detections.csv";
-  AllocationWindow window(5, kFrames);
+  test::AllocationWindow window(5, kFrames);
   {
     App app;
     AppSeams seams;
     seams.observer = &window;
     std::string why;
-    ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+    ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
     ASSERT_TRUE(app.run(&why)) << why;
     const LoopCounters c = app.counters();
     EXPECT_EQ(c.framesIn, static_cast<std::uint64_t>(kFrames));
@@ -134,13 +101,13 @@ TEST(AppLoop, ZeroAllocationsWithInjectedVehiclesAndTracksAndTheFigureWithDds) {
     config::AppConfig config = loopConfig(dir);
     config.app.trajectoryCsv = out + "/tracks.csv";
     config.app.detectionsCsv = out + "/detections.csv";
-    AllocationWindow window(5, kFrames);
+    test::AllocationWindow window(5, kFrames);
     App app;
     AppSeams seams;
     seams.perception = truth(dir);
     seams.observer = &window;
     std::string why;
-    ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+    ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
     ASSERT_TRUE(app.run(&why)) << why;
     const LoopCounters c = app.counters();
     EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames));
@@ -168,13 +135,13 @@ TEST(AppLoop, ZeroAllocationsWithInjectedVehiclesAndTracksAndTheFigureWithDds) {
     config.dds.enabled = true;
     config.dds.domainId = static_cast<std::uint32_t>(1 + getpid() % 200);
     config.dds.partition = "alloc_" + std::to_string(getpid());
-    AllocationWindow window(5, kFrames);
+    test::AllocationWindow window(5, kFrames);
     App app;
     AppSeams seams;
     seams.perception = truth(dir);
     seams.observer = &window;
     std::string why;
-    ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+    ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
     const std::uint64_t publishedBefore = window.published();
     ASSERT_TRUE(app.run(&why)) << why;
     ASSERT_TRUE(window.counted());
@@ -215,7 +182,7 @@ TEST(AppFaults, CorruptAndTruncatedFramesAreCountedAndSkipped) {
   AppSeams seams;
   seams.perception = truth(dir);
   std::string why;
-  ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+  ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
   ASSERT_TRUE(app.run(&why)) << why;
   const LoopCounters c = app.counters();
   EXPECT_EQ(c.badFrames, 2U);
@@ -284,7 +251,7 @@ TEST(AppFaults, NanPoseIsRefusedCountedAndTheLoopRecovers) {
   AppSeams seams;
   seams.perception = truth(dir);
   seams.poseInput = std::make_unique<NanPoseInput>(reader, from, to);
-  ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+  ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
   ASSERT_TRUE(app.run(&why)) << why;
   const LoopCounters c = app.counters();
   EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames));
@@ -340,7 +307,7 @@ TEST(AppFaults, TelemetryGapGivesStalePosesAndLiftingResumesAfterIt) {
   App app;
   AppSeams seams;
   seams.perception = truth(dir);
-  ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+  ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
   ASSERT_TRUE(app.run(&why)) << why;
   const LoopCounters c = app.counters();
   EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames));
@@ -432,7 +399,7 @@ TEST(AppFaults, ImplausibleRecordedTelemetryRowsAreNamedRefusedAndCounted) {
   App app;
   AppSeams seams;
   seams.perception = truth(dir);
-  ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+  ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
   ASSERT_TRUE(app.run(&why)) << why;
   const LoopCounters c = app.counters();
   EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames));
@@ -550,7 +517,7 @@ TEST(AppFaults, CameraDisappearsAndComesBackAndProcessingResumes) {
   AppSeams seams;
   seams.v4l2Device = &device;
   seams.observer = &times;
-  RunSettings run = everyFrame();
+  RunSettings run = test::everyFrame();
   run.maxFrames = 10;
   std::string why;
   ASSERT_TRUE(app.init(config, run, std::move(seams), &why)) << why;

@@ -50,13 +50,6 @@ config::AppConfig loopConfig(const std::string& sequenceDir) {
   return config;
 }
 
-RunSettings everyFrame() {
-  RunSettings run;
-  run.everyFrame = true;
-  run.quiet = true;
-  return run;
-}
-
 std::string readText(const std::string& path) {
   std::ifstream in(path);
   std::ostringstream text;
@@ -195,28 +188,6 @@ class FrameKeeper final : public FramePerception {
   std::vector<cv::Mat>* frames_;
 };
 
-// Counts the processing thread's allocations over frames from..to (as in app_loop_test).
-class AllocationWindow final : public LoopObserver {
- public:
-  AllocationWindow(std::uint64_t from, std::uint64_t to) : from_(from), to_(to) {}
-  void onFrameDone(std::uint64_t processed) override {
-    if (processed == from_) {
-      counter_.startOnThread(static_cast<unsigned long>(pthread_self()));
-    } else if (processed == to_) {
-      counter_.stop();
-      counted_ = true;
-    }
-  }
-  std::size_t count() const { return counter_.count(); }
-  bool counted() const { return counted_; }
-
- private:
-  std::uint64_t from_;
-  std::uint64_t to_;
-  test::AllocationCounter counter_;
-  bool counted_ = false;
-};
-
 std::unique_ptr<test::TruthPerception> truth(const std::string& sequenceDir) {
   auto perception = std::make_unique<test::TruthPerception>();
   std::string why;
@@ -239,7 +210,7 @@ LoopCounters truthRun(const std::string& sequence, const std::string& truthDir,
     seams.perception = std::make_unique<FrameKeeper>(std::move(seams.perception), frames);
   }
   std::string why;
-  EXPECT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+  EXPECT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
   EXPECT_TRUE(app.run(&why)) << why;
   return app.counters();
 }
@@ -309,12 +280,12 @@ TEST(AppRecord, ReplayOfTheRecordingGivesTheSameDetectionsAndTelemetry) {
     config::AppConfig config = loopConfig(dir);
     config.app.detectionsCsv = out + "/real_live.csv";
     config.app.record.dir = realRecording;
-    AllocationWindow window(5, kFrames);
+    test::AllocationWindow window(5, kFrames);
     App app;
     AppSeams seams;
     seams.observer = &window;
     std::string why;
-    ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+    ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
     ASSERT_TRUE(app.run(&why)) << why;
     EXPECT_EQ(app.counters().recordFrames, static_cast<std::uint64_t>(kFrames));
     ASSERT_TRUE(window.counted());
@@ -329,7 +300,7 @@ TEST(AppRecord, ReplayOfTheRecordingGivesTheSameDetectionsAndTelemetry) {
     config.app.detectionsCsv = out + "/real_replayed.csv";
     App app;
     std::string why;
-    ASSERT_TRUE(app.init(config, everyFrame(), AppSeams{}, &why)) << why;
+    ASSERT_TRUE(app.init(config, test::everyFrame(), AppSeams{}, &why)) << why;
     ASSERT_TRUE(app.run(&why)) << why;
     EXPECT_EQ(app.counters().framesProcessed, static_cast<std::uint64_t>(kFrames));
   }
@@ -353,7 +324,7 @@ TEST(AppRecord, EveryNthFrameRecordsOneFrameInNAndCountsTheOthers) {
   AppSeams seams;
   seams.perception = truth(dir);
   std::string why;
-  ASSERT_TRUE(app.init(config, everyFrame(), std::move(seams), &why)) << why;
+  ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
   ASSERT_TRUE(app.run(&why)) << why;
   const LoopCounters c = app.counters();
   expectEveryFrameAccountedFor(c);
@@ -483,7 +454,7 @@ TEST(AppRecord, CameraRecordingReplaysToTheSameDetectionsAndTelemetry) {
     AppSeams seams;
     seams.v4l2Device = &device;
     seams.poseInput = std::move(pose);
-    RunSettings run = everyFrame();
+    RunSettings run = test::everyFrame();
     run.maxFrames = kFrames;
     std::string why;
     ASSERT_TRUE(app.init(config, run, std::move(seams), &why)) << why;
@@ -523,7 +494,7 @@ TEST(AppRecord, CameraRecordingReplaysToTheSameDetectionsAndTelemetry) {
     replay.app.detectionsCsv = out + "/replayed.csv";
     App app;
     std::string why;
-    ASSERT_TRUE(app.init(replay, everyFrame(), AppSeams{}, &why)) << why;
+    ASSERT_TRUE(app.init(replay, test::everyFrame(), AppSeams{}, &why)) << why;
     ASSERT_TRUE(app.run(&why)) << why;
     EXPECT_EQ(app.counters().framesProcessed, static_cast<std::uint64_t>(kFrames));
     EXPECT_EQ(app.counters().noPose + app.counters().stalePose, 0U);

@@ -1,5 +1,6 @@
 #include "app_test_support.hpp"
 
+#include <pthread.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -205,6 +206,22 @@ std::size_t TruthPerception::objectCount(std::size_t frameIndex) const {
   return frameIndex < timestamps_.size()
              ? reader_.objects(reader_.frames()[frameIndex].frameId).size()
              : 0;
+}
+
+app::RunSettings everyFrame() {
+  app::RunSettings run;
+  run.everyFrame = true;
+  run.quiet = true;
+  return run;
+}
+
+void AllocationWindow::onFrameDone(std::uint64_t processed) {
+  if (processed == from_) {
+    counter_.startOnThread(static_cast<unsigned long>(pthread_self()));
+  } else if (processed == to_) {
+    counter_.stop();
+    counted_ = true;
+  }
 }
 
 }  // namespace vp::test

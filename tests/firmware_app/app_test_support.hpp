@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "alloc_counter.hpp"
 #include "app.hpp"
 #include "georef/georeference.hpp"
 #include "lifting/plane_lifter.hpp"
@@ -107,6 +108,29 @@ class TruthPerception final : public app::FramePerception {
   perception::FrameFootprint footprint_{};
   perception::PipelineTimings timings_{};
   cv::Mat frame_;
+};
+
+// Offline run settings: the source waits for the loop (no frame dropped), no log lines.
+app::RunSettings everyFrame();
+
+// Counts the processing thread's heap allocations from the end of frame `from` to the end of
+// frame `to` (the warm-up before may allocate: first-touch caches, stdio), and the states
+// published meanwhile.
+class AllocationWindow final : public app::LoopObserver {
+ public:
+  AllocationWindow(std::uint64_t from, std::uint64_t to) : from_(from), to_(to) {}
+  void onFrameDone(std::uint64_t processed) override;
+  void onPublished(const messages::VehicleState& /*state*/) override { ++published_; }
+  std::size_t count() const { return counter_.count(); }
+  bool counted() const { return counted_; }
+  std::uint64_t published() const { return published_; }
+
+ private:
+  std::uint64_t from_;
+  std::uint64_t to_;
+  AllocationCounter counter_;
+  bool counted_ = false;
+  std::uint64_t published_ = 0;
 };
 
 }  // namespace vp::test

@@ -128,41 +128,11 @@ config::AppConfig quietConfig(config::AppConfig config) {
   return config;
 }
 
-RunSettings everyFrame() {
-  RunSettings run;
-  run.everyFrame = true;
-  run.quiet = true;
-  return run;
-}
-
 // Runs the app with the fixture's truth injected; the app (which owns the perception) is kept
 // so that the caller can read what the perception measured.
 struct TruthRun {
   std::unique_ptr<App> app = std::make_unique<App>();
   test::TruthPerception* truth = nullptr;
-};
-
-// Counts the processing thread's allocations from the end of frame `from` to the end of frame
-// `to` (the warm-up before may allocate).
-class AllocationWindow final : public LoopObserver {
- public:
-  AllocationWindow(std::uint64_t from, std::uint64_t to) : from_(from), to_(to) {}
-  void onFrameDone(std::uint64_t processed) override {
-    if (processed == from_) {
-      counter_.startOnThread(static_cast<unsigned long>(pthread_self()));
-    } else if (processed == to_) {
-      counter_.stop();
-      counted_ = true;
-    }
-  }
-  std::size_t count() const { return counter_.count(); }
-  bool counted() const { return counted_; }
-
- private:
-  std::uint64_t from_;
-  std::uint64_t to_;
-  test::AllocationCounter counter_;
-  bool counted_ = false;
 };
 
 TruthRun runWithTruth(const config::AppConfig& config, const test::TruthReplay& replay,
@@ -177,7 +147,8 @@ TruthRun runWithTruth(const config::AppConfig& config, const test::TruthReplay& 
   AppSeams seams;
   seams.perception = std::move(perception);
   seams.observer = observer;
-  EXPECT_TRUE(run.app->init(quietConfig(config), everyFrame(), std::move(seams), &why)) << why;
+  EXPECT_TRUE(run.app->init(quietConfig(config), test::everyFrame(), std::move(seams), &why))
+      << why;
   EXPECT_TRUE(run.app->run(&why)) << why;
   return run;
 }
@@ -290,7 +261,7 @@ TEST(AppVideo, DirectlyReplayedVideoLiftsVehiclesWithinHalfAMetreOfTheTruth) {
   rig.gimbal = config.mount.gimbal;
   rig.dtmPath = config.terrain.dtmPath;
   rig.crs = config.terrain.crs;
-  AllocationWindow window(4, test::kLoopFrames);
+  test::AllocationWindow window(4, test::kLoopFrames);
   const TruthRun run = runWithTruth(config, {&rig, f.firstFrame_ns}, &window);
   EXPECT_EQ(run.app->counters().framesProcessed, static_cast<std::uint64_t>(test::kLoopFrames));
   EXPECT_EQ(run.app->counters().framesIn, static_cast<std::uint64_t>(test::kLoopFrames));
@@ -306,19 +277,19 @@ TEST(AppVideo, DirectVideoStartUpErrorsNameTheKey) {
   config.source.video.path = f.video + ".missing";
   App app;
   std::string why;
-  EXPECT_FALSE(app.init(quietConfig(config), everyFrame(), {}, &why));
+  EXPECT_FALSE(app.init(quietConfig(config), test::everyFrame(), {}, &why));
   EXPECT_EQ(why, "source.video.path: " + f.video + ".missing: video file not found");
 
   config = directVideoConfig(f);
   config.source.video.srt.clear();
   App app2;
-  EXPECT_FALSE(app2.init(quietConfig(config), everyFrame(), {}, &why));
+  EXPECT_FALSE(app2.init(quietConfig(config), test::everyFrame(), {}, &why));
   EXPECT_EQ(why, "source.video: give one of srt (the drone's subtitle file) and telemetry_csv");
 
   config = directVideoConfig(f);
   config.camera.intrinsics.width_px = 640;
   App app3;
-  EXPECT_FALSE(app3.init(quietConfig(config), everyFrame(), {}, &why));
+  EXPECT_FALSE(app3.init(quietConfig(config), test::everyFrame(), {}, &why));
   EXPECT_NE(why.find("but the source delivers 320x256"), std::string::npos) << why;
 }
 
