@@ -45,28 +45,19 @@ std::string num(double value) {
   return std::string(buffer, result.ptr);
 }
 
-std::string rigYaml(const geodesy::GeodeticPoint& origin, const camera::Intrinsics& k,
-                    const camera::Distortion& d, const std::string& dtmCrs) {
-  std::ostringstream y;
-  y << "# Camera rig of an imported drone video (vp_import_video), configuration schema.\n";
-  y << "origin:\n  latitude_deg: " << num(origin.latitude_deg)
-    << "\n  longitude_deg: " << num(origin.longitude_deg)
-    << "\n  height_m: " << num(origin.height_m) << "\n";
-  y << "camera:\n  width_px: " << k.width_px << "\n  height_px: " << k.height_px
-    << "\n  fx_px: " << num(k.fx_px) << "\n  fy_px: " << num(k.fy_px)
-    << "\n  cx_px: " << num(k.cx_px) << "\n  cy_px: " << num(k.cy_px)
-    << "\n  lens_model: " << camera::toString(d.model) << "\n";
-  if (d.model == camera::LensModel::BrownConrady) {
-    y << "  distortion:\n    k1: " << num(d.k1) << "\n    k2: " << num(d.k2)
-      << "\n    p1: " << num(d.p1) << "\n    p2: " << num(d.p2) << "\n    k3: " << num(d.k3)
-      << "\n";
-  }
-  // The subtitles give the camera head's attitude relative to north and the horizon (or the
-  // nadir assumption): an earth-referenced gimbal, no mount rotation, no lever arm.
-  y << "mount:\n  roll_deg: 0\n  pitch_deg: 0\n  yaw_deg: 0\n  lever_arm_m: [0, 0, 0]\n"
-    << "  gimbal:\n    reference: earth\n    roll_deg: 0\n    pitch_deg: -90\n    yaw_deg: 0\n";
-  y << "terrain:\n  dtm_path: dtm.tif\n  crs: " << dtmCrs << "\n";
-  return y.str();
+// The rig of the import: the subtitles give the camera head's attitude relative to north and
+// the horizon (or the nadir assumption), so an earth-referenced gimbal, no mount rotation and no
+// lever arm.
+config::RigConfig importRig(const geodesy::GeodeticPoint& origin, const camera::Intrinsics& k,
+                            const camera::Distortion& d,
+                            const std::optional<terrain::CrsSpec>& dtmCrs) {
+  config::RigConfig rig;
+  rig.origin = origin;
+  rig.camera = {k, d};
+  rig.mount.gimbal.reference = geodesy::GimbalReference::Earth;
+  rig.mount.gimbal.angles = {0.0, -90.0, 0.0};
+  rig.terrain.crs = dtmCrs;
+  return rig;
 }
 
 // A flat DTM at height_m in the UTM zone of the track, covering it with a margin.
@@ -315,7 +306,7 @@ bool importVideo(const ImportOptions& options, ImportSummary& summary, std::stri
   const geodesy::GeodeticPoint& start = telemetry.records.front().position;
   geodesy::GeodeticPoint origin{start.latitude_deg, start.longitude_deg, start.height_m};
   std::string dtmFile = options.dtmPath;
-  std::string dtmCrs = options.dtmCrs;
+  std::optional<terrain::CrsSpec> dtmCrs;  // auto
   fs::path staging;
   if (options.flatDtmHeight_m) {
     origin.height_m = *options.flatDtmHeight_m;
@@ -325,18 +316,17 @@ bool importVideo(const ImportOptions& options, ImportSummary& summary, std::stri
       return false;
     }
     dtmFile = staging.string();
-    dtmCrs = "auto";
   } else {
     terrain::TerrainGrid grid;
-    std::optional<terrain::CrsSpec> crs;
-    if (dtmCrs != "auto") {
-      crs = terrain::crsFromString(dtmCrs);
-      if (!crs) {
-        return fail(why, "--dtm-crs: expected auto, wgs84 or utm:<zone><N|S>, got " + dtmCrs);
+    if (options.dtmCrs != "auto") {
+      dtmCrs = terrain::crsFromString(options.dtmCrs);
+      if (!dtmCrs) {
+        return fail(why,
+                    "--dtm-crs: expected auto, wgs84 or utm:<zone><N|S>, got " + options.dtmCrs);
       }
     }
     terrain::TerrainModel model;
-    if (!io::loadDtm(options.dtmPath, crs, grid, why) ||
+    if (!io::loadDtm(options.dtmPath, dtmCrs, grid, why) ||
         !model.init(std::move(grid), geodesy::LocalFrame(origin), why)) {
       return false;
     }
@@ -371,8 +361,12 @@ bool importVideo(const ImportOptions& options, ImportSummary& summary, std::stri
   sequence::SequenceWriter writer;
   writer.imageExtension = ".jpg";
   writer.jpegQuality = options.jpegQuality;
-  const bool opened = writer.open(options.outDir, info,
-                                  rigYaml(origin, intrinsics, distortion, dtmCrs), dtmFile, why);
+  const bool opened = writer.open(
+      options.outDir, info,
+      config::formatRigYaml(importRig(origin, intrinsics, distortion, dtmCrs), "dtm.tif",
+                            "Camera rig of an imported drone video "
+                            "(vp_import_video), configuration schema."),
+      dtmFile, why);
   if (!staging.empty()) {
     std::error_code ignored;
     fs::remove(staging, ignored);
