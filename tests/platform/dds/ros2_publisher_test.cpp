@@ -242,6 +242,77 @@ TEST(Ros2ReaderProcess, ReceivesEveryFieldOfStatesObjectsStatusAndGrid) {
   }
 }
 
+// Cyclone's own allocations per ROS 2 frame message, reader in another process (measured and
+// printed for docs/dds.md's table, not asserted: they are Cyclone's, outside our code). One
+// VehicleStateArray write and one TrackedObjects write per frame, each measured alone (its own
+// publisher), for 1, 20 and 200 tracks: add() of every state plus endFrame(), 20 frames after 5
+// warm-up frames, acknowledgements awaited outside the counted window.
+TEST(Ros2ReaderProcess, AllocationsPerArrayWrite) {
+  test::useLoopbackDds();
+  config::DdsConfig arrayConfig = test::uniqueDdsConfig();
+  arrayConfig.ros2.topicNamespace = "vp_alloc_" + std::to_string(getpid());
+  arrayConfig.autoware.enabled = false;
+  arrayConfig.autoware.topic = "/perception/alloc_" + std::to_string(getpid()) + "/objects";
+  config::DdsConfig objectsConfig = arrayConfig;
+  objectsConfig.ros2.enabled = false;
+  objectsConfig.autoware.enabled = true;
+  const std::string command =
+      std::string(VP_ROS2_READER) + " --domain " + std::to_string(arrayConfig.domainId) +
+      " --namespace " + arrayConfig.ros2.topicNamespace + " --autoware-topic " +
+      arrayConfig.autoware.topic + " --until-writers-gone --timeout-s 120 > /dev/null 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  constexpr int kWarmUp = 5;
+  constexpr int kFrames = 20;
+  std::string report;
+  {
+    Participant participant;
+    ASSERT_TRUE(participant.open(arrayConfig).ok());
+    Ros2StatePublisher arrays;
+    Ros2StatePublisher objects;
+    ASSERT_TRUE(arrays.open(participant, arrayConfig).ok());
+    ASSERT_TRUE(objects.open(participant, objectsConfig).ok());
+    ASSERT_TRUE(waitForMatch(arrays.arrayWriter(), 30000ms));
+    ASSERT_TRUE(waitForMatch(objects.autowareWriter(), 30000ms));
+    std::this_thread::sleep_for(300ms);  // the reader sees the writers too
+    std::int64_t time_ns = dds_time();
+    for (const std::uint32_t tracks : {1U, 20U, 200U}) {
+      std::vector<messages::VehicleState> states;
+      for (std::uint32_t id = 1; id <= tracks; ++id) {
+        states.push_back(fullState(id, 0, id % 7 == 0));
+      }
+      for (auto* publisher : {&arrays, &objects}) {
+        const dds_entity_t writer =
+            publisher == &arrays ? publisher->arrayWriter() : publisher->autowareWriter();
+        std::size_t counted = 0;
+        for (int frame = 0; frame < kWarmUp + kFrames; ++frame) {
+          time_ns += 100'000'000;
+          for (auto& state : states) {
+            state.measurementTime_ns = time_ns;
+          }
+          test::AllocationCounter counter;
+          for (const auto& state : states) {
+            EXPECT_TRUE(publisher->add(state).ok());
+          }
+          const Ros2FrameSummary summary = publisher->endFrame(time_ns);
+          counter.stop();
+          EXPECT_EQ(summary.errors, 0U) << describe(summary.firstError);
+          counted += frame >= kWarmUp ? counter.count() : 0;
+          EXPECT_EQ(dds_wait_for_acks(writer, DDS_SECS(10)), DDS_RETCODE_OK);
+        }
+        char line[160];
+        std::snprintf(line, sizeof line, "  %s, %3u tracks: %.2f allocations per write\n",
+                      publisher == &arrays ? "VehicleStateArray" : "TrackedObjects   ", tracks,
+                      static_cast<double>(counted) / kFrames);
+        report += line;
+      }
+    }
+  }
+  EXPECT_EQ(pclose(pipe), 0) << "the reader timed out or failed";
+  std::printf("ROS 2 frame messages, reader in another process (process-wide, malloc %s):\n%s",
+              test::AllocationCounter::countsMalloc() ? "counted" : "not counted", report.c_str());
+}
+
 // Our side of every ROS 2 write: filling the array, the Autoware objects, the status and the
 // grid into the preallocated samples allocates nothing (Cyclone's serialisation is measured in
 // docs/dds.md, not asserted).
