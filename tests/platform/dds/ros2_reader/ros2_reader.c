@@ -7,10 +7,14 @@
  * of every sample it takes is printed as "<topic>.<field path>=<value>" between "BEGIN <topic>" and
  * "END <topic>" lines; doubles with 17 and floats with 9 significant digits, so that the values
  * read back are exactly those sent. It stops once it has the requested number of samples of each
- * topic (status 0), or at the timeout (status 3); status 1 for a DDS error, 2 for usage.
+ * topic (status 0), or at the timeout (status 3); status 1 for a DDS error, 2 for usage. With
+ * --until-writers-gone it also waits, after having the requested samples, until every writer it
+ * matched has left (the sender's process or participant ended), taking whatever they wrote:
+ * the counts are then minimums and the reader sees everything a sender wrote up to its end.
  *
  * usage: vp_test_ros2_reader --domain N --namespace NS --autoware-topic /T
- *          [--states K] [--status K] [--occupancy K] [--objects K] [--timeout-s S] */
+ *          [--states K] [--status K] [--occupancy K] [--objects K] [--timeout-s S]
+ *          [--until-writers-gone] */
 #include <dds/dds.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -276,7 +280,7 @@ static void printObjects(const autoware_perception_msgs_msg_dds__TrackedObjects_
 static void usage(void) {
   fprintf(stderr,
           "usage: vp_test_ros2_reader --domain N --namespace NS --autoware-topic /T [--states K]"
-          " [--status K] [--occupancy K] [--objects K] [--timeout-s S]\n");
+          " [--status K] [--occupancy K] [--objects K] [--timeout-s S] [--until-writers-gone]\n");
   exit(2);
 }
 
@@ -286,8 +290,13 @@ int main(int argc, char** argv) {
   const char* autowareTopic = NULL;
   long want[kTopics] = {0, 0, 0, 0};
   double timeout_s = 30.0;
+  int untilWritersGone = 0;
   for (int a = 1; a < argc; ++a) {
     const char* key = argv[a];
+    if (strcmp(key, "--until-writers-gone") == 0) {
+      untilWritersGone = 1;
+      continue;
+    }
     if (a + 1 >= argc) {
       usage();
     }
@@ -360,8 +369,9 @@ int main(int argc, char** argv) {
 
   long got[kTopics] = {0, 0, 0, 0};
   const dds_time_t end = dds_time() + (dds_duration_t)(timeout_s * 1e9);
+  int writersGone = 0; /* every writer matched so far has left (read before the take below) */
   for (;;) {
-    int done = 1;
+    int done = !untilWritersGone || writersGone;
     for (int k = 0; k < kTopics; ++k) {
       done = done && got[k] >= want[k];
     }
@@ -377,6 +387,19 @@ int main(int argc, char** argv) {
       return 3;
     }
     check(dds_waitset_wait(waitset, NULL, 0, DDS_MSECS(100)), "dds_waitset_wait");
+    if (untilWritersGone) {
+      /* Checked before taking: what a writer wrote before it left is in the cache by now. */
+      int matchedEver = 0;
+      int present = 0;
+      for (int k = 0; k < kTopics; ++k) {
+        dds_subscription_matched_status_t matched;
+        check(dds_get_subscription_matched_status(readers[k], &matched),
+              "dds_get_subscription_matched_status");
+        matchedEver += matched.total_count > 0;
+        present += matched.current_count > 0;
+      }
+      writersGone = matchedEver > 0 && present == 0;
+    }
     for (int k = 0; k < kTopics; ++k) {
       void* samples[1] = {NULL};
       dds_sample_info_t info;
