@@ -453,6 +453,7 @@ SceneSpec generateScene(SceneKind kind, Rng& rng) {
   const int buildingCount = rng.weighted(std::array<double, 4>{0.15, 0.35, 0.35, 0.15}) * 3;
   addBuildings(scene, rng, buildingCount);
   addTrees(scene, rng);
+  addStreetFurniture(scene);  // own Rng: takes no draw from rng
 
   // Light: sun direction and colours (overcast days have weak, soft shadows).
   Lighting& l = scene.light;

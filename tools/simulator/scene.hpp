@@ -3,13 +3,14 @@
 // Contract: generateScene() turns a scene kind and the sequence's Rng into a SceneSpec: the
 // road layout (an intersection of two roads, a straight section, or a straight road with a
 // parking lot), lane and marking style, kerbs and pavements, asphalt patches and manholes,
-// buildings, trees, the lighting (sun elevation/azimuth, sun and sky colour) and the
-// traffic parameters. Everything is in the world ENU frame (metres, x east, y north); z is
-// taken from the terrain when the scene is built. The spec is plain data: the renderer,
-// the ground texture and the traffic read it, nothing modifies it after generation.
+// buildings, trees, street furniture, the lighting (sun elevation/azimuth, sun and sky
+// colour) and the traffic parameters. Everything is in the world ENU frame (metres, x east,
+// y north); z is taken from the terrain when the scene is built. The spec is plain data: the
+// renderer, the ground texture and the traffic read it, nothing modifies it after generation.
 // Right-hand traffic: a road's forward lanes lie to the right of its direction.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -102,6 +103,25 @@ struct Tree {
   std::uint32_t seed = 0;
 };
 
+// Street furniture: static non-vehicle objects on pavements and grass (street_furniture.cpp).
+// They are not vehicles in the ground truth; the detector must learn to ignore them.
+enum class FurnitureKind { Bench, Shelter, Kiosk, StairEntrance };
+const char* toString(FurnitureKind kind);
+
+struct StreetFurniture {
+  FurnitureKind kind = FurnitureKind::Bench;
+  Eigen::Vector2d centre{0, 0};  // footprint centre, ENU m
+  double heading_rad = 0.0;      // direction of the length axis; the front faces +left normal
+  double length_m = 1.8;
+  double width_m = 0.6;   // footprint depth (across the length axis)
+  double height_m = 0.8;  // top above the ground (bench backrest, shelter roof, railing)
+  Eigen::Vector3f albedo{0.5F, 0.5F, 0.5F};      // slats, frame, walls, parapet
+  Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};  // shelter glass tint, kiosk roof
+  bool backrest = true;                          // benches
+  std::uint32_t seed = 0;
+  Eigen::Vector2d axis() const { return {std::cos(heading_rad), std::sin(heading_rad)}; }
+};
+
 struct Patch {  // repaired rectangle of road surface
   Eigen::Vector2d centre{0, 0};
   Eigen::Vector2d dir{1, 0};
@@ -171,6 +191,7 @@ struct SceneSpec {
   std::vector<Patch> paved;  // extra drivable rectangles (lots, driveways); tone unused
   std::vector<Building> buildings;
   std::vector<Tree> trees;
+  std::vector<StreetFurniture> furniture;
   std::vector<Patch> patches;
   std::vector<Manhole> manholes;
   GroundStyle style{};
@@ -186,5 +207,22 @@ struct SceneSpec {
 };
 
 SceneSpec generateScene(SceneKind kind, Rng& rng);
+
+// Oriented rectangle on the ground plane (overlap tests of furniture, buildings, vehicles).
+struct Footprint {
+  Eigen::Vector2d centre{0, 0};
+  Eigen::Vector2d axis{1, 0};  // unit, along the length
+  double halfLength_m = 0.5;
+  double halfWidth_m = 0.5;
+};
+// True when the rectangles, each grown by margin_m, intersect (separating axis test).
+bool footprintsOverlap(const Footprint& a, const Footprint& b, double margin_m);
+Footprint footprintOf(const StreetFurniture& item);
+
+// Street furniture (street_furniture.cpp), called by generateScene after the buildings and
+// trees. It draws from its own Rng seeded from a value the scene already drew (the style's
+// seed): it takes nothing from the sequence's Rng, so every other draw of a seed stays as it
+// was without it.
+void addStreetFurniture(SceneSpec& scene);
 
 }  // namespace vp::sim
