@@ -291,19 +291,6 @@ void Renderer::buildBuildings() {
     if (b.roof == RoofKind::Flat) {
       addQuad(staticTriangles_, {k[0].x(), k[0].y(), z1}, {k[1].x(), k[1].y(), z1},
               {k[2].x(), k[2].y(), z1}, {k[3].x(), k[3].y(), z1}, roofIndex);
-      std::uint32_t h = b.seed;
-      for (int u = 0; u < b.rooftopUnits; ++u) {
-        h = hashU32(h + 17U);
-        const double ul = 0.6 + 1.6 * static_cast<double>(hashToUnit(h));
-        const double uw = 0.5 + 1.2 * static_cast<double>(hashToUnit(hashU32(h + 1U)));
-        const double uh = 0.6 + 1.4 * static_cast<double>(hashToUnit(hashU32(h + 2U)));
-        const double px = (static_cast<double>(hashToUnit(hashU32(h + 3U))) - 0.5) *
-                          (b.length_m - 2.0 * ul - 1.0);
-        const double py =
-            (static_cast<double>(hashToUnit(hashU32(h + 4U))) - 0.5) * (b.width_m - 2.0 * uw - 1.0);
-        addBox(staticTriangles_, b.centre + px * f + py * n, f, ul, uw, z1, z1 + uh, unitIndex,
-               unitIndex);
-      }
     } else {
       // Gabled: ridge along the length axis, eaves overhanging by 0.35 m.
       const double o = 0.35;
@@ -325,6 +312,7 @@ void Renderer::buildBuildings() {
                                                 {m.x(), m.y(), zr}, base + (end > 0 ? 3U : 1U)));
       }
     }
+    buildRoofFixtures(b, id, z1, roofIndex, unitIndex);
   }
 }
 

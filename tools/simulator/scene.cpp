@@ -151,6 +151,7 @@ void addBuildings(SceneSpec& scene, Rng& rng, int count) {
     }
     b.seed = rng.nextU32();
     if (buildingClear(scene, b, clearance)) {
+      addRoofFixtures(b);  // own Rng from b.seed: takes no draw from rng
       scene.buildings.push_back(b);
     }
   }

@@ -3,10 +3,11 @@
 // Contract: generateScene() turns a scene kind and the sequence's Rng into a SceneSpec: the
 // road layout (an intersection of two roads, a straight section, or a straight road with a
 // parking lot), lane and marking style, kerbs and pavements, asphalt patches and manholes,
-// buildings, trees, street furniture, the lighting (sun elevation/azimuth, sun and sky
-// colour) and the traffic parameters. Everything is in the world ENU frame (metres, x east,
-// y north); z is taken from the terrain when the scene is built. The spec is plain data: the
-// renderer, the ground texture and the traffic read it, nothing modifies it after generation.
+// buildings with their roof fixtures, trees, street furniture, the lighting (sun
+// elevation/azimuth, sun and sky colour) and the traffic parameters. Everything is in the world
+// ENU frame (metres, x east, y north); z is taken from the terrain when the scene is built. The
+// spec is plain data: the renderer, the ground texture and the traffic read it, nothing
+// modifies it after generation.
 // Right-hand traffic: a road's forward lanes lie to the right of its direction.
 #pragma once
 
@@ -78,6 +79,20 @@ struct ParkingLot {
 
 enum class RoofKind { Flat, Gabled };
 
+// Things on a roof that look like small objects from above (roof_fixtures.cpp places them).
+enum class RoofFixtureKind { Hvac, Skylight, Dormer, SolarPanel };
+
+struct RoofFixture {
+  RoofFixtureKind kind = RoofFixtureKind::Hvac;
+  // Footprint centre in the roof's frame: along the length axis and across it (m from the
+  // building centre); gabled roofs: across > 0 on the +normal slope.
+  double along_m = 0.0;
+  double across_m = 0.0;
+  double length_m = 1.0;  // along the building's length axis
+  double width_m = 1.0;   // across it (horizontal)
+  double height_m = 0.0;  // above the roof (HVAC box, dormer front; flush fixtures: 0)
+};
+
 struct Building {
   Eigen::Vector2d centre{0, 0};
   double heading_rad = 0.0;  // direction of the length axis
@@ -90,6 +105,7 @@ struct Building {
   Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};
   int rooftopUnits = 0;  // flat roofs: boxes of HVAC units
   std::uint32_t seed = 0;
+  std::vector<RoofFixture> fixtures;  // HVAC units, skylights, dormers, solar panels
 };
 
 struct Tree {
@@ -220,9 +236,11 @@ bool footprintsOverlap(const Footprint& a, const Footprint& b, double margin_m);
 Footprint footprintOf(const StreetFurniture& item);
 
 // Street furniture (street_furniture.cpp), called by generateScene after the buildings and
-// trees. It draws from its own Rng seeded from a value the scene already drew (the style's
-// seed): it takes nothing from the sequence's Rng, so every other draw of a seed stays as it
-// was without it.
+// trees, and roof fixtures (roof_fixtures.cpp), called for each building placed. Each draws
+// from its own Rng seeded from a value the scene already drew (the style's, the building's
+// seed): they take nothing from the sequence's Rng, so every other draw of a seed stays as it
+// was without them.
 void addStreetFurniture(SceneSpec& scene);
+void addRoofFixtures(Building& building);
 
 }  // namespace vp::sim
