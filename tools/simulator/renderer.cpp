@@ -6,6 +6,7 @@
 #include <limits>
 #include <thread>
 
+#include "mesh_build.hpp"
 #include "noise.hpp"
 
 namespace vp::sim {
@@ -14,40 +15,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kOcclusionCell_m = 0.1;  // finest sky-occlusion cell
-
-RenderTriangle flatTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                            const Eigen::Vector3d& c, std::uint32_t surface) {
-  RenderTriangle t;
-  t.p = {a.cast<float>(), b.cast<float>(), c.cast<float>()};
-  Eigen::Vector3f n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
-  n = n.norm() > 0 ? n.normalized() : Eigen::Vector3f::UnitZ();
-  t.n = {n, n, n};
-  t.surface = surface;
-  return t;
-}
-
-void addQuad(std::vector<RenderTriangle>& out, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-             const Eigen::Vector3d& c, const Eigen::Vector3d& d, std::uint32_t surface) {
-  out.push_back(flatTriangle(a, b, c, surface));
-  out.push_back(flatTriangle(a, c, d, surface));
-}
-
-// Closed box without its bottom, on (x, y) centre with half sizes, from z0 to z1.
-void addBox(std::vector<RenderTriangle>& out, const Eigen::Vector2d& c, const Eigen::Vector2d& f,
-            double halfL, double halfW, double z0, double z1, std::uint32_t wall,
-            std::uint32_t top) {
-  const Eigen::Vector2d n(-f.y(), f.x());
-  std::array<Eigen::Vector2d, 4> k = {c + halfL * f + halfW * n, c - halfL * f + halfW * n,
-                                      c - halfL * f - halfW * n, c + halfL * f - halfW * n};
-  for (int i = 0; i < 4; ++i) {
-    const Eigen::Vector2d& a = k[static_cast<std::size_t>(i)];
-    const Eigen::Vector2d& b = k[static_cast<std::size_t>((i + 1) % 4)];
-    addQuad(out, {a.x(), a.y(), z0}, {b.x(), b.y(), z0}, {b.x(), b.y(), z1}, {a.x(), a.y(), z1},
-            wall);
-  }
-  addQuad(out, {k[0].x(), k[0].y(), z1}, {k[1].x(), k[1].y(), z1}, {k[2].x(), k[2].y(), z1},
-          {k[3].x(), k[3].y(), z1}, top);
-}
 
 // Unit icosphere (two subdivisions): 162 vertices, 320 faces.
 void icosphere(std::vector<Eigen::Vector3d>& v, std::vector<std::array<int, 3>>& f) {
@@ -186,6 +153,7 @@ void Renderer::init(const SceneSpec& scene, const World& world, const Eigen::Vec
   }
   buildBuildings();
   buildTrees();
+  buildFurniture();
   double zMin = 1e9;
   double zMax = -1e9;
   for (const RenderTriangle& t : staticTriangles_) {
@@ -323,19 +291,6 @@ void Renderer::buildBuildings() {
     if (b.roof == RoofKind::Flat) {
       addQuad(staticTriangles_, {k[0].x(), k[0].y(), z1}, {k[1].x(), k[1].y(), z1},
               {k[2].x(), k[2].y(), z1}, {k[3].x(), k[3].y(), z1}, roofIndex);
-      std::uint32_t h = b.seed;
-      for (int u = 0; u < b.rooftopUnits; ++u) {
-        h = hashU32(h + 17U);
-        const double ul = 0.6 + 1.6 * static_cast<double>(hashToUnit(h));
-        const double uw = 0.5 + 1.2 * static_cast<double>(hashToUnit(hashU32(h + 1U)));
-        const double uh = 0.6 + 1.4 * static_cast<double>(hashToUnit(hashU32(h + 2U)));
-        const double px = (static_cast<double>(hashToUnit(hashU32(h + 3U))) - 0.5) *
-                          (b.length_m - 2.0 * ul - 1.0);
-        const double py =
-            (static_cast<double>(hashToUnit(hashU32(h + 4U))) - 0.5) * (b.width_m - 2.0 * uw - 1.0);
-        addBox(staticTriangles_, b.centre + px * f + py * n, f, ul, uw, z1, z1 + uh, unitIndex,
-               unitIndex);
-      }
     } else {
       // Gabled: ridge along the length axis, eaves overhanging by 0.35 m.
       const double o = 0.35;
@@ -357,6 +312,7 @@ void Renderer::buildBuildings() {
                                                 {m.x(), m.y(), zr}, base + (end > 0 ? 3U : 1U)));
       }
     }
+    buildRoofFixtures(b, id, z1, roofIndex, unitIndex);
   }
 }
 
@@ -556,6 +512,32 @@ Eigen::Vector3f Renderer::shade(const PinholeView& view, double x, double y, std
       normal = (normal + 1.6F * bump).normalized();
       const float leaf = valueNoise3(p.x() * 9.0F, p.y() * 9.0F, p.z() * 9.0F, s.seed + 6U);
       albedo *= 0.7F + 0.6F * leaf;
+      break;
+    }
+    case Material::Stairs: {
+      // Steps going down along the axis from param: a light nosing per 0.3 m tread, darker
+      // (less sky, no sun past the walls) the deeper they are.
+      const float t = std::max(0.0F, p.x() * s.axis.x() + p.y() * s.axis.y() - s.param);
+      const float tread = t / 0.3F - std::floor(t / 0.3F);
+      const float depth = std::max(0.1F, std::exp(-t / 1.8F));
+      albedo *= (tread < 0.12F ? 1.5F : 1.0F) * depth;
+      skyOcclusion = std::max(0.2F, depth);
+      break;
+    }
+    case Material::SolarPanel: {
+      // Modules of 1.0 x 1.7 m with a light frame; cells of 0.16 m with faint gaps.
+      const float u = p.x() * s.axis.x() + p.y() * s.axis.y();
+      const float v = -p.x() * s.axis.y() + p.y() * s.axis.x();
+      const float mu = u / 1.0F - std::floor(u / 1.0F);
+      const float mv = v / 1.7F - std::floor(v / 1.7F);
+      if (mu < 0.03F || mv < 0.02F) {
+        albedo = Eigen::Vector3f(0.45F, 0.46F, 0.47F);
+      } else {
+        const float cu = u / 0.16F - std::floor(u / 0.16F);
+        const float cv = v / 0.16F - std::floor(v / 0.16F);
+        albedo *= (cu < 0.06F || cv < 0.06F) ? 1.6F : 1.0F;
+        reflect = 0.5F;
+      }
       break;
     }
     case Material::Paint:

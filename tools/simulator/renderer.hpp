@@ -4,13 +4,14 @@
 // filtered), with the per-sample depth and triangle (object id) buffers kept for ground truth.
 //
 // Contract: init() builds the static geometry once per sequence (the ground mesh with its
-// procedural texture, buildings, trees), the static part of the sun's shadow map and the
-// ground cache (texture and static shadow, filled as frames first see the ground); render()
-// adds the vehicles of the frame (their shadows, the darkening of the ground under them) and
-// shades every sample: Lambertian diffuse from the sun (shadow mapped, soft) and the sky
-// (hemispherical, ambient occlusion under vehicles), Blinn-Phong highlights and Fresnel sky
-// reflections on paint and glass. Output values are scene radiance in arbitrary linear
-// units (a white surface in full sun is about 1). Deterministic for any thread count.
+// procedural texture, buildings with their roof fixtures, trees, street furniture), the static
+// part of the sun's shadow map and the ground cache (texture and static shadow, filled as
+// frames first see the ground); render() adds the vehicles of the frame (their shadows, the
+// darkening of the ground under them) and shades every sample: Lambertian diffuse from the sun
+// (shadow mapped, soft) and the sky (hemispherical, ambient occlusion under vehicles),
+// Blinn-Phong highlights and Fresnel sky reflections on paint and glass. Output values are
+// scene radiance in arbitrary linear units (a white surface in full sun is about 1).
+// Deterministic for any thread count.
 #pragma once
 
 #include <optional>
@@ -87,6 +88,12 @@ class Renderer {
   void buildGround(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi);
   void buildBuildings();
   void buildTrees();
+  // A building's HVAC units, skylights, dormers and solar panels (roof_mesh.cpp); z1: eaves
+  // (flat roof) height, roof/unit: the building's roof and rooftop-unit surfaces.
+  void buildRoofFixtures(const Building& b, int objectId, double z1, std::uint32_t roof,
+                         std::uint32_t unit);
+  // Benches, shelters, kiosks, stair entrances (furniture_mesh.cpp): object ids -3000 - index.
+  void buildFurniture();
   void buildOcclusion(const std::vector<SimVehicle>& vehicles);
   float occlusionAt(double x, double y) const;
   // Colour of the surface point seen at sample coordinates (x, y) on triangle ti (-1: none)

@@ -151,6 +151,7 @@ void addBuildings(SceneSpec& scene, Rng& rng, int count) {
     }
     b.seed = rng.nextU32();
     if (buildingClear(scene, b, clearance)) {
+      addRoofFixtures(b);  // own Rng from b.seed: takes no draw from rng
       scene.buildings.push_back(b);
     }
   }
@@ -453,6 +454,7 @@ SceneSpec generateScene(SceneKind kind, Rng& rng) {
   const int buildingCount = rng.weighted(std::array<double, 4>{0.15, 0.35, 0.35, 0.15}) * 3;
   addBuildings(scene, rng, buildingCount);
   addTrees(scene, rng);
+  addStreetFurniture(scene);  // own Rng: takes no draw from rng
 
   // Light: sun direction and colours (overcast days have weak, soft shadows).
   Lighting& l = scene.light;

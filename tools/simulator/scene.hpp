@@ -3,13 +3,15 @@
 // Contract: generateScene() turns a scene kind and the sequence's Rng into a SceneSpec: the
 // road layout (an intersection of two roads, a straight section, or a straight road with a
 // parking lot), lane and marking style, kerbs and pavements, asphalt patches and manholes,
-// buildings, trees, the lighting (sun elevation/azimuth, sun and sky colour) and the
-// traffic parameters. Everything is in the world ENU frame (metres, x east, y north); z is
-// taken from the terrain when the scene is built. The spec is plain data: the renderer,
-// the ground texture and the traffic read it, nothing modifies it after generation.
+// buildings with their roof fixtures, trees, street furniture, the lighting (sun
+// elevation/azimuth, sun and sky colour) and the traffic parameters. Everything is in the world
+// ENU frame (metres, x east, y north); z is taken from the terrain when the scene is built. The
+// spec is plain data: the renderer, the ground texture and the traffic read it, nothing
+// modifies it after generation.
 // Right-hand traffic: a road's forward lanes lie to the right of its direction.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -77,6 +79,20 @@ struct ParkingLot {
 
 enum class RoofKind { Flat, Gabled };
 
+// Things on a roof that look like small objects from above (roof_fixtures.cpp places them).
+enum class RoofFixtureKind { Hvac, Skylight, Dormer, SolarPanel };
+
+struct RoofFixture {
+  RoofFixtureKind kind = RoofFixtureKind::Hvac;
+  // Footprint centre in the roof's frame: along the length axis and across it (m from the
+  // building centre); gabled roofs: across > 0 on the +normal slope.
+  double along_m = 0.0;
+  double across_m = 0.0;
+  double length_m = 1.0;  // along the building's length axis
+  double width_m = 1.0;   // across it (horizontal)
+  double height_m = 0.0;  // above the roof (HVAC box, dormer front; flush fixtures: 0)
+};
+
 struct Building {
   Eigen::Vector2d centre{0, 0};
   double heading_rad = 0.0;  // direction of the length axis
@@ -89,6 +105,7 @@ struct Building {
   Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};
   int rooftopUnits = 0;  // flat roofs: boxes of HVAC units
   std::uint32_t seed = 0;
+  std::vector<RoofFixture> fixtures;  // HVAC units, skylights, dormers, solar panels
 };
 
 struct Tree {
@@ -100,6 +117,25 @@ struct Tree {
   Eigen::Vector3f leafAlbedo{0.08F, 0.16F, 0.05F};
   float gapFraction = 0.1F;  // share of the canopy that lets light through (bare trees: high)
   std::uint32_t seed = 0;
+};
+
+// Street furniture: static non-vehicle objects on pavements and grass (street_furniture.cpp).
+// They are not vehicles in the ground truth; the detector must learn to ignore them.
+enum class FurnitureKind { Bench, Shelter, Kiosk, StairEntrance };
+const char* toString(FurnitureKind kind);
+
+struct StreetFurniture {
+  FurnitureKind kind = FurnitureKind::Bench;
+  Eigen::Vector2d centre{0, 0};  // footprint centre, ENU m
+  double heading_rad = 0.0;      // direction of the length axis; the front faces +left normal
+  double length_m = 1.8;
+  double width_m = 0.6;   // footprint depth (across the length axis)
+  double height_m = 0.8;  // top above the ground (bench backrest, shelter roof, railing)
+  Eigen::Vector3f albedo{0.5F, 0.5F, 0.5F};      // slats, frame, walls, parapet
+  Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};  // shelter glass tint, kiosk roof
+  bool backrest = true;                          // benches
+  std::uint32_t seed = 0;
+  Eigen::Vector2d axis() const { return {std::cos(heading_rad), std::sin(heading_rad)}; }
 };
 
 struct Patch {  // repaired rectangle of road surface
@@ -171,6 +207,7 @@ struct SceneSpec {
   std::vector<Patch> paved;  // extra drivable rectangles (lots, driveways); tone unused
   std::vector<Building> buildings;
   std::vector<Tree> trees;
+  std::vector<StreetFurniture> furniture;
   std::vector<Patch> patches;
   std::vector<Manhole> manholes;
   GroundStyle style{};
@@ -186,5 +223,24 @@ struct SceneSpec {
 };
 
 SceneSpec generateScene(SceneKind kind, Rng& rng);
+
+// Oriented rectangle on the ground plane (overlap tests of furniture, buildings, vehicles).
+struct Footprint {
+  Eigen::Vector2d centre{0, 0};
+  Eigen::Vector2d axis{1, 0};  // unit, along the length
+  double halfLength_m = 0.5;
+  double halfWidth_m = 0.5;
+};
+// True when the rectangles, each grown by margin_m, intersect (separating axis test).
+bool footprintsOverlap(const Footprint& a, const Footprint& b, double margin_m);
+Footprint footprintOf(const StreetFurniture& item);
+
+// Street furniture (street_furniture.cpp), called by generateScene after the buildings and
+// trees, and roof fixtures (roof_fixtures.cpp), called for each building placed. Each draws
+// from its own Rng seeded from a value the scene already drew (the style's, the building's
+// seed): they take nothing from the sequence's Rng, so every other draw of a seed stays as it
+// was without them.
+void addStreetFurniture(SceneSpec& scene);
+void addRoofFixtures(Building& building);
 
 }  // namespace vp::sim

@@ -329,7 +329,8 @@ std::string Simulator::summary() const {
     << num(std::round(rig_.tilt_deg * 10) / 10) << " deg, sun elevation "
     << num(std::round(scene_.light.sunElevation_deg)) << " deg"
     << (scene_.light.overcast ? " (overcast)" : "") << ", " << scene_.buildings.size()
-    << " buildings, " << scene_.trees.size() << " trees, gimbal "
+    << " buildings, " << scene_.trees.size() << " trees, " << scene_.furniture.size()
+    << " street furniture, gimbal "
     << (rig_.gimbalReference == geodesy::GimbalReference::Earth ? "earth" : "body")
     << (options_.telemetryNoise ? ", telemetry with noise" : ", telemetry = true pose");
   return s.str();

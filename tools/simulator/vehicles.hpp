@@ -38,6 +38,9 @@ enum class Material : std::uint8_t {
   Canopy,
   Trunk,
   RoofUnit,
+  Furniture,   // street furniture: plain albedo
+  Stairs,      // stair/underpass opening: dark steps (axis: down the stairs)
+  SolarPanel,  // dark blue cells in a grid (axis: along the panel rows)
 };
 
 struct VehicleTriangle {
