@@ -166,9 +166,9 @@ bool App::initSource(std::string* why) {
     config_.mount = {rig.mount, rig.gimbal};
     config_.terrain.dtmPath = rig.dtmPath;  // the DTM load options stay the application's
     config_.terrain.crs = rig.crs;
+    // The recording's site map (its rig.yaml's site.file), unless the configuration names one.
     if (config_.site.file.empty()) {
-      config_.site.file =
-          rig.sitePath;  // the recording's site map, unless the configuration names one
+      config_.site.file = rig.sitePath;
     }
   }
   if (config_.source.kind == config::FrameSourceKind::Video) {

@@ -116,9 +116,10 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
   stats.record_ms(Stage::Crops, timings.crops_ms);
   stats.record_ms(Stage::Lift, timings.lift_ms);
   countObservations();
+  // What the tracker and the files get: the site's prior has dropped detections off its roads.
+  const std::span<const perception::VehicleObservation> observations = screenObservations();
 
   const std::int64_t trackStart_ns = clock.now_ns();
-  const std::span<const perception::VehicleObservation> observations = screenObservations();
   const std::size_t detections = tracking::toWorldDetections(observations, worldDetections_);
   const auto report = tracker_.step(
       t, std::span<const tracking::WorldDetection>(worldDetections_.data(), detections));
