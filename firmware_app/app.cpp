@@ -67,6 +67,8 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   wiring.world = &frame_;
   wiring.terrain = &terrain_;
   wiring.shapeModel = &asm_;
+  wiring.site = config_.site.file.empty() ? nullptr : &site_;
+  wiring.offRoad = config_.site.offRoad;
   wiring.droneId = config_.dds.droneId;
   wiring.sourceOnMonotonicClock = capture_.source().capturesOnMonotonicClock();
   wiring.fixedView = !config_.georef.gcpFile.empty();
@@ -164,6 +166,10 @@ bool App::initSource(std::string* why) {
     config_.mount = {rig.mount, rig.gimbal};
     config_.terrain.dtmPath = rig.dtmPath;  // the DTM load options stay the application's
     config_.terrain.crs = rig.crs;
+    // The recording's site map (its rig.yaml's site.file), unless the configuration names one.
+    if (config_.site.file.empty()) {
+      config_.site.file = rig.sitePath;
+    }
   }
   if (config_.source.kind == config::FrameSourceKind::Video) {
     // A video has no rig: camera, mount and DTM are the configuration's.
@@ -217,7 +223,7 @@ bool App::initWorld(std::string* why) {
     }
     return false;
   }
-  if (!initGroundView(why)) {
+  if (!initGroundView(why) || !initSite(why)) {
     return false;
   }
   if (seams_.perception) {
@@ -233,6 +239,29 @@ bool App::initWorld(std::string* why) {
     return false;
   }
   perception_ = std::move(pipeline);
+  return true;
+}
+
+bool App::initSite(std::string* why) {
+  // The site map (docs/site_map.md): its areas screen the lifted detections before the tracker.
+  if (config_.site.file.empty()) {
+    return true;
+  }
+  std::string problem;
+  if (!site::loadSite(config_.site.file, frame_, &site_, &problem)) {
+    if (why) {
+      *why = "site.file: " + problem;
+    }
+    return false;
+  }
+  logLine(
+      "site: %zu features from %s (%zu drivable, %zu parking, %zu exclusion, %zu lanes, %zu "
+      "gates, %zu zones); off-road detections: %s",
+      site_.features().size(), csv::shortened(config_.site.file).c_str(),
+      site_.count(site::FeatureKind::Drivable), site_.count(site::FeatureKind::Parking),
+      site_.count(site::FeatureKind::Exclusion), site_.count(site::FeatureKind::Lane),
+      site_.count(site::FeatureKind::Gate), site_.count(site::FeatureKind::Zone),
+      site::toString(config_.site.offRoad));
   return true;
 }
 

@@ -55,6 +55,7 @@
 #include "platform/system/systemd_notify.hpp"
 #include "recorder.hpp"
 #include "shape/vehicle_model.hpp"
+#include "site/site.hpp"
 #include "terrain/terrain_model.hpp"
 
 namespace vp::app {
@@ -104,6 +105,7 @@ class App final : public CounterSource {
   bool initSource(std::string* why);
   bool initWorld(std::string* why);
   bool initGroundView(std::string* why);
+  bool initSite(std::string* why);
   bool initPose(std::string* why);
   bool startRealtime(std::string* why);
   bool openRecorder(std::string* why);
@@ -124,6 +126,7 @@ class App final : public CounterSource {
   camera::CameraModel camera_;
   shape::ActiveShapeModel asm_;
   georef::GroundView groundView_;  // with georef.gcp_file: the fixed view lifting uses
+  site::Site site_;                // with site.file: the site map the scene prior uses
 
   // The loop's books, borrowed by the units (processing thread; capture's counts are its own).
   LoopCounters counters_{};

@@ -43,6 +43,10 @@ bool FrameStep::init(const FrameStepWiring& wiring, std::unique_ptr<FramePercept
     return false;
   }
   worldDetections_.resize(detection::kMaxDetectionsPerFrame);
+  sitePrior_.init(wiring_.site, wiring_.offRoad);
+  if (sitePrior_.active()) {
+    screened_.resize(detection::kMaxDetectionsPerFrame);
+  }
   states_.resize(static_cast<std::size_t>(tracker.maxTracks));
   published_.resize(static_cast<std::size_t>(tracker.maxTracks));
   return true;
@@ -112,10 +116,11 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
   stats.record_ms(Stage::Crops, timings.crops_ms);
   stats.record_ms(Stage::Lift, timings.lift_ms);
   countObservations();
+  // What the tracker and the files get: the site's prior has dropped detections off its roads.
+  const std::span<const perception::VehicleObservation> observations = screenObservations();
 
   const std::int64_t trackStart_ns = clock.now_ns();
-  const std::size_t detections =
-      tracking::toWorldDetections(perception_->observations(), worldDetections_);
+  const std::size_t detections = tracking::toWorldDetections(observations, worldDetections_);
   const auto report = tracker_.step(
       t, std::span<const tracking::WorldDetection>(worldDetections_.data(), detections));
   if (!report) {
@@ -130,11 +135,11 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
   stats.record(Stage::Publish, published_ns - publishStart_ns);
   stats.record(Stage::EndToEnd, published_ns - capture_ns);
 
-  outputs_.writeDetections(frame.frameId, perception_->observations());
+  outputs_.writeDetections(frame.frameId, observations);
   if (outputs_.wantsVideo()) {
     const perception::FrameLiftSummary& lift = perception_->liftSummary();
     const bool posed = lift.poseStatus == perception::LiftStatus::Ok;
-    outputs_.writeVideo(perception_->correctedFrame(), perception_->observations(),
+    outputs_.writeVideo(perception_->correctedFrame(), observations,
                         posed ? &perception_->lifter() : nullptr,
                         posed ? &lift.cameraPose : nullptr);
   }
@@ -155,6 +160,16 @@ void FrameStep::countObservations() {
       ++counters.outsideDtm;
     }
   }
+}
+
+std::span<const perception::VehicleObservation> FrameStep::screenObservations() {
+  const std::span<const perception::VehicleObservation> observations = perception_->observations();
+  if (!sitePrior_.active()) {
+    return observations;
+  }
+  const perception::SiteScreening screening = sitePrior_.screen(observations, screened_);
+  wiring_.counters->offSite += screening.offSite;
+  return {screened_.data(), screening.written};
 }
 
 void FrameStep::logWorkingScale(std::int64_t frameId) {

@@ -31,8 +31,10 @@
 #include "loop_outputs.hpp"
 #include "loop_stats.hpp"
 #include "messages/messages.hpp"
+#include "perception/site_prior.hpp"
 #include "perception_stage.hpp"
 #include "shape/vehicle_model.hpp"
+#include "site/site.hpp"
 #include "telemetry/pose_buffer.hpp"
 #include "terrain/terrain_model.hpp"
 #include "tracking/track_manager.hpp"
@@ -66,6 +68,8 @@ struct FrameStepWiring {
   const geodesy::LocalFrame* world = nullptr;
   const terrain::TerrainModel* terrain = nullptr;
   const shape::ActiveShapeModel* shapeModel = nullptr;
+  const site::Site* site = nullptr;  // the site map (null: no scene prior)
+  site::OffRoadPolicy offRoad = site::OffRoadPolicy::Drop;
   std::uint32_t droneId = 0;
   bool sourceOnMonotonicClock = false;  // camera stamps: CLOCK_MONOTONIC
   bool fixedView = false;               // georeferenced by ground control points: no pose is needed
@@ -88,6 +92,8 @@ class FrameStep {
 
  private:
   void countObservations();
+  // The observations the tracker and the files get: perception's, screened by the site's prior.
+  std::span<const perception::VehicleObservation> screenObservations();
   void logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameId,
                       const telemetry::PoseEstimate& pose);
   std::span<const messages::VehicleState> publish(std::int64_t timestamp_ns, std::int64_t frameId);
@@ -102,6 +108,8 @@ class FrameStep {
 
   // Per-frame arrays, sized at init.
   std::vector<tracking::WorldDetection> worldDetections_;
+  perception::SitePrior sitePrior_;
+  std::vector<perception::VehicleObservation> screened_;  // the prior's output (when active)
   std::vector<messages::VehicleState> states_;   // this frame's published (confirmed, lost) tracks
   std::vector<tracking::TrackState> published_;  // the same tracks as the tracker has them
 

@@ -49,6 +49,7 @@ struct LoopCounters {
   std::uint64_t detections = 0;  // observations (lifted or not)
   std::uint64_t lifted = 0;
   std::uint64_t outsideDtm = 0;  // observations off the DTM (outside_dtm, no_data, no_intersection)
+  std::uint64_t offSite = 0;  // lifted observations off the site's roads (site.off_road: drop/flag)
   std::uint64_t statesPublished = 0;
   std::uint64_t tracksDisposed = 0;
   std::uint64_t publishErrors = 0;

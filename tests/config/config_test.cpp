@@ -211,6 +211,9 @@ telemetry:
 georef:
   gcp_file: none
   max_residual_m: 2.5
+site:
+  file: maps/site.geojson
+  off_road: flag
 app:
   queue_depth: 2
   frame_pool_size: 6
@@ -852,6 +855,11 @@ const MalformedCase kMalformedCases[] = {
     {"gcp_file: none", "gcp_file: ''", "georef.gcp_file", "must not be empty"},
     {"max_residual_m: 2.5", "max_residual_m: 0", "georef.max_residual_m",
      "must be in (0, 100], got 0"},
+    // site
+    {"site:\n  file", "site: 1\nx:\n  file", "site", "expected a map, got '1'"},
+    {"file: maps/site.geojson", "file: ''", "site.file", "must not be empty"},
+    {"off_road: flag", "off_road: ignore", "site.off_road",
+     "unknown value 'ignore' (expected drop, flag, keep)"},
     // app
     {"app:\n  queue_depth", "app: 1\nx:\n  queue_depth", "app", "expected a map, got '1'"},
     {"queue_depth: 2", "queue_depth: 9", "app.queue_depth", "must be in [1, 8], got 9"},
@@ -1069,6 +1077,9 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "georef",
                                                "georef.gcp_file",
                                                "georef.max_residual_m",
+                                               "site",
+                                               "site.file",
+                                               "site.off_road",
                                                "app",
                                                "app.queue_depth",
                                                "app.frame_pool_size",
@@ -1630,6 +1641,16 @@ TEST(ConfigLoop, NoneSwitchesAnOptionalFileOffAndDdsTelemetryNeedsAFlightStack) 
   EXPECT_EQ(errorOf(text),
             "site.yaml: telemetry.source: dds needs dds.telemetry.source ardupilot or px4 (it is "
             "none)");
+}
+
+TEST(ConfigLoop, TheSiteFileIsRelativeToTheConfigurationAndOffRoadIsRead) {
+  const AppConfig full = parse(kFullConfig);
+  EXPECT_EQ(full.site.file, "/data/site/maps/site.geojson");
+  EXPECT_EQ(full.site.offRoad, site::OffRoadPolicy::Flag);
+  const AppConfig none = parse(edited("file: maps/site.geojson", "file: none"));
+  EXPECT_TRUE(none.site.file.empty());
+  EXPECT_EQ(parse(edited("off_road: flag", "off_road: keep")).site.offRoad,
+            site::OffRoadPolicy::Keep);
 }
 
 TEST(ConfigLoop, GroundControlPointsNeedTelemetryOffAndResolveTheirPath) {

@@ -192,6 +192,13 @@ TEST(DefaultYaml, GeorefIsTheGroundViewsDefaults) {
   EXPECT_EQ(file.maxResidual_m, code.maxResidual_m);
 }
 
+TEST(DefaultYaml, SiteIsTheSiteMapsDefaults) {
+  const site::SiteOptions code;
+  const site::SiteOptions file = shippedDefaults().site;
+  EXPECT_EQ(file.file, code.file);
+  EXPECT_EQ(file.offRoad, code.offRoad);
+}
+
 // Every key of the file is one the loader reads (else it would keep a default the file only
 // pretends to set).
 TEST(DefaultYaml, RecordIsTheRecordersDefaults) {

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include <unistd.h>
@@ -12,6 +13,7 @@
 
 #include "ground_truth.hpp"
 #include "io/dtm_file.hpp"
+#include "site_map.hpp"
 
 #ifndef VP_SOURCE_DIR
 #define VP_SOURCE_DIR "."
@@ -318,6 +320,7 @@ std::string Simulator::rigYaml() const {
     << "\n    roll_deg: 0\n    pitch_deg: " << num(-90.0 + rig_.tilt_deg)
     << "\n    yaw_deg: " << num(earth ? wrap_deg(rig_.viewAzimuth_deg) : 0.0) << "\n";
   y << "terrain:\n  dtm_path: dtm.tif\n  crs: auto\n";
+  y << "site:\n  file: site.geojson  # the scene's site map (docs/site_map.md)\n";
   return y.str();
 }
 
@@ -358,6 +361,16 @@ bool Simulator::write(std::string* why, const std::function<void(const FrameOutp
   fs::remove(staging, ignored);
   if (!opened) {
     return false;
+  }
+  {
+    // The site map rig.yaml names (site_map.hpp).
+    const fs::path sitePath = fs::path(options_.outDir) / "site.geojson";
+    std::ofstream site(sitePath, std::ios::binary | std::ios::trunc);
+    site << siteGeoJson(scene_, world_.frame());
+    site.close();
+    if (!site) {
+      return fail(why, sitePath.string() + ": cannot write");
+    }
   }
   if (options_.instanceMasks) {
     fs::create_directories(fs::path(options_.outDir) / "instances");

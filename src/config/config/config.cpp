@@ -33,6 +33,7 @@ AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName
   config.source = detail::readSource(root.section("source"), baseDir);
   config.telemetry = detail::readTelemetryLink(root.section("telemetry"));
   config.georef = detail::readGeoref(root.section("georef"), baseDir);
+  config.site = detail::readSite(root.section("site"), baseDir);
   config.app = detail::readLoop(root.section("app"), baseDir);
   if (config.telemetry.source == TelemetrySourceKind::Dds &&
       config.dds.telemetry.source == TelemetrySource::None) {

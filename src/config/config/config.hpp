@@ -30,6 +30,7 @@
 #include "georef/georeference.hpp"
 #include "perception/frame_pipeline.hpp"
 #include "rig_config/rig_config.hpp"
+#include "site/site.hpp"
 #include "telemetry/pose_buffer.hpp"
 #include "terrain/terrain_model.hpp"
 #include "tracking/track_manager.hpp"
@@ -58,6 +59,7 @@ struct AppConfig {
   SourceConfig source{};
   TelemetryLinkConfig telemetry{};
   georef::GeorefOptions georef{};  // ground control points of a fixed view (telemetry off)
+  site::SiteOptions site{};        // the site map and its scene prior (site.file absolute)
   LoopConfig app{};
   std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
 };

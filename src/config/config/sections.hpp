@@ -24,6 +24,7 @@ SourceConfig readSource(MapReader section, const std::string& baseDir);  // sour
 TelemetryLinkConfig readTelemetryLink(MapReader section);                // telemetry_section
 georef::GeorefOptions readGeoref(MapReader section,                      // georef_section.cpp
                                  const std::string& baseDir);
-LoopConfig readLoop(MapReader section, const std::string& baseDir);  // app_section.cpp
+site::SiteOptions readSite(MapReader section, const std::string& baseDir);  // site_section
+LoopConfig readLoop(MapReader section, const std::string& baseDir);         // app_section.cpp
 
 }  // namespace vp::config::detail

@@ -20,6 +20,12 @@ RigConfig parseRigConfig(const std::string& yamlText, const std::string& sourceN
   rig.camera = detail::readCamera(root.requiredSection("camera"));
   rig.mount = detail::readMount(root.section("mount"));
   rig.terrain = detail::readTerrain(root.requiredSection("terrain"), baseDir);
+  if (root.has("site")) {
+    detail::MapReader site = root.section("site");
+    rig.sitePath = detail::readOptionalPath(site, "file", baseDir, "");
+    site.skip("off_road");
+    site.warnUnknownKeys();
+  }
   for (const std::string_view name : detail::kLoopSectionNames) {
     root.skip(name);
   }

@@ -53,6 +53,9 @@ struct RigConfig {
   CameraConfig camera{};
   MountConfig mount{};
   TerrainConfig terrain{};
+  // site.file: the map of the site the rig serves (a sequence's site.geojson beside rig.yaml),
+  // absolute; empty without one. The rest of `site:` is the application's.
+  std::string sitePath;
   std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
 };
 

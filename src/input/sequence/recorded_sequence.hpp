@@ -68,6 +68,7 @@ struct Rig {
   geodesy::GimbalState gimbal{};        // default gimbal state when telemetry has none
   std::string dtmPath;                  // terrain: absolute, an existing file
   std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
+  std::string sitePath;                 // site.file: the site map, absolute; empty without one
   std::vector<std::string> warnings;    // unknown keys and other non-fatal remarks
 };
 

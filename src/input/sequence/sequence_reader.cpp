@@ -56,6 +56,7 @@ Rig readRig(const fs::path& directory) {
   rig.gimbal = config.mount.gimbal;
   rig.dtmPath = config.terrain.dtmPath;
   rig.crs = config.terrain.crs;
+  rig.sitePath = config.sitePath;
   rig.warnings = std::move(config.warnings);
   return rig;
 }

@@ -75,6 +75,9 @@ struct VehicleObservation {
   bool hasRearAxle = false;
   Eigen::Vector3d rearAxleEnu = Eigen::Vector3d::Zero();  // seed 002 reference point, m
   geodesy::GeodeticPoint rearAxleWgs84{};
+  // Set by the site's scene prior (site_prior.hpp, site.off_road: flag): the footprint centre
+  // lies off every drivable and parking area, or on an exclusion area.
+  bool offSite = false;
 };
 
 // What a frame's lift did.

@@ -1,0 +1,105 @@
+// site/site: the map of the site a hovering drone serves (site.geojson, docs/site_map.md),
+// loaded and checked once at start-up and queried in the loop.
+//
+// Contract: parseSite()/loadSite() read a GeoJSON FeatureCollection (RFC 7946: WGS84
+// longitude/latitude, no other CRS) whose features carry the properties `kind`, `id` and
+// `name` only. Areas (`drivable`, `parking`, `exclusion`, `zone`) are Polygons with one closed,
+// simple outer ring; `lane` (driving direction = vertex order) and `gate` (a counting line) are
+// LineStrings. A file that is not such a collection, a feature with a wrong geometry, an open or
+// self-intersecting ring, a CRS other than WGS84, an unknown property or kind, a duplicate id or
+// a site without a drivable or parking area is refused, the message naming the file, the
+// feature (index and id, line) and the problem. Every vertex is converted once to the world ENU
+// frame (geodesy::LocalFrame, east/north in metres). After loading, a Site is immutable: its
+// queries (contains(), classify()) are const, never allocate and never throw, so the loop may
+// call them per detection; it is safe to share read-only between threads.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "geodesy/geodesy.hpp"
+
+namespace vp::site {
+
+enum class FeatureKind : std::uint8_t { Drivable, Parking, Exclusion, Lane, Gate, Zone };
+const char* toString(FeatureKind kind);  // the file's word: "drivable", ...
+std::optional<FeatureKind> featureKindFromString(const std::string& text);
+// Areas are Polygons; lanes and gates are LineStrings.
+bool isArea(FeatureKind kind);
+
+struct Feature {
+  FeatureKind kind = FeatureKind::Drivable;
+  std::string id;
+  std::string name;
+  std::size_t index = 0;  // position in the file's `features` array
+  // The vertices (Site::vertices()): an area's ring without the repeated closing vertex.
+  std::uint32_t first = 0;
+  std::uint32_t count = 0;
+  Eigen::Vector2d min_m{0.0, 0.0};  // bounding box, ENU east/north
+  Eigen::Vector2d max_m{0.0, 0.0};
+};
+
+// Where a world point lies on the site.
+enum class Placement : std::uint8_t {
+  OnRoad,    // inside a drivable or parking area and inside no exclusion
+  OffRoad,   // outside every drivable and parking area
+  Excluded,  // inside an exclusion area (roof, yard)
+};
+const char* toString(Placement placement);
+
+// What the perception stage does with a lifted detection whose footprint centre is not on the
+// road (Placement OffRoad or Excluded): drop it before the tracker (counted), flag it (counted,
+// tracked all the same), or keep it (not checked).
+enum class OffRoadPolicy : std::uint8_t { Drop, Flag, Keep };
+const char* toString(OffRoadPolicy policy);  // "drop", "flag", "keep"
+std::optional<OffRoadPolicy> offRoadPolicyFromString(const std::string& text);
+
+// The `site:` section of the configuration (docs/site_map.md).
+struct SiteOptions {
+  std::string file;  // the site file, absolute after loading; empty: none
+  OffRoadPolicy offRoad = OffRoadPolicy::Drop;  // only with a site file
+};
+
+class Site {
+ public:
+  Site() = default;
+  explicit Site(std::string sourceName) : sourceName_(std::move(sourceName)) {}
+
+  // Start-up only (the loader): adds a feature with its vertices (world ENU east/north, an
+  // area's ring without the closing repeat); sets its first, count and bounding box.
+  void append(Feature feature, std::span<const Eigen::Vector2d> vertices_m);
+
+  std::span<const Feature> features() const { return features_; }
+  std::span<const Eigen::Vector2d> vertices(const Feature& feature) const {
+    return {vertices_.data() + feature.first, feature.count};
+  }
+  const std::string& sourceName() const { return sourceName_; }
+  bool empty() const { return features_.empty(); }
+  std::size_t count(FeatureKind kind) const;
+
+  // Point in an area (even-odd rule; a point on the boundary may fall either way). False for a
+  // line feature.
+  bool contains(const Feature& feature, const Eigen::Vector2d& point_m) const;
+  Placement classify(const Eigen::Vector2d& point_m) const;
+
+ private:
+  std::string sourceName_;
+  std::vector<Feature> features_;
+  std::vector<Eigen::Vector2d> vertices_;
+};
+
+// text: the file's content; sourceName names it in messages. On failure returns false, leaves
+// *site unchanged and sets *why ("site.geojson: feature 2 (id \"roof-1\", line 14): ...").
+bool parseSite(const std::string& text, const std::string& sourceName,
+               const geodesy::LocalFrame& frame, Site* site, std::string* why);
+bool loadSite(const std::string& path, const geodesy::LocalFrame& frame, Site* site,
+              std::string* why);
+
+}  // namespace vp::site

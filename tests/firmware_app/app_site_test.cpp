@@ -1,0 +1,196 @@
+// tests/firmware_app/app_site_test: the site map in the loop. A replayed simulated sequence
+// carries its site.geojson (named by its rig.yaml); the truth vehicles plus one fake detection
+// on a building's roof per frame (a perception seam) go through the loop: the roof detections
+// are counted as off_site and dropped before the tracker while every truth vehicle is kept; with
+// off_road flag they are counted and tracked (more trajectory rows); with keep nothing is counted;
+// a bad site file stops the start-up with a message naming the key, the file and the feature.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "app.hpp"
+#include "app_test_support.hpp"
+#include "config/config.hpp"
+#include "detection/detection.hpp"
+#include "output_files/trajectory_file.hpp"
+#include "rig_config/rig_config.hpp"
+#include "site/site.hpp"
+
+namespace vp::app {
+namespace {
+
+// The truth's observations and, in every frame with a lifted vehicle, a copy of the first lifted
+// one moved onto the roof.
+class RoofInjector final : public FramePerception {
+ public:
+  RoofInjector(std::unique_ptr<test::TruthPerception> truth, const Eigen::Vector2d& roof_m)
+      : truth_(std::move(truth)), roof_m_(roof_m) {}
+
+  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
+                                     const telemetry::PoseEstimate& pose) override {
+    const perception::PipelineStatus status = truth_->process(bgrFrame, timestamp_ns, pose);
+    summary_ = truth_->liftSummary();
+    const std::span<const perception::VehicleObservation> truth = truth_->observations();
+    std::size_t n = 0;
+    const perception::VehicleObservation* firstLifted = nullptr;
+    for (const perception::VehicleObservation& o : truth) {
+      if (n < observations_.size()) {
+        observations_[n++] = o;
+      }
+      if (o.liftStatus == perception::LiftStatus::Ok) {
+        ++truthLifted_;
+        firstLifted = firstLifted ? firstLifted : &o;
+      }
+    }
+    if (firstLifted != nullptr && n < observations_.size()) {
+      perception::VehicleObservation& roof = observations_[n++];
+      roof = *firstLifted;
+      const Eigen::Vector3d shift(roof_m_.x() - roof.ground.centreEnu.x(),
+                                  roof_m_.y() - roof.ground.centreEnu.y(), 0.0);
+      roof.ground.centreEnu += shift;
+      for (Eigen::Vector3d& corner : roof.ground.cornersEnu) {
+        corner += shift;
+      }
+      ++injected_;
+    }
+    summary_.written = n;
+    return status;
+  }
+  std::span<const perception::VehicleObservation> observations() const override {
+    return {observations_.data(), summary_.written};
+  }
+  const perception::FrameLiftSummary& liftSummary() const override { return summary_; }
+  const perception::FrameFootprint& footprint() const override { return truth_->footprint(); }
+  const perception::PipelineTimings& timings() const override { return truth_->timings(); }
+  const char* lastError() const override { return truth_->lastError(); }
+  const cv::Mat& correctedFrame() const override { return truth_->correctedFrame(); }
+  const lifting::Lifter& lifter() const override { return truth_->lifter(); }
+  const char* modelId() const override { return "ground truth + a roof"; }
+
+  std::uint64_t injected() const { return injected_; }
+  std::uint64_t truthLifted() const { return truthLifted_; }
+
+ private:
+  std::unique_ptr<test::TruthPerception> truth_;
+  Eigen::Vector2d roof_m_;
+  std::array<perception::VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
+  perception::FrameLiftSummary summary_{};
+  std::uint64_t injected_ = 0;
+  std::uint64_t truthLifted_ = 0;
+};
+
+// The centre of the sequence's first building (an exclusion area of its site file).
+Eigen::Vector2d firstRoof(const std::string& dir) {
+  const config::RigConfig rig = config::loadRigConfig(dir + "/rig.yaml");
+  EXPECT_EQ(rig.sitePath, dir + "/site.geojson") << "rig.yaml names the sequence's site map";
+  site::Site site;
+  std::string why;
+  EXPECT_TRUE(site::loadSite(rig.sitePath, geodesy::LocalFrame(rig.origin), &site, &why)) << why;
+  for (const site::Feature& f : site.features()) {
+    if (f.kind == site::FeatureKind::Exclusion) {
+      return (f.min_m + f.max_m) / 2.0;
+    }
+  }
+  ADD_FAILURE() << "no building in the site file";
+  return Eigen::Vector2d::Zero();
+}
+
+struct SiteRun {
+  LoopCounters counters{};
+  std::uint64_t injected = 0;
+  std::uint64_t truthLifted = 0;
+  std::size_t trajectoryRows = 0;  // tracks' rows in the trajectory file
+  std::size_t roofRows = 0;        // of those, within 3 m of the roof detection
+  std::string summary;
+};
+
+SiteRun runWithRoof(const std::string& dir, site::OffRoadPolicy policy) {
+  config::AppConfig config = test::defaultConfigFor(dir);
+  config.dds.enabled = false;
+  config.source.paced = false;
+  config.app.statsPeriod_s = 3600.0;
+  config.site.offRoad = policy;
+  const std::string out = test::scratchDir(std::string("site_") + site::toString(policy));
+  config.app.trajectoryCsv = out + "/tracks.csv";
+  auto truth = std::make_unique<test::TruthPerception>();
+  std::string why;
+  EXPECT_TRUE(truth->init(dir, &why)) << why;
+  const Eigen::Vector2d roof_m = firstRoof(dir);
+  auto injector = std::make_unique<RoofInjector>(std::move(truth), roof_m);
+  RoofInjector* seen = injector.get();
+  SiteRun result;
+  App app;
+  AppSeams seams;
+  seams.perception = std::move(injector);
+  RunSettings run;
+  run.everyFrame = true;
+  run.quiet = true;
+  EXPECT_TRUE(app.init(config, run, std::move(seams), &why)) << why;
+  EXPECT_TRUE(app.run(&why)) << why;
+  result.counters = app.counters();
+  result.injected = seen->injected();
+  result.truthLifted = seen->truthLifted();
+  result.summary = app.summaryLine();
+  output_files::TrajectoryFile tracks;
+  EXPECT_TRUE(output_files::readTrajectoryFile(config.app.trajectoryCsv, &tracks, &why)) << why;
+  result.trajectoryRows = tracks.rows.size();
+  for (const output_files::TrajectoryRecord& row : tracks.rows) {
+    result.roofRows += (row.centreEnu - roof_m).norm() < 3.0 ? 1 : 0;
+  }
+  return result;
+}
+
+TEST(AppSite, RoofDetectionsAreDroppedAndCountedWhileEveryTruthVehicleIsKept) {
+  const std::string dir = test::loopSequence();
+  ASSERT_FALSE(dir.empty());
+  const SiteRun drop = runWithRoof(dir, site::OffRoadPolicy::Drop);
+  EXPECT_EQ(drop.counters.framesProcessed, static_cast<std::uint64_t>(test::kLoopFrames));
+  ASSERT_GT(drop.injected, 0U);
+  EXPECT_EQ(drop.counters.lifted, drop.truthLifted + drop.injected);
+  // Exactly the roof detections: no truth vehicle is off the site.
+  EXPECT_EQ(drop.counters.offSite, drop.injected);
+  EXPECT_EQ(drop.roofRows, 0U) << "no track on the roof";
+  EXPECT_GT(drop.trajectoryRows, 0U);
+  EXPECT_NE(drop.summary.find(" off_site=" + std::to_string(drop.injected) + " "),
+            std::string::npos)
+      << drop.summary;
+
+  // Flag: counted the same, but tracked, so the roof becomes one more track with rows.
+  const SiteRun flag = runWithRoof(dir, site::OffRoadPolicy::Flag);
+  EXPECT_EQ(flag.counters.offSite, flag.injected);
+  EXPECT_GT(flag.trajectoryRows, drop.trajectoryRows);
+  EXPECT_GT(flag.roofRows, 0U);
+
+  // Keep: the prior is off; the tracker gets what it gets with flag.
+  const SiteRun keep = runWithRoof(dir, site::OffRoadPolicy::Keep);
+  EXPECT_EQ(keep.counters.offSite, 0U);
+  EXPECT_EQ(keep.trajectoryRows, flag.trajectoryRows);
+}
+
+TEST(AppSite, ABadSiteFileStopsTheStartUpNamingTheFeature) {
+  const std::string dir = test::copySequence(test::loopSequence(), "bad_site");
+  {
+    std::ofstream site(dir + "/site.geojson", std::ios::trunc);
+    site << R"({"type": "FeatureCollection", "features": [
+  {"type": "Feature", "properties": {"kind": "drivable", "id": "road-1", "colour": "grey"},
+   "geometry": {"type": "Polygon", "coordinates": [[[11.0, 48.0], [11.001, 48.0], [11.0, 48.001], [11.0, 48.0]]]}}
+]})";
+  }
+  config::AppConfig config = test::defaultConfigFor(dir);
+  config.dds.enabled = false;
+  App app;
+  std::string why;
+  EXPECT_FALSE(app.init(config, RunSettings{}, AppSeams{}, &why));
+  EXPECT_NE(why.find("site.file: " + dir +
+                     "/site.geojson: feature 0 (id \"road-1\", line 2): "
+                     "unknown property \"colour\""),
+            std::string::npos)
+      << why;
+}
+
+}  // namespace
+}  // namespace vp::app
