@@ -27,16 +27,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-void useLoopbackDds() {
-  setenv("CYCLONEDDS_URI",
-         "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
-         "address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
-         "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
-         "</MaxAutoParticipantIndex><Peers><Peer Address=\"127.0.0.1\"/></Peers></Discovery>"
-         "</Domain></CycloneDDS>",
-         1);
-}
-
 class PublishedLog final : public LoopObserver {
  public:
   // Reserved up front: the observer runs on the processing thread.
@@ -68,7 +58,7 @@ bool waitForReader(dds_entity_t writer, std::chrono::milliseconds timeout) {
 }
 
 TEST(AppDds, SubscriberProcessReceivesEveryPublishedStateAndTheDisposals) {
-  useLoopbackDds();
+  test::useLoopbackDds();
   const std::string dir = test::loopSequence();
   ASSERT_FALSE(dir.empty());
   config::AppConfig config = test::defaultConfigFor(dir);
@@ -182,7 +172,7 @@ class PublishTimes final : public LoopObserver {
 };
 
 TEST(AppDds, ReplayLatencyAtTheReceiverIsPositiveAndMatchesTheAppsEndToEnd) {
-  useLoopbackDds();
+  test::useLoopbackDds();
   const std::string dir = test::loopSequence();
   ASSERT_FALSE(dir.empty());
   config::AppConfig config = test::defaultConfigFor(dir);

@@ -35,16 +35,6 @@ namespace {
 using namespace std::chrono_literals;
 using test::ros2::Fields;
 
-void useLoopbackDds() {
-  setenv("CYCLONEDDS_URI",
-         "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
-         "address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
-         "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
-         "</MaxAutoParticipantIndex><Peers><Peer Address=\"127.0.0.1\"/></Peers></Discovery>"
-         "</Domain></CycloneDDS>",
-         1);
-}
-
 // What the app published, frame by frame (a frame ends at onFrameDone).
 class PublishedFrames final : public LoopObserver {
  public:
@@ -197,7 +187,7 @@ bool waitForReaders(const std::vector<dds_entity_t>& writers, std::chrono::milli
 }
 
 TEST(AppRos2, ReaderProcessReceivesEveryArrayAndObjectListFieldByFieldAndEveryRemoval) {
-  useLoopbackDds();
+  test::useLoopbackDds();
   const std::string dir = test::loopSequence();
   ASSERT_FALSE(dir.empty());
   config::AppConfig config = test::defaultConfigFor(dir);

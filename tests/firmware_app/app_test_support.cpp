@@ -224,4 +224,14 @@ void AllocationWindow::onFrameDone(std::uint64_t processed) {
   }
 }
 
+void useLoopbackDds() {
+  setenv("CYCLONEDDS_URI",
+         "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
+         "address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
+         "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
+         "</MaxAutoParticipantIndex><Peers><Peer Address=\"127.0.0.1\"/></Peers></Discovery>"
+         "</Domain></CycloneDDS>",
+         1);
+}
+
 }  // namespace vp::test

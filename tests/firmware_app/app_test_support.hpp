@@ -133,4 +133,8 @@ class AllocationWindow final : public app::LoopObserver {
   std::uint64_t published_ = 0;
 };
 
+// Cyclone DDS on the loopback interface only, discovery by unicast to 127.0.0.1 (CYCLONEDDS_URI
+// for this process and the processes it starts): tests never leave the machine.
+void useLoopbackDds();
+
 }  // namespace vp::test

@@ -100,13 +100,7 @@ std::vector<double> alignedDistances(const std::vector<Eigen::Vector2d>& publish
 }
 
 TEST(VehicleStateTruth, UtmRearAxleAndKeypointsAgreeWithTheSimulatorsTruth) {
-  setenv("CYCLONEDDS_URI",
-         "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
-         "address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
-         "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
-         "</MaxAutoParticipantIndex><Peers><Peer Address=\"127.0.0.1\"/></Peers></Discovery>"
-         "</Domain></CycloneDDS>",
-         1);
+  test::useLoopbackDds();
   // The loop sequence's scene at 960 x 768: a GSD of 0.10 m at the image centre, which the
   // default working_gsd_m brings to the detector's 0.12 m, as in flight (the loop tests' 320 x
   // 256 frames have 0.31 m: too coarse for centimetre keypoints).
