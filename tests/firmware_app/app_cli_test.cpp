@@ -54,13 +54,6 @@ Result runApp(const std::string& arguments) {
   return result;
 }
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 const std::string kDefaultConfig = std::string(VP_SOURCE_DIR) + "/config/default.yaml";
 const std::string kSequence = std::string(VP_FIXTURE_DIR) + "/sequence_min";
 
@@ -97,7 +90,7 @@ TEST(AppCli, UsageErrorsExitTwoNamingTheOption) {
 
 TEST(AppCli, ConfigurationErrorsExitTwoNamingTheKey) {
   const std::string dir = test::scratchDir("cli_config");
-  std::string text = readText(kDefaultConfig);
+  std::string text = test::readText(kDefaultConfig);
   text.replace(text.find("queue_depth: 1"), 14, "queue_depth: 9");
   // Beside config/ so that the relative paths still resolve.
   const std::string path =
@@ -142,29 +135,16 @@ TEST(AppCli, SigtermStopsCleanly) {
   const std::string log = test::scratchDir("cli_sigterm") + "/log.txt";
   std::vector<std::string> args = {VP_FIRMWARE_APP, "--config", kDefaultConfig, "--sequence",
                                    kSequence,       "--loop",   "--no-dds"};
-  std::vector<char*> argv;
-  for (std::string& arg : args) {
-    argv.push_back(arg.data());
-  }
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, VP_FIRMWARE_APP, &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
+  const pid_t pid = test::spawnApp(args, log);
+  ASSERT_GT(pid, 0);
   // Signal once the loop runs (start-up can take seconds on a loaded machine), then let it
   // take a few frames.
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (readText(log).find("running: ") == std::string::npos &&
-         std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  test::waitUntilRunning(log, std::chrono::seconds(120));
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   ASSERT_EQ(kill(pid, SIGTERM), 0);
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  const std::string output = readText(log);
+  const std::string output = test::readText(log);
   ASSERT_TRUE(WIFEXITED(status)) << output;
   EXPECT_EQ(WEXITSTATUS(status), 0) << output;
   EXPECT_NE(output.find("summary: "), std::string::npos) << output;
@@ -189,7 +169,7 @@ void setFrameTimes(const std::string& sequence, const std::string& t0, const std
 
 // Every line of a CSV output has the header's field count and the file ends with a line break.
 void expectWholeRows(const std::string& path) {
-  const std::string text = readText(path);
+  const std::string text = test::readText(path);
   ASSERT_FALSE(text.empty()) << path;
   EXPECT_EQ(text.back(), '\n') << path;
   std::istringstream lines(text);
@@ -219,22 +199,9 @@ TEST(AppCli, SigtermDuringALongPacedWaitExitsPromptlyAndCleanly) {
                                    sequence,           "--no-dds",
                                    "--trajectory-csv", dir + "/tracks.csv",
                                    "--detections-csv", dir + "/detections.csv"};
-  std::vector<char*> argv;
-  for (std::string& arg : args) {
-    argv.push_back(arg.data());
-  }
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, VP_FIRMWARE_APP, &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (readText(log).find("running: ") == std::string::npos &&
-         std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  const pid_t pid = test::spawnApp(args, log);
+  ASSERT_GT(pid, 0);
+  test::waitUntilRunning(log, std::chrono::seconds(120));
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // frame 0 done, frame 1 waits
   ASSERT_EQ(kill(pid, SIGTERM), 0);
   const auto signalled = std::chrono::steady_clock::now();
@@ -249,9 +216,9 @@ TEST(AppCli, SigtermDuringALongPacedWaitExitsPromptlyAndCleanly) {
   if (done == 0) {
     kill(pid, SIGKILL);
     waitpid(pid, &status, 0);
-    FAIL() << "still running 10 s after SIGTERM:\n" << readText(log);
+    FAIL() << "still running 10 s after SIGTERM:\n" << test::readText(log);
   }
-  const std::string output = readText(log);
+  const std::string output = test::readText(log);
   ASSERT_TRUE(WIFEXITED(status)) << output;
   EXPECT_EQ(WEXITSTATUS(status), 0) << output;
   EXPECT_LT(exit_s, 3.0) << output;
@@ -340,7 +307,7 @@ TEST(AppCli, TheWatchdogIsFedWhileTheSourceIsSilent) {
     waitpid(pid, &status, 0);
   }
   ::close(fd);
-  const std::string output = readText(log);
+  const std::string output = test::readText(log);
   ASSERT_TRUE(WIFEXITED(status)) << output;
   EXPECT_EQ(WEXITSTATUS(status), 0) << output;
   ASSERT_TRUE(ready) << output;

@@ -19,6 +19,7 @@
 
 #include "app.hpp"
 #include "app_test_support.hpp"
+#include "dds_test_support.hpp"
 #include "loop_log.hpp"
 #include "state_format.hpp"
 
@@ -42,19 +43,6 @@ std::vector<std::string> splitCsv(const std::string& line) {
     columns.push_back(column);
   }
   return columns;
-}
-
-bool waitForReader(dds_entity_t writer, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < deadline) {
-    dds_publication_matched_status_t status{};
-    if (dds_get_publication_matched_status(writer, &status) == DDS_RETCODE_OK &&
-        status.current_count >= 1) {
-      return true;
-    }
-    std::this_thread::sleep_for(20ms);
-  }
-  return false;
 }
 
 TEST(AppDds, SubscriberProcessReceivesEveryPublishedStateAndTheDisposals) {
@@ -88,7 +76,7 @@ TEST(AppDds, SubscriberProcessReceivesEveryPublishedStateAndTheDisposals) {
     RunSettings run;
     run.quiet = true;
     ASSERT_TRUE(app.init(config, run, std::move(seams), &why)) << why;
-    matched = waitForReader(app.vehicleStateWriter(), 15000ms);
+    matched = test::waitForMatch(app.vehicleStateWriter(), 1, 15000ms);
     // The writer may see the reader before the reader has seen the writer; the first
     // confirmed tracks come 0.3 s after the start anyway, this leaves discovery some more.
     std::this_thread::sleep_for(500ms);

@@ -50,13 +50,6 @@ config::AppConfig loopConfig(const std::string& sequenceDir) {
   return config;
 }
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 sequence::SequenceReader openSequence(const std::string& dir) {
   sequence::SequenceReader reader;
   std::string why;
@@ -169,28 +162,17 @@ Comparison compareDetections(const std::string& firstPath, const std::string& se
 
 // Keeps a copy of every frame the loop processed (test seam; allocates, so not in the
 // zero-allocation runs).
-class FrameKeeper final : public FramePerception {
+class FrameKeeper final : public test::ForwardingPerception {
  public:
   FrameKeeper(std::unique_ptr<FramePerception> inner, std::vector<cv::Mat>* frames)
-      : inner_(std::move(inner)), frames_(frames) {}
+      : ForwardingPerception(std::move(inner)), frames_(frames) {}
   perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                      const telemetry::PoseEstimate& pose) override {
     frames_->push_back(bgrFrame.clone());
-    return inner_->process(bgrFrame, timestamp_ns, pose);
+    return ForwardingPerception::process(bgrFrame, timestamp_ns, pose);
   }
-  std::span<const perception::VehicleObservation> observations() const override {
-    return inner_->observations();
-  }
-  const perception::FrameLiftSummary& liftSummary() const override { return inner_->liftSummary(); }
-  const perception::FrameFootprint& footprint() const override { return inner_->footprint(); }
-  const perception::PipelineTimings& timings() const override { return inner_->timings(); }
-  const char* lastError() const override { return inner_->lastError(); }
-  const cv::Mat& correctedFrame() const override { return inner_->correctedFrame(); }
-  const lifting::Lifter& lifter() const override { return inner_->lifter(); }
-  const char* modelId() const override { return inner_->modelId(); }
 
  private:
-  std::unique_ptr<FramePerception> inner_;
   std::vector<cv::Mat>* frames_;
 };
 
@@ -762,27 +744,14 @@ TEST(AppRecord, SigtermMidRecordingLeavesASequenceTheReaderOpens) {
                                    "--no-dds",
                                    "--record",
                                    recording};
-  std::vector<char*> argv;
-  for (std::string& arg : args) {
-    argv.push_back(arg.data());
-  }
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, VP_FIRMWARE_APP, &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  while (readText(log).find("running: ") == std::string::npos &&
-         std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  const pid_t pid = test::spawnApp(args, log);
+  ASSERT_GT(pid, 0);
+  test::waitUntilRunning(log, std::chrono::seconds(120));
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // a dozen frames at 10 Hz
   ASSERT_EQ(kill(pid, SIGTERM), 0);
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  const std::string output = readText(log);
+  const std::string output = test::readText(log);
   ASSERT_TRUE(WIFEXITED(status)) << output;
   EXPECT_EQ(WEXITSTATUS(status), 0) << output;
 
@@ -799,7 +768,7 @@ TEST(AppRecord, SigtermMidRecordingLeavesASequenceTheReaderOpens) {
       "record_frames=" + std::to_string(copy.frames().size()) + " record_dropped=";
   EXPECT_NE(output.find(summaryKey), std::string::npos) << output;
   // Whole rows only: three fields each, the file ends with a line break; no temporary file.
-  const std::string rows = readText(recording + "/frames.csv");
+  const std::string rows = test::readText(recording + "/frames.csv");
   ASSERT_FALSE(rows.empty());
   EXPECT_EQ(rows.back(), '\n');
   std::istringstream lines(rows);

@@ -46,28 +46,17 @@ std::unique_ptr<test::TruthPerception> truth(const std::string& sequenceDir) {
 }
 
 // The truth perception, slowed down to `delay` per frame: a source faster than the loop.
-class SlowPerception final : public FramePerception {
+class SlowPerception final : public test::ForwardingPerception {
  public:
   SlowPerception(std::unique_ptr<FramePerception> inner, std::chrono::milliseconds delay)
-      : inner_(std::move(inner)), delay_(delay) {}
+      : ForwardingPerception(std::move(inner)), delay_(delay) {}
   perception::PipelineStatus process(const cv::Mat& frame, std::int64_t timestamp_ns,
                                      const telemetry::PoseEstimate& pose) override {
     std::this_thread::sleep_for(delay_);
-    return inner_->process(frame, timestamp_ns, pose);
+    return ForwardingPerception::process(frame, timestamp_ns, pose);
   }
-  std::span<const perception::VehicleObservation> observations() const override {
-    return inner_->observations();
-  }
-  const perception::FrameLiftSummary& liftSummary() const override { return inner_->liftSummary(); }
-  const perception::FrameFootprint& footprint() const override { return inner_->footprint(); }
-  const perception::PipelineTimings& timings() const override { return inner_->timings(); }
-  const char* lastError() const override { return inner_->lastError(); }
-  const cv::Mat& correctedFrame() const override { return inner_->correctedFrame(); }
-  const lifting::Lifter& lifter() const override { return inner_->lifter(); }
-  const char* modelId() const override { return inner_->modelId(); }
 
  private:
-  std::unique_ptr<FramePerception> inner_;
   std::chrono::milliseconds delay_;
 };
 
@@ -94,13 +83,6 @@ std::string frameFile(const std::string& dir, std::size_t index) {
   std::string why;
   EXPECT_TRUE(reader.open(dir, &why)) << why;
   return dir + "/" + reader.frames()[index].file;
-}
-
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 TEST(AppAccounting, EveryFrameIsCountedWhenTheLoopStopsWithFramesWaiting) {
@@ -156,7 +138,7 @@ TEST(AppStop, AStopEndsALongPacedWaitAtOnce) {
   // for frame 3. A stop 200 ms into that wait must end the run within a second.
   const std::string dir = test::copySequence(test::loopSequence(), "long_wait");
   {
-    std::istringstream in(readText(dir + "/frames.csv"));
+    std::istringstream in(test::readText(dir + "/frames.csv"));
     std::string out;
     std::string line;
     for (int i = 0; std::getline(in, line); ++i) {
@@ -242,7 +224,7 @@ TEST(AppOutputs, AWriteFailingMidRunIsCountedWhenItHappensAndRowsStayWhole) {
   EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(test::kLoopFrames));
   EXPECT_GT(c.outputErrors, 0U);
   EXPECT_LT(c.outputErrors, c.framesProcessed) << "the first frames were written";
-  const std::string text = readText(config.app.detectionsCsv);
+  const std::string text = test::readText(config.app.detectionsCsv);
   ASSERT_FALSE(text.empty());
   EXPECT_EQ(text.back(), '\n');
   output_files::DetectionsFile file;

@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -27,6 +28,7 @@
 
 #include "app.hpp"
 #include "app_test_support.hpp"
+#include "dds_test_support.hpp"
 #include "ros2_fields.hpp"
 
 namespace vp::app {
@@ -171,19 +173,14 @@ std::vector<dds_entity_t> rosWriters(std::uint32_t domainId) {
 
 bool waitForReaders(const std::vector<dds_entity_t>& writers, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < deadline) {
-    bool all = true;
-    for (const dds_entity_t writer : writers) {
-      dds_publication_matched_status_t status{};
-      all = all && dds_get_publication_matched_status(writer, &status) == DDS_RETCODE_OK &&
-            status.current_count >= 1;
+  for (const dds_entity_t writer : writers) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (!test::waitForMatch(writer, 1, std::max(left, std::chrono::milliseconds(0)))) {
+      return false;
     }
-    if (all) {
-      return true;
-    }
-    std::this_thread::sleep_for(20ms);
   }
-  return false;
+  return true;
 }
 
 TEST(AppRos2, ReaderProcessReceivesEveryArrayAndObjectListFieldByFieldAndEveryRemoval) {

@@ -1,7 +1,11 @@
 #include "app_test_support.hpp"
 
+#include <fcntl.h>
 #include <pthread.h>
+#include <spawn.h>
 #include <unistd.h>
+#include <fstream>
+#include <sstream>
 
 #include <algorithm>
 #include <filesystem>
@@ -224,14 +228,38 @@ void AllocationWindow::onFrameDone(std::uint64_t processed) {
   }
 }
 
-void useLoopbackDds() {
-  setenv("CYCLONEDDS_URI",
-         "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
-         "address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>"
-         "<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>30"
-         "</MaxAutoParticipantIndex><Peers><Peer Address=\"127.0.0.1\"/></Peers></Discovery>"
-         "</Domain></CycloneDDS>",
-         1);
+std::string readText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+pid_t spawnApp(std::vector<std::string> args, const std::string& stderrLog) {
+  std::vector<char*> argv;
+  for (std::string& arg : args) {
+    argv.push_back(arg.data());
+  }
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, stderrLog.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return rc == 0 ? pid : -1;
+}
+
+bool waitUntilRunning(const std::string& stderrLog, std::chrono::seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (readText(stderrLog).find("running: ") == std::string::npos) {
+    if (std::chrono::steady_clock::now() >= deadline) {
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return true;
 }
 
 }  // namespace vp::test

@@ -5,7 +5,10 @@
 // DetectionLifter on the recorded rig and telemetry.
 #pragma once
 
+#include <sys/types.h>
+#include <chrono>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -133,8 +136,37 @@ class AllocationWindow final : public app::LoopObserver {
   std::uint64_t published_ = 0;
 };
 
-// Cyclone DDS on the loopback interface only, discovery by unicast to 127.0.0.1 (CYCLONEDDS_URI
-// for this process and the processes it starts): tests never leave the machine.
-void useLoopbackDds();
+// A perception stage that hands every call to another one: tests derive from it to watch or
+// slow down process() and keep the rest as the inner stage has it.
+class ForwardingPerception : public app::FramePerception {
+ public:
+  explicit ForwardingPerception(std::unique_ptr<app::FramePerception> inner)
+      : inner_(std::move(inner)) {}
+  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
+                                     const telemetry::PoseEstimate& pose) override {
+    return inner_->process(bgrFrame, timestamp_ns, pose);
+  }
+  std::span<const perception::VehicleObservation> observations() const override {
+    return inner_->observations();
+  }
+  const perception::FrameLiftSummary& liftSummary() const override { return inner_->liftSummary(); }
+  const perception::FrameFootprint& footprint() const override { return inner_->footprint(); }
+  const perception::PipelineTimings& timings() const override { return inner_->timings(); }
+  const char* lastError() const override { return inner_->lastError(); }
+  const cv::Mat& correctedFrame() const override { return inner_->correctedFrame(); }
+  const lifting::Lifter& lifter() const override { return inner_->lifter(); }
+  const char* modelId() const override { return inner_->modelId(); }
+
+ private:
+  std::unique_ptr<app::FramePerception> inner_;
+};
+
+// The whole file as text ("" when it cannot be read).
+std::string readText(const std::string& path);
+// Starts vp_firmware_app with `args` (args[0] the program) and its stderr written to
+// `stderrLog`; the process id, or -1 when it could not be started.
+pid_t spawnApp(std::vector<std::string> args, const std::string& stderrLog);
+// Waits until the app's log shows its loop running ("running: "), at most `timeout`.
+bool waitUntilRunning(const std::string& stderrLog, std::chrono::seconds timeout);
 
 }  // namespace vp::test

@@ -26,6 +26,7 @@
 
 #include "app.hpp"
 #include "app_test_support.hpp"
+#include "dds_test_support.hpp"
 #include "geodesy/geodesy.hpp"
 #include "output_files/trajectory_file.hpp"
 #include "sequence/recorded_sequence.hpp"

@@ -21,19 +21,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// Waits until the writer has `count` matched readers (discovery), up to `timeout`.
-bool waitForMatch(dds_entity_t writer, std::uint32_t count, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    dds_publication_matched_status_t status{};
-    if (dds_get_publication_matched_status(writer, &status) >= 0 && status.current_count >= count) {
-      return true;
-    }
-    std::this_thread::sleep_for(10ms);
-  }
-  return false;
-}
-
 struct Event {
   bool valid = false;
   dds_instance_state_t instanceState = DDS_IST_ALIVE;
@@ -79,7 +66,7 @@ class DdsPublisherTest : public ::testing::Test {
                           config_.vehicleState)
                     .ok());
     ASSERT_TRUE(reader_.open(participant_, topic_, config_.vehicleState, config_.partition).ok());
-    ASSERT_TRUE(waitForMatch(publisher_.writer(), 1, 5000ms));
+    ASSERT_TRUE(test::waitForMatch(publisher_.writer(), 1, 5000ms));
   }
 
   config::DdsConfig config_;
@@ -242,8 +229,8 @@ TEST(DdsWriters, StatusAndOccupancyArrive) {
   ASSERT_TRUE(
       statusReader.open(participant, statusTopic, config.droneStatus, config.partition).ok());
   ASSERT_TRUE(gridReader.open(participant, gridTopic, config.occupancy, config.partition).ok());
-  ASSERT_TRUE(waitForMatch(statusWriter.writer(), 1, 5000ms));
-  ASSERT_TRUE(waitForMatch(gridWriter.writer(), 1, 5000ms));
+  ASSERT_TRUE(test::waitForMatch(statusWriter.writer(), 1, 5000ms));
+  ASSERT_TRUE(test::waitForMatch(gridWriter.writer(), 1, 5000ms));
 
   messages::DroneStatus status;
   status.droneId = 7;
@@ -322,7 +309,7 @@ std::vector<Event> lateJoinerEvents(const config::DdsConfig& config, std::uint32
                         config.vehicleState)
                   .ok());
   EXPECT_TRUE(reader.open(readerSide, topic, config.vehicleState, config.partition).ok());
-  EXPECT_TRUE(waitForMatch(publisher.writer(), 1, 5000ms));
+  EXPECT_TRUE(test::waitForMatch(publisher.writer(), 1, 5000ms));
   // Everything that arrives within the listening time (more than expected would show too).
   return takeEvents(reader.get(), vehicles * statesPerVehicle, 1500ms);
 }
@@ -387,7 +374,7 @@ TEST(RsuSubscriberProcess, AllocationsPerWriteWithRemoteReader) {
     ASSERT_TRUE(participant.open(config).ok());
     VehicleStatePublisher publisher;
     ASSERT_TRUE(publisher.open(participant, config).ok());
-    ASSERT_TRUE(waitForMatch(publisher.writer(), 1, 15000ms));
+    ASSERT_TRUE(test::waitForMatch(publisher.writer(), 1, 15000ms));
     std::vector<messages::VehicleState> states;
     for (std::uint32_t id = 1; id <= kTracks; ++id) {
       states.push_back(test::makeState(id, dds_time()));
@@ -462,7 +449,7 @@ TEST(RsuSubscriberProcess, ReceivesStatesAndDisposals) {
     ASSERT_TRUE(participant.open(config).ok());
     VehicleStatePublisher publisher;
     ASSERT_TRUE(publisher.open(participant, config).ok());
-    matched = waitForMatch(publisher.writer(), 1, 15000ms);
+    matched = test::waitForMatch(publisher.writer(), 1, 15000ms);
     if (matched) {
       // The writer may match the reader before the reader has discovered the writer; then the
       // reader ignores the data. Acknowledgements tell: republish the frame until acked.

@@ -173,18 +173,6 @@ struct LocalDrone {
   }
 };
 
-bool waitForMatch(dds_entity_t writer, std::chrono::milliseconds timeout) {
-  const auto end = Clock::now() + timeout;
-  while (Clock::now() < end) {
-    dds_publication_matched_status_t status{};
-    if (dds_get_publication_matched_status(writer, &status) >= 0 && status.current_count > 0) {
-      return true;
-    }
-    std::this_thread::sleep_for(10ms);
-  }
-  return false;
-}
-
 class QosProcessTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -275,7 +263,7 @@ TEST_F(QosProcessTest, LateJoinerGetsTheNewestStateOfEachLiveVehicle) {
 
   Child rsu = subscriber("late", {"--until-writers-gone", "--duration-s", "30"});
   const auto started = Clock::now();
-  ASSERT_TRUE(waitForMatch(publisher.writer(), 15000ms)) << errors("late");
+  ASSERT_TRUE(test::waitForMatch(publisher.writer(), 1, 15000ms)) << errors("late");
   // The late reader acknowledges the history it was handed.
   EXPECT_EQ(dds_wait_for_acks(publisher.writer(), DDS_SECS(10)), DDS_RETCODE_OK);
   ASSERT_TRUE(waitForRows(
@@ -316,7 +304,7 @@ TEST_F(QosProcessTest, LateJoinerGetsNoStateOlderThanTheLifespan) {
   writeHistory(publisher, 5, 4, 3);
   std::this_thread::sleep_for(700ms);
   Child rsu = subscriber("stale", {"--until-writers-gone", "--duration-s", "30"});
-  ASSERT_TRUE(waitForMatch(publisher.writer(), 15000ms)) << errors("stale");
+  ASSERT_TRUE(test::waitForMatch(publisher.writer(), 1, 15000ms)) << errors("stale");
   EXPECT_EQ(dds_wait_for_acks(publisher.writer(), DDS_SECS(10)), DDS_RETCODE_OK);
   std::this_thread::sleep_for(500ms);
   drone.reset();
@@ -336,7 +324,7 @@ TEST_F(QosProcessTest, VolatileLateJoinerGetsNothingOfThePast) {
   writeHistory(publisher, 5, 4, 3);
   Child rsu = subscriber("volatile",
                          {"--config", yaml.string(), "--until-writers-gone", "--duration-s", "30"});
-  ASSERT_TRUE(waitForMatch(publisher.writer(), 15000ms)) << errors("volatile");
+  ASSERT_TRUE(test::waitForMatch(publisher.writer(), 1, 15000ms)) << errors("volatile");
   // The writer may match before the reader knows the writer (then the reader drops the data):
   // write the new frame until it is acknowledged.
   const std::int64_t now = dds_time() + 1'000'000'000LL;  // later than every old state

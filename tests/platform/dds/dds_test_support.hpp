@@ -5,9 +5,13 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <thread>
+
+#include <dds/dds.h>
 
 #include "config/dds_config.hpp"
 #include "messages/messages.hpp"
@@ -23,6 +27,20 @@ inline void useLoopbackDds() {
       "</MaxAutoParticipantIndex><Peers><Peer Address=\"127.0.0.1\"/></Peers></Discovery>"
       "</Domain></CycloneDDS>";
   setenv("CYCLONEDDS_URI", kUri, 1);
+}
+
+// Waits until the writer has `count` matched readers (discovery), up to `timeout`.
+inline bool waitForMatch(dds_entity_t writer, std::uint32_t count,
+                         std::chrono::milliseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < end) {
+    dds_publication_matched_status_t status{};
+    if (dds_get_publication_matched_status(writer, &status) >= 0 && status.current_count >= count) {
+      return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
 }
 
 // A domain id and partition unique to this process and call.

@@ -35,18 +35,6 @@ using test::ros2::putTime;
 using test::ros2::text;
 using test::ros2::textF;
 
-bool waitForMatch(dds_entity_t writer, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < end) {
-    dds_publication_matched_status_t status{};
-    if (dds_get_publication_matched_status(writer, &status) >= 0 && status.current_count >= 1) {
-      return true;
-    }
-    std::this_thread::sleep_for(10ms);
-  }
-  return false;
-}
-
 // Every field of a state, non-zero, including UTM, rear axle, variances and keypoints.
 messages::VehicleState fullState(std::uint32_t trackId, std::int64_t time_ns, bool large) {
   messages::VehicleState s = test::makeState(trackId, time_ns);
@@ -143,7 +131,7 @@ TEST(Ros2ReaderProcess, ReceivesEveryFieldOfStatesObjectsStatusAndGrid) {
     ASSERT_TRUE(gridWriter.open(participant, config).ok());
     for (const dds_entity_t writer : {states.arrayWriter(), states.autowareWriter(),
                                       statusWriter.writer(), gridWriter.writer()}) {
-      ASSERT_TRUE(waitForMatch(writer, 30000ms)) << "the reader process did not match";
+      ASSERT_TRUE(test::waitForMatch(writer, 1, 30000ms)) << "the reader process did not match";
     }
     // Frame 1: a car and a (lost) truck; frame 2: the truck was deleted.
     EXPECT_TRUE(states.add(car1).ok());
@@ -272,8 +260,8 @@ TEST(Ros2ReaderProcess, AllocationsPerArrayWrite) {
     Ros2StatePublisher objects;
     ASSERT_TRUE(arrays.open(participant, arrayConfig).ok());
     ASSERT_TRUE(objects.open(participant, objectsConfig).ok());
-    ASSERT_TRUE(waitForMatch(arrays.arrayWriter(), 30000ms));
-    ASSERT_TRUE(waitForMatch(objects.autowareWriter(), 30000ms));
+    ASSERT_TRUE(test::waitForMatch(arrays.arrayWriter(), 1, 30000ms));
+    ASSERT_TRUE(test::waitForMatch(objects.autowareWriter(), 1, 30000ms));
     std::this_thread::sleep_for(300ms);  // the reader sees the writers too
     std::int64_t time_ns = dds_time();
     for (const std::uint32_t tracks : {1U, 20U, 200U}) {
