@@ -7,8 +7,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "fuzz_support.hpp"
@@ -19,13 +17,6 @@ namespace {
 namespace fs = std::filesystem;
 using vp::output_files::DetectionsFile;
 constexpr const char* kTarget = "detections_file";
-
-std::string contents(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;  // (istreambuf_iterator trips g++ 12's -Wnull-dereference)
-  text << in.rdbuf();
-  return text.str();
-}
 
 // Writes `file` to `path`; every row must be accepted.
 void rewrite(const DetectionsFile& file, const fs::path& path) {
@@ -43,28 +34,6 @@ void rewrite(const DetectionsFile& file, const fs::path& path) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const fs::path input = vp::fuzz::scratchDirectory() / "detections.csv";
-  vp::fuzz::writeFile(input, vp::fuzz::asText(data, size));
-  DetectionsFile file;
-  std::string why;
-  if (!vp::output_files::readDetectionsFile(input.string(), &file, &why)) {
-    vp::fuzz::note(kTarget, why);
-    vp::fuzz::expect(why.starts_with(input.string()), kTarget,
-                     "read failed without naming the file: '" + why + "'");
-    return 0;
-  }
-  vp::fuzz::note(kTarget, "accepted " + std::to_string(file.rows.size()) + " rows");
-  vp::fuzz::expect(file.rows.size() == file.lines.size(), kTarget, "rows and lines differ");
-
-  const fs::path first = vp::fuzz::scratchDirectory() / "detections_1.csv";
-  const fs::path second = vp::fuzz::scratchDirectory() / "detections_2.csv";
-  rewrite(file, first);
-  DetectionsFile again;
-  vp::fuzz::expect(vp::output_files::readDetectionsFile(first.string(), &again, &why), kTarget,
-                   "the reader refuses what the writer wrote from an accepted file: " + why);
-  vp::fuzz::expect(again.rows.size() == file.rows.size(), kTarget, "row count changed");
-  rewrite(again, second);
-  vp::fuzz::expect(contents(first) == contents(second), kTarget,
-                   "write(read(write(read(file)))) differs from write(read(file))");
-  return 0;
+  return vp::fuzz::checkRoundTrip<DetectionsFile>(kTarget, "detections", data, size,
+                                                  vp::output_files::readDetectionsFile, rewrite);
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 #include <system_error>
 
 namespace vp::fuzz {
@@ -84,6 +85,13 @@ void note(const char* target, const std::string& what) {
   if (verbose) {
     std::fprintf(stderr, "%s: %s\n", target, what.c_str());
   }
+}
+
+std::string readBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;  // (istreambuf_iterator trips g++ 12's -Wnull-dereference)
+  text << in.rdbuf();
+  return text.str();
 }
 
 }  // namespace vp::fuzz

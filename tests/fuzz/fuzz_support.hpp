@@ -43,4 +43,40 @@ inline std::string_view asText(const std::uint8_t* data, std::size_t size) {
   return {reinterpret_cast<const char*>(data), size};
 }
 
+// The whole file as bytes ("" when it cannot be read).
+std::string readBytes(const std::filesystem::path& path);
+
+// The round trip of a CSV output format on arbitrary contents: read(path, File*, why) returns
+// true, or false with a message naming the file; a file it accepts (one line number per row),
+// written by write(file, path), is accepted again, and writing what was read back reproduces
+// the first write byte for byte. `name` is the scratch files' stem. Returns 0 (libFuzzer's).
+template <class File, class Read, class Write>
+int checkRoundTrip(const char* target, const std::string& name, const std::uint8_t* data,
+                   std::size_t size, Read read, Write write) {
+  const std::filesystem::path input = scratchDirectory() / (name + ".csv");
+  writeFile(input, asText(data, size));
+  File file;
+  std::string why;
+  if (!read(input.string(), &file, &why)) {
+    note(target, why);
+    expect(why.starts_with(input.string()), target,
+           "read failed without naming the file: '" + why + "'");
+    return 0;
+  }
+  note(target, "accepted " + std::to_string(file.rows.size()) + " rows");
+  expect(file.rows.size() == file.lines.size(), target, "rows and lines differ");
+
+  const std::filesystem::path first = scratchDirectory() / (name + "_1.csv");
+  const std::filesystem::path second = scratchDirectory() / (name + "_2.csv");
+  write(file, first);
+  File again;
+  expect(read(first.string(), &again, &why), target,
+         "the reader refuses what the writer wrote from an accepted file: " + why);
+  expect(again.rows.size() == file.rows.size(), target, "row count changed");
+  write(again, second);
+  expect(readBytes(first) == readBytes(second), target,
+         "write(read(write(read(file)))) differs from write(read(file))");
+  return 0;
+}
+
 }  // namespace vp::fuzz

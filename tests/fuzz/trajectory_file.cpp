@@ -7,8 +7,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "fuzz_support.hpp"
@@ -19,13 +17,6 @@ namespace {
 namespace fs = std::filesystem;
 using vp::output_files::TrajectoryFile;
 constexpr const char* kTarget = "trajectory_file";
-
-std::string contents(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;  // (istreambuf_iterator trips g++ 12's -Wnull-dereference)
-  text << in.rdbuf();
-  return text.str();
-}
 
 bool writeTrajectoryRow(vp::output_files::TrajectoryFileWriter& writer,
                         const vp::output_files::TrajectoryRecord& row, std::string* why) {
@@ -49,28 +40,6 @@ void rewrite(const TrajectoryFile& file, const fs::path& path) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const fs::path input = vp::fuzz::scratchDirectory() / "trajectory.csv";
-  vp::fuzz::writeFile(input, vp::fuzz::asText(data, size));
-  TrajectoryFile file;
-  std::string why;
-  if (!vp::output_files::readTrajectoryFile(input.string(), &file, &why)) {
-    vp::fuzz::note(kTarget, why);
-    vp::fuzz::expect(why.starts_with(input.string()), kTarget,
-                     "read failed without naming the file: '" + why + "'");
-    return 0;
-  }
-  vp::fuzz::note(kTarget, "accepted " + std::to_string(file.rows.size()) + " rows");
-  vp::fuzz::expect(file.rows.size() == file.lines.size(), kTarget, "rows and lines differ");
-
-  const fs::path first = vp::fuzz::scratchDirectory() / "trajectory_1.csv";
-  const fs::path second = vp::fuzz::scratchDirectory() / "trajectory_2.csv";
-  rewrite(file, first);
-  TrajectoryFile again;
-  vp::fuzz::expect(vp::output_files::readTrajectoryFile(first.string(), &again, &why), kTarget,
-                   "the reader refuses what the writer wrote from an accepted file: " + why);
-  vp::fuzz::expect(again.rows.size() == file.rows.size(), kTarget, "row count changed");
-  rewrite(again, second);
-  vp::fuzz::expect(contents(first) == contents(second), kTarget,
-                   "write(read(write(read(file)))) differs from write(read(file))");
-  return 0;
+  return vp::fuzz::checkRoundTrip<TrajectoryFile>(kTarget, "trajectory", data, size,
+                                                  vp::output_files::readTrajectoryFile, rewrite);
 }
