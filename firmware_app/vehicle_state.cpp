@@ -22,16 +22,11 @@ double wrapTwoPi(double angle) {
   return wrapped >= kTwoPi ? 0.0 : wrapped;
 }
 
-// Rear axle and keypoints: the fused type and shape placed at the track's centre and heading
-// (shape::placeOnGround), each point on the DTM.
-void placeBody(const tracking::TrackState& track, const Eigen::Vector3d& centre,
-               const geodesy::LocalFrame& frame, const terrain::TerrainModel* terrain,
-               const shape::ActiveShapeModel* shapeModel, messages::VehicleState& state) {
-  shape::VehicleGeometry geometry;  // no keypoints: the rear axle by the length rule
-  geometry.type = track.type;
-  if (shapeModel != nullptr && track.type != shape::VehicleType::Large) {
-    geometry = shape::vehicleGeometry(*shapeModel, track.type, track.shape);
-  }
+// Rear axle and keypoints: the fused type and shape (geometry) placed at the track's centre and
+// heading (shape::placeOnGround), each point on the DTM.
+void placeBody(const tracking::TrackState& track, const shape::VehicleGeometry& geometry,
+               const Eigen::Vector3d& centre, const geodesy::LocalFrame& frame,
+               const terrain::TerrainModel* terrain, messages::VehicleState& state) {
   // Ground under a point: the DTM's height difference to the centre added to the centre's z
   // (ENU z and ellipsoidal height change alike over a car's few metres); without a DTM, or
   // off it, the centre's height (flat ground).
@@ -122,11 +117,14 @@ messages::VehicleState toVehicleState(const tracking::TrackState& track, std::ui
   state.width_m = static_cast<float>(track.width_m);
   state.type = track.type;
   state.typeProbability = track.typeProbabilities;
+  // The ASM model of the fused type and shape, once: the height, the rear axle, the keypoints.
+  shape::VehicleGeometry
+      geometry;  // none (large vehicle, no ASM): the rear axle by the length rule
+  geometry.type = track.type;
   if (track.type != shape::VehicleType::Large) {
     state.shape = track.shape;
     if (shapeModel != nullptr) {
-      const shape::VehicleGeometry geometry =
-          shape::vehicleGeometry(*shapeModel, track.type, track.shape);
+      geometry = shape::vehicleGeometry(*shapeModel, track.type, track.shape);
       state.height_m = static_cast<float>(geometry.size_m.z());
     }
   }
@@ -138,7 +136,7 @@ messages::VehicleState toVehicleState(const tracking::TrackState& track, std::ui
     state.utmEasting_m = utm->easting_m;
     state.utmNorthing_m = utm->northing_m;
   }
-  placeBody(track, centre, frame, terrain, shapeModel, state);
+  placeBody(track, geometry, centre, frame, terrain, state);
   const Eigen::Matrix3d& c = track.poseCovariance;
   state.poseCovariance = {static_cast<float>(c(0, 0)), static_cast<float>(c(0, 1)),
                           static_cast<float>(c(0, 2)), static_cast<float>(c(1, 1)),
