@@ -207,6 +207,52 @@ TEST(Simulator, KeypointsAndBoxesObliqueParking) {
   fs::remove_all(rec.dir);
 }
 
+// The street furniture list (ground_truth/furniture.csv, the detector's hard negatives): each
+// listed item's pixels in the object-id image lie inside its image box, an item with pixels in
+// view is listed, and the file holds exactly the listed rows.
+TEST(Simulator, FurnitureListEnclosesEachItemsPixels) {
+  const Recorded rec = simulate(vp::sim::SceneKind::Intersection, 1101, "furniture");
+  std::size_t listed = 0;
+  for (const vp::sim::FrameOutput& f : rec.frames) {
+    std::map<long, std::vector<cv::Point>> pixels;
+    for (int v = 0; v < f.ids.rows; ++v) {
+      for (int u = 0; u < f.ids.cols; ++u) {
+        const int id = f.ids.at<std::int32_t>(v, u);
+        if (id <= -3000 && id > -4000) {
+          pixels[-3000L - id].emplace_back(u, v);
+        }
+      }
+    }
+    for (const auto& [index, points] : pixels) {
+      const auto it = std::find_if(f.furniture.begin(), f.furniture.end(),
+                                   [&](const auto& t) { return t.index == index; });
+      ASSERT_NE(it, f.furniture.end()) << "item " << index << " in view but not listed";
+      EXPECT_EQ(it->visiblePixels, static_cast<long>(points.size()));
+      const double c = std::cos(it->box.angle);
+      const double s = std::sin(it->box.angle);
+      for (const cv::Point& p : points) {
+        const double dx = p.x - it->box.cx;
+        const double dy = p.y - it->box.cy;
+        // Slack: an output pixel takes the id of its supersamples; the box encloses corners.
+        EXPECT_LE(std::abs(dx * c + dy * s), 0.5 * it->box.length + 1.5);
+        EXPECT_LE(std::abs(-dx * s + dy * c), 0.5 * it->box.width + 1.5);
+      }
+    }
+    EXPECT_EQ(f.furniture.size(), pixels.size());
+    listed += f.furniture.size();
+  }
+  EXPECT_GT(listed, 0U) << "the scene should show some furniture";
+  std::ifstream csv(rec.dir / "ground_truth" / "furniture.csv");
+  std::string line;
+  std::size_t rows = 0;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line, "frame_id,kind,index,cx_px,cy_px,length_px,width_px,angle_rad,visible_px");
+  while (std::getline(csv, line)) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, listed);
+}
+
 TEST(Simulator, SameSeedSameBytesDifferentSeedDifferentFiles) {
   const auto run = [](std::uint64_t seed, const std::string& name, int threads) {
     const fs::path dir = freshDir(name);

@@ -17,6 +17,7 @@ mistakes at 6 cm per pixel.
   tools/detector/mine_negatives.py --data SEQ_DIR... --detections DIR --out negatives.csv
   tools/detector/mine_negatives.py --images ROOT --list STEMS --detections FILE --gsd-m G \
       --positives --out real_samples.csv
+  tools/detector/mine_negatives.py --data SEQ_DIR... --furniture --out furniture.csv
 
 DIR holds <sequence name>.csv for each sequence (its folder's basename). With --images (a
 folder of images/ and YOLO labels/, as ../shared/data/real/cats-madison) FILE is one
@@ -151,6 +152,49 @@ def mine(seq_dirs: List[str], det_dir: str, min_score: float, max_iou: float):
     return rows, counts
 
 
+def furniture_samples(seq_dirs: List[str], min_visible_px: int, max_iou: float):
+    """Background rows for the street furniture the simulator lists in view
+    (ground_truth/furniture.csv: benches, shelters, kiosks, stair entrances): a car-sized box
+    (at least 4.6 x 1.9 m at the frame's vehicle GSD) centred on each item with at least
+    min_visible_px visible pixels and overlapping no vehicle — what the first stage boxes when
+    it mistakes one for a car, so that the verifier learns to refuse them."""
+    rows, counts = [], {}
+    for seq in seq_dirs:
+        name = os.path.basename(os.path.normpath(seq))
+        path = os.path.join(seq, "ground_truth", "furniture.csv")
+        if not os.path.isfile(path):
+            raise DatasetError(f"{path}: no furniture list (render the sequence with a "
+                               "vp_simulate that writes it)")
+        by_frame: Dict[int, List[Tuple]] = {}
+        with open(path, newline="") as f:
+            for line_no, r in enumerate(csv.DictReader(f), start=2):
+                try:
+                    by_frame.setdefault(int(r["frame_id"]), []).append(
+                        (float(r["cx_px"]), float(r["cy_px"]), float(r["length_px"]),
+                         float(r["width_px"]), float(r["angle_rad"]), int(r["visible_px"])))
+                except (KeyError, ValueError, TypeError):
+                    raise DatasetError(f"{path}:{line_no}: not a furniture row") from None
+        samples = read_sequence(seq, max_occlusion=1.0, max_truncation=1.0)
+        n = 0
+        for s in samples:
+            items = [it for it in by_frame.get(s.frame_index, []) if it[5] >= min_visible_px]
+            if not items:
+                continue
+            gsd = float(np.nanmedian(s.gsd_m)) if np.isfinite(s.gsd_m).any() else math.nan
+            if not math.isfinite(gsd):
+                continue
+            boxes = np.array([[cx, cy, max(length, 4.6 / gsd), max(width, 1.9 / gsd), angle]
+                              for cx, cy, length, width, angle, _ in items])
+            iou = (rotated_iou_matrix(boxes, s.boxes).max(axis=1) if len(s)
+                   else np.zeros(len(boxes)))
+            for b, best in zip(boxes, iou):
+                if best < max_iou:
+                    rows.append((os.path.abspath(s.image_path), b[0], b[1], 1.0, *b[2:], gsd, 0))
+                    n += 1
+        counts[name] = n
+    return rows, counts
+
+
 def read_stems(path: str):
     """Image stems from a text file (one per line) or a split JSON (its train_stems)."""
     import json
@@ -171,7 +215,12 @@ def main(argv=None) -> int:
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--data", nargs="+", help="recorded sequence directories")
     src.add_argument("--images", help="a folder of images/ and YOLO labels/ (real images)")
-    p.add_argument("--detections", required=True,
+    p.add_argument("--furniture", action="store_true",
+                   help="--data: instead of detections, list the street furniture the simulator "
+                        "recorded in view (ground_truth/furniture.csv) as background boxes")
+    p.add_argument("--min-visible-px", type=int, default=60,
+                   help="--furniture: items with fewer visible pixels are left out")
+    p.add_argument("--detections",
                    help="--data: folder of <sequence name>.csv files written by vp_detect_images; "
                         "--images: that tool's one CSV for the folder")
     p.add_argument("--list", help="--images: only these images (one stem per line, or a split "
@@ -188,6 +237,10 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     if not 0.0 <= a.min_score <= 1.0 or not 0.0 < a.max_iou <= 1.0:
         p.error("--min-score must be in [0, 1] and --max-iou in (0, 1]")
+    if a.furniture and a.images:
+        p.error("--furniture goes with --data (simulated sequences)")
+    if not a.furniture and not a.detections:
+        p.error("--detections is required (except with --furniture)")
     if a.images and not (a.gsd_m > 0):
         p.error("--images needs --gsd-m > 0 (the GSD the detections were cropped at)")
     try:
@@ -195,6 +248,8 @@ def main(argv=None) -> int:
             stems = read_stems(a.list) if a.list else None
             rows, counts = mine_images(a.images, a.detections, stems, a.gsd_m, a.min_score,
                                        a.max_iou, a.positives)
+        elif a.furniture:
+            rows, counts = furniture_samples(a.data, a.min_visible_px, a.max_iou)
         else:
             rows, counts = mine(a.data, a.detections, a.min_score, a.max_iou)
     except (DatasetError, OSError) as e:
@@ -209,7 +264,8 @@ def main(argv=None) -> int:
                         f"{width:.1f}", f"{angle:.4f}", f"{gsd:.5f}", label])
     negatives = [r for r in rows if r[-1] == 0]
     frames = len({r[0] for r in negatives})
-    print(f"mine_negatives.py: {len(negatives)} false detections in {frames} frames of "
+    what = "furniture boxes" if a.furniture else "false detections"
+    print(f"mine_negatives.py: {len(negatives)} {what} in {frames} frames of "
           f"{sum(1 for c in counts.values() if c)} of {len(counts)} "
           f"{'images' if a.images else 'sequences'}"
           + (f", {len(rows) - len(negatives)} matched ones" if a.positives else "") + f" -> {a.out}")

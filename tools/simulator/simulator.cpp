@@ -250,6 +250,7 @@ bool Simulator::nextFrame(FrameOutput& out, std::string* why) {
   out.objects.clear();
   out.keypoints.clear();
   computeGroundTruth(out.frameId, vehicles, ctx, out.objects, out.keypoints);
+  listFurniture(out, *camPose);
 
   // Auto exposure: set on the first frame, then a slow drift with occasional steps.
   if (exposureBase_ < 0.0) {
@@ -339,6 +340,57 @@ std::string Simulator::summary() const {
   return s.str();
 }
 
+void Simulator::listFurniture(FrameOutput& out, const lifting::CameraPoseWorld& pose) const {
+  out.furniture.clear();
+  const std::vector<StreetFurniture>& items = scene_.furniture;
+  if (items.empty()) {
+    return;
+  }
+  // Visible pixels per item from the object-id image (furniture ids are -3000 - index).
+  std::vector<long> visible(items.size(), 0);
+  for (int v = 0; v < out.ids.rows; ++v) {
+    const auto* row = out.ids.ptr<std::int32_t>(v);
+    for (int u = 0; u < out.ids.cols; ++u) {
+      const long index = -3000L - row[u];
+      if (index >= 0 && index < static_cast<long>(items.size())) {
+        ++visible[static_cast<std::size_t>(index)];
+      }
+    }
+  }
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (visible[i] == 0) {
+      continue;
+    }
+    const StreetFurniture& item = items[i];
+    const Eigen::Vector2d f = item.axis();
+    const Eigen::Vector2d n(-f.y(), f.x());
+    std::vector<Eigen::Vector3d> corners;
+    for (int a = -1; a <= 1; a += 2) {
+      for (int b = -1; b <= 1; b += 2) {
+        const Eigen::Vector2d p =
+            item.centre + a * 0.5 * item.length_m * f + b * 0.5 * item.width_m * n;
+        const double z = world_.groundZ(p.x(), p.y());
+        corners.emplace_back(p.x(), p.y(), z);
+        corners.emplace_back(p.x(), p.y(), z + item.height_m);
+      }
+    }
+    const double z0 = world_.groundZ(item.centre.x(), item.centre.y());
+    const Eigen::Vector3d origin(item.centre.x(), item.centre.y(), z0);
+    const Eigen::Vector3d ahead(item.centre.x() + f.x(), item.centre.y() + f.y(), z0);
+    const auto box = lifter_.enclosingImageBox(pose, origin, ahead, corners);
+    if (!box) {
+      continue;
+    }
+    StaticObjectTruth truth;
+    truth.frameId = out.frameId;
+    truth.kind = toString(item.kind);
+    truth.index = static_cast<std::uint32_t>(i);
+    truth.box = *box;
+    truth.visiblePixels = visible[i];
+    out.furniture.push_back(truth);
+  }
+}
+
 bool Simulator::write(std::string* why, const std::function<void(const FrameOutput&)>& onFrame) {
   namespace fs = std::filesystem;
   const fs::path staging =
@@ -375,6 +427,10 @@ bool Simulator::write(std::string* why, const std::function<void(const FrameOutp
   if (options_.instanceMasks) {
     fs::create_directories(fs::path(options_.outDir) / "instances");
   }
+  // Street furniture in view per frame (not vehicles; docs/simulator.md): hard negatives.
+  const fs::path furniturePath = fs::path(options_.outDir) / "ground_truth" / "furniture.csv";
+  std::ofstream furniture(furniturePath, std::ios::binary | std::ios::trunc);
+  furniture << "frame_id,kind,index,cx_px,cy_px,length_px,width_px,angle_rad,visible_px\n";
   FrameOutput frame;
   for (int i = 0; i < options_.frames; ++i) {
     if (!nextFrame(frame, why)) {
@@ -391,6 +447,13 @@ bool Simulator::write(std::string* why, const std::function<void(const FrameOutp
     if (!writer.writeFrame(record, frame.image, why) || !writer.writeTelemetry(telemetry, why) ||
         !writer.writeObjects(frame.objects, why) || !writer.writeKeypoints(frame.keypoints, why)) {
       return false;
+    }
+    for (const StaticObjectTruth& t : frame.furniture) {
+      char row[200];
+      std::snprintf(row, sizeof(row), "%lld,%s,%u,%.2f,%.2f,%.2f,%.2f,%.5f,%ld\n",
+                    static_cast<long long>(t.frameId), t.kind.c_str(), t.index, t.box.cx, t.box.cy,
+                    t.box.length, t.box.width, t.box.angle, t.visiblePixels);
+      furniture << row;
     }
     if (options_.instanceMasks) {
       cv::Mat mask(frame.ids.size(), CV_16UC1);
@@ -411,6 +474,10 @@ bool Simulator::write(std::string* why, const std::function<void(const FrameOutp
     if (onFrame) {
       onFrame(frame);
     }
+  }
+  furniture.close();
+  if (!furniture) {
+    return fail(why, furniturePath.string() + ": cannot write");
   }
   return writer.close(why);
 }

@@ -71,6 +71,16 @@ struct RigSpec {
   double gimbalSigma_deg = 0.05;
 };
 
+// A static non-vehicle object in one frame: its image box (enclosing its footprint corners at
+// the ground and at its top, length axis along the object's) and its visible pixel count.
+struct StaticObjectTruth {
+  std::int64_t frameId = 0;
+  std::string kind;
+  std::uint32_t index = 0;  // in the scene's furniture list
+  geometry::RotatedBox box{};
+  long visiblePixels = 0;
+};
+
 struct FrameOutput {
   std::int64_t frameId = 0;
   std::int64_t timestamp_ns = 0;
@@ -80,6 +90,8 @@ struct FrameOutput {
   lifting::DronePose recordedPose{};
   std::vector<sequence::ObjectTruth> objects;
   std::vector<sequence::KeypointTruth> keypoints;
+  // Street furniture in view (not vehicles): hard negatives for the detector's training.
+  std::vector<StaticObjectTruth> furniture;
 };
 
 class Simulator {
@@ -110,6 +122,8 @@ class Simulator {
   std::string summary() const;
 
  private:
+  // The street furniture in view in out.ids, with image boxes (out.furniture).
+  void listFurniture(FrameOutput& out, const lifting::CameraPoseWorld& pose) const;
   void drawRig();
   lifting::DronePose hoverPose();
 

@@ -74,6 +74,29 @@ class HardNegatives(unittest.TestCase):
         self.assertEqual([(r["image"], float(r["cx_px"]), float(r["cy_px"])) for r in written],
                          [(image, x, y)])
 
+    def test_furniture_in_view_becomes_car_sized_background_boxes(self):
+        car = self.frames[0].boxes[0]
+        x, y = self.empty_spot(1)
+        with open(os.path.join(self.seq, "ground_truth", "furniture.csv"), "w") as f:
+            f.write("frame_id,kind,index,cx_px,cy_px,length_px,width_px,angle_rad,visible_px\n")
+            f.write(f"1,bench,0,{x},{y},3.0,1.0,0.5,40\n")       # listed: a negative
+            f.write(f"1,kiosk,1,{x},{y},3.0,1.0,0.5,5\n")        # too little in view
+            f.write(f"0,shelter,2,{car[0]},{car[1]},3.0,1.0,0.5,99\n")  # on a vehicle
+        rows, counts = mine_negatives.furniture_samples([self.seq], min_visible_px=20,
+                                                         max_iou=0.1)
+        self.assertEqual(counts, {"seq_7": 1})
+        image, cx, cy, score, length, width, angle, gsd, label = rows[0]
+        self.assertEqual((image, cx, cy, angle, label),
+                         (os.path.abspath(self.frames[1].image_path), x, y, 0.5, 0))
+        # At least a car's size at the frame's vehicle GSD: what the first stage would box.
+        self.assertAlmostEqual(length, 4.6 / gsd)
+        self.assertAlmostEqual(width, 1.9 / gsd)
+        os.remove(os.path.join(self.seq, "ground_truth", "furniture.csv"))
+        with redirect_stderr(io.StringIO()) as err, redirect_stdout(io.StringIO()):
+            self.assertEqual(mine_negatives.main(["--data", self.seq, "--furniture", "--out",
+                                                  os.path.join(self.root, "f.csv")]), 1)
+        self.assertIn("furniture.csv", err.getvalue())
+
     def test_refuses_missing_or_malformed_detections(self):
         def refusal():
             err = io.StringIO()
