@@ -130,6 +130,7 @@ bool App::openRecorder(std::string* why) {
   setup.rig.camera = config_.camera;
   setup.rig.mount = config_.mount;
   setup.rig.terrain = config_.terrain;
+  setup.sitePath = config_.site.file;  // the configuration's, or the replayed recording's
   const FrameSource& source = capture_.source();
   setup.source = replay_ != nullptr ? "the replay of " + config_.source.sequenceDir
                  : config_.source.v4l2.busInfo.empty()

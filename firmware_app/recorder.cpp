@@ -21,6 +21,8 @@ constexpr std::uint64_t kBytesPerMib = 1ULL << 20;
 constexpr std::uint64_t kRowReserve = 128;
 // The writer looks at the telemetry ring at least this often while no frame comes.
 constexpr auto kWriterPoll = std::chrono::milliseconds(50);
+// The site file's name in the recording (as vp_simulate names it).
+constexpr const char* kSiteFile = "site.geojson";
 
 }  // namespace
 
@@ -62,12 +64,28 @@ bool Recorder::open(const RecorderSetup& setup, std::string* why) {
   writer_.imageExtension = ".jpg";
   writer_.jpegQuality = options_.jpegQuality;
   writer_.flushRows = true;
-  const std::string rigYaml = config::formatRigYaml(
+  std::string rigYaml = config::formatRigYaml(
       setup.rig, "dtm.tif", "the rig vp_firmware_app ran with while recording this sequence");
+  if (!setup.sitePath.empty()) {
+    // The replay reads the site where rig.yaml names it (docs/site_map.md).
+    rigYaml += std::string("site:\n  file: ") + kSiteFile + "\n";
+  }
   if (!writer_.open(directory_, info, rigYaml, setup.rig.terrain.dtmPath, &problem)) {
     return fail(problem);
   }
-  bytes_.store(writer_.bytesOnDisk(), std::memory_order_relaxed);
+  if (!setup.sitePath.empty()) {
+    std::error_code error;
+    const fs::path copy = fs::path(directory_) / kSiteFile;
+    fs::copy_file(setup.sitePath, copy, fs::copy_options::overwrite_existing, error);
+    if (!error) {
+      siteBytes_ = static_cast<std::uint64_t>(fs::file_size(copy, error));
+    }
+    if (error) {
+      return fail("cannot copy the site file " + setup.sitePath + " into the recording as " +
+                  kSiteFile + ": " + error.message());
+    }
+  }
+  bytes_.store(writer_.bytesOnDisk() + siteBytes_, std::memory_order_relaxed);
   thread_ = std::thread(&Recorder::writerLoop, this);
   char budget[64];
   if (options_.maxDisk_mib > 0) {
@@ -197,7 +215,8 @@ bool Recorder::makeRoom(std::uint64_t bytes) {
   const std::uint64_t budget = static_cast<std::uint64_t>(options_.maxDisk_mib) * kBytesPerMib;
   const std::uint64_t reserve = static_cast<std::uint64_t>(options_.minFreeDisk_mib) * kBytesPerMib;
   for (;;) {
-    const bool overBudget = budget > 0 && writer_.bytesOnDisk() + bytes + kRowReserve > budget;
+    const bool overBudget =
+        budget > 0 && writer_.bytesOnDisk() + siteBytes_ + bytes + kRowReserve > budget;
     bool lowSpace = false;
     if (reserve > 0) {
       std::error_code error;
@@ -253,7 +272,7 @@ void Recorder::writeFrame(FrameIndex index) {
     return;
   }
   recorded_.fetch_add(1, std::memory_order_relaxed);
-  bytes_.store(writer_.bytesOnDisk(), std::memory_order_relaxed);
+  bytes_.store(writer_.bytesOnDisk() + siteBytes_, std::memory_order_relaxed);
 }
 
 std::string Recorder::notes() const {

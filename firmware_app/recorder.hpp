@@ -3,7 +3,8 @@
 // loop wait for the disk.
 //
 // Contract: open() (start-up) creates the sequence with sequence::SequenceWriter (rig.yaml
-// from the running rig, the DTM copied beside it as dtm.tif), allocates `queue_frames`
+// from the running rig, the DTM copied beside it as dtm.tif, the site file, if the loop has
+// one, as site.geojson named by rig.yaml's site.file), allocates `queue_frames`
 // camera-size frame buffers and the telemetry ring, and starts the writer thread; it fails
 // naming app.record.dir and the problem. Then, from two threads, without allocating, locking
 // against the writer or waiting for it:
@@ -66,6 +67,10 @@ struct RecorderSetup {
   std::string source;              // what is recorded, for sequence.yaml (device or sequence)
   double frameRate_hz = 10.0;      // the source's nominal rate
   std::int64_t writeDelay_ns = 0;  // tests: the writer waits this long per frame (a slow disk)
+  // The site file the loop runs with (site.file, absolute; empty: none): copied into the
+  // sequence as site.geojson and named by its rig.yaml (site.file), so that a replay of the
+  // recording uses the same site.
+  std::string sitePath;
 };
 
 class Recorder final : public PoseSampleTap {
@@ -102,6 +107,7 @@ class Recorder final : public PoseSampleTap {
   config::RecordConfig options_{};
   std::string directory_;
   std::int64_t writeDelay_ns_ = 0;
+  std::uint64_t siteBytes_ = 0;      // the site file's copy (not the writer's: counted here)
   sequence::SequenceWriter writer_;  // writer thread only, after open()
   sequence::EncodedFrame encoded_;
   std::string why_;      // writer thread's scratch message

@@ -17,7 +17,7 @@ cd "$(dirname "$0")/.."
 SECONDS_PER_TARGET="${1:-60}"
 shift || true
 ALL_TARGETS=(config_yaml sequence_files dtm_file mavlink_stream onnx_model detections_file
-             trajectory_file)
+             trajectory_file site_file)
 TARGETS=("$@")
 [ ${#TARGETS[@]} -eq 0 ] && TARGETS=("${ALL_TARGETS[@]}")
 OUT="${FUZZ_OUT:-/tmp/vp_fuzz}"

@@ -8,8 +8,10 @@
 
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include "app.hpp"
@@ -108,8 +110,12 @@ struct SiteRun {
   std::string summary;
 };
 
-SiteRun runWithRoof(const std::string& dir, site::OffRoadPolicy policy) {
+// The loop on the sequence `dir` (its site, unless the configuration names one) with the truth
+// vehicles of `truthDir` and one roof detection per frame; recording into `recordDir` if given.
+SiteRun runWithRoof(const std::string& dir, site::OffRoadPolicy policy,
+                    const std::string& truthDir = "", const std::string& recordDir = "") {
   config::AppConfig config = test::defaultConfigFor(dir);
+  config.app.record.dir = recordDir;
   config.dds.enabled = false;
   config.source.paced = false;
   config.app.statsPeriod_s = 3600.0;
@@ -118,7 +124,7 @@ SiteRun runWithRoof(const std::string& dir, site::OffRoadPolicy policy) {
   config.app.trajectoryCsv = out + "/tracks.csv";
   auto truth = std::make_unique<test::TruthPerception>();
   std::string why;
-  EXPECT_TRUE(truth->init(dir, &why)) << why;
+  EXPECT_TRUE(truth->init(truthDir.empty() ? dir : truthDir, &why)) << why;
   const Eigen::Vector2d roof_m = firstRoof(dir);
   auto injector = std::make_unique<RoofInjector>(std::move(truth), roof_m);
   RoofInjector* seen = injector.get();
@@ -169,6 +175,67 @@ TEST(AppSite, RoofDetectionsAreDroppedAndCountedWhileEveryTruthVehicleIsKept) {
   const SiteRun keep = runWithRoof(dir, site::OffRoadPolicy::Keep);
   EXPECT_EQ(keep.counters.offSite, 0U);
   EXPECT_EQ(keep.trajectoryRows, flag.trajectoryRows);
+}
+
+std::string fileText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// --record copies the site file the loop runs with into the recording (site.geojson, named by
+// its rig.yaml), so that the replay of the recording screens the detections with the same site:
+// the roof detections are off the site again, the same number of them.
+TEST(AppSite, ARecordingCarriesTheSiteAndItsReplayUsesIt) {
+  const std::string dir = test::loopSequence();
+  ASSERT_FALSE(dir.empty());
+  const std::string recording = test::scratchDir("site_recording") + "/seq";
+  const SiteRun live = runWithRoof(dir, site::OffRoadPolicy::Drop, "", recording);
+  ASSERT_GT(live.injected, 0U);
+  EXPECT_EQ(live.counters.offSite, live.injected);
+  EXPECT_TRUE(live.counters.recording);
+
+  // The copy, byte for byte, where the recording's rig.yaml names it.
+  const std::string copy = recording + "/site.geojson";
+  EXPECT_EQ(fileText(copy), fileText(dir + "/site.geojson"));
+  EXPECT_EQ(config::loadRigConfig(recording + "/rig.yaml").sitePath, copy);
+
+  // The replay of the recording (no site.file in its configuration): the same roof detections
+  // off the site (firstRoof() reads the recording's site), the same truth vehicles on it.
+  const SiteRun replay = runWithRoof(recording, site::OffRoadPolicy::Drop, dir);
+  EXPECT_EQ(replay.injected, live.injected);
+  EXPECT_EQ(replay.counters.offSite, live.counters.offSite);
+  EXPECT_EQ(replay.counters.lifted, live.counters.lifted);
+  EXPECT_EQ(replay.roofRows, 0U);
+}
+
+// A loop without a site records none: no site.geojson, and rig.yaml names none.
+TEST(AppSite, ARecordingWithoutASiteHasNoSiteFile) {
+  const std::string dir = test::copySequence(test::loopSequence(), "no_site");
+  std::filesystem::remove(dir + "/site.geojson");
+  {
+    std::string rig = fileText(dir + "/rig.yaml");
+    const std::size_t at = rig.find("site:");
+    ASSERT_NE(at, std::string::npos);
+    rig.erase(at, rig.find('\n', rig.find("file:", at)) + 1 - at);
+    std::ofstream(dir + "/rig.yaml", std::ios::trunc) << rig;
+  }
+  ASSERT_TRUE(config::loadRigConfig(dir + "/rig.yaml").sitePath.empty());
+  config::AppConfig config = test::defaultConfigFor(dir);
+  config.dds.enabled = false;
+  config.source.paced = false;
+  const std::string recording = test::scratchDir("no_site_recording") + "/seq";
+  config.app.record.dir = recording;
+  App app;
+  RunSettings run;
+  run.quiet = true;
+  run.maxFrames = 3;
+  std::string why;
+  ASSERT_TRUE(app.init(config, run, AppSeams{}, &why)) << why;
+  ASSERT_TRUE(app.run(&why)) << why;
+  EXPECT_FALSE(std::filesystem::exists(recording + "/site.geojson"));
+  EXPECT_TRUE(config::loadRigConfig(recording + "/rig.yaml").sitePath.empty());
 }
 
 TEST(AppSite, ABadSiteFileStopsTheStartUpNamingTheFeature) {

@@ -243,12 +243,95 @@ def output_file_seeds():
     write("trajectory_file", "no_gamma_columns.csv", ("\n".join(cut) + "\n").encode())
 
 
+# ---- site_file -------------------------------------------------------------------------------
+
+def doc_json(doc):
+    """The first ```json block of docs/<doc>."""
+    text = read(ROOT, "docs", doc).decode()
+    return text.split("```json\n")[1].split("```")[0].encode()
+
+
+# A crossroads of two roads with a zone at the junction, lanes and gates on each approach, in
+# the form vp_simulate writes (one feature per line), around the fuzz harness's world frame.
+def crossroads():
+    lon0, lat0 = 11.5750, 48.1371
+    d_lon, d_lat = 0.0001349, 0.0000899  # about 10 m each way
+
+    def pos(e, n):
+        return f"[{lon0 + e * d_lon / 10:.8f}, {lat0 + n * d_lat / 10:.8f}]"
+
+    def rect(e0, n0, e1, n1):
+        return "[[" + ", ".join(pos(e, n) for e, n in
+                                ((e0, n0), (e1, n0), (e1, n1), (e0, n1), (e0, n0))) + "]]"
+
+    def feature(kind, fid, name, geometry, coordinates):
+        return ('  {"type": "Feature", "properties": {"kind": "%s", "id": "%s", "name": "%s"}, '
+                '"geometry": {"type": "%s", "coordinates": %s}}' % (kind, fid, name, geometry,
+                                                                  coordinates))
+
+    features = [
+        feature("drivable", "road-ew", "east-west road", "Polygon", rect(-60, -7, 60, 7)),
+        feature("drivable", "road-ns", "north-south road", "Polygon", rect(-7, -60, 7, 60)),
+        feature("parking", "lot-ne", "corner lot", "Polygon", rect(15, 15, 45, 40)),
+        feature("exclusion", "roof-sw", "shop roof", "Polygon", rect(-45, -40, -15, -15)),
+        feature("zone", "box-1", "box junction", "Polygon", rect(-7, -7, 7, 7)),
+        feature("lane", "ew-east", "eastbound", "LineString", f"[{pos(-60, -3.5)}, {pos(60, -3.5)}]"),
+        feature("lane", "ew-west", "westbound", "LineString", f"[{pos(60, 3.5)}, {pos(-60, 3.5)}]"),
+        feature("lane", "ns-north", "northbound", "LineString",
+                f"[{pos(3.5, -60)}, {pos(3.5, 0)}, {pos(3.5, 60)}]"),
+        feature("gate", "gate-w", "west approach", "LineString", f"[{pos(-9, -7)}, {pos(-9, 7)}]"),
+        feature("gate", "gate-e", "east approach", "LineString", f"[{pos(9, -7)}, {pos(9, 7)}]"),
+        feature("gate", "gate-s", "south approach", "LineString", f"[{pos(-7, -9)}, {pos(7, -9)}]"),
+    ]
+    return ('{"type": "FeatureCollection",\n "features": [\n' + ",\n".join(features) +
+            "\n ]}\n").encode()
+
+
+def site_seeds():
+    doc = doc_json("site_map.md")
+    write("site_file", "doc_example.geojson", doc)
+    write("site_file", "crossroads.geojson", crossroads())
+    write("site_file", "crs84_member_3d_positions.geojson", doc.replace(
+        b'"features": [',
+        b'"crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:OGC:1.3:CRS84"}},\n'
+        b' "features": [', 1).replace(b"[11.5740, 48.1370]", b"[11.5740, 48.1370, 521.5]"))
+    # Refused files, one problem each (the loader's messages, docs/site_map.md).
+    refused = {
+        "bad-not-json.geojson": doc[: len(doc) // 2],
+        "bad-topology.geojson": b'{"type": "Topology", "objects": {}}\n',
+        "bad-projected-crs.geojson": doc.replace(
+            b'"features": [',
+            b'"crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::32632"}},'
+            b'\n "features": [', 1),
+        "bad-open-ring.geojson": doc.replace(b", [11.5740, 48.1370]]]", b"]]", 1),
+        "bad-self-intersecting.geojson": doc.replace(
+            b"[11.5760, 48.1372], [11.5740, 48.1372]", b"[11.5740, 48.1372], [11.5760, 48.1372]", 1),
+        "bad-unknown-property.geojson": doc.replace(
+            b'"name": "Main St"', b'"name": "Main St", "lanes": 2', 1),
+        "bad-duplicate-id.geojson": doc.replace(b'"id": "roof-1"', b'"id": "road-1"', 1),
+        "bad-no-drivable.geojson": doc.replace(b'"kind": "drivable"', b'"kind": "zone"', 1),
+        "bad-one-position-gate.geojson": doc.replace(b"[[11.5742, 48.1370], [11.5742, 48.1372]]",
+                                                     b"[[11.5742, 48.1370]]", 1),
+        "bad-hole.geojson": doc.replace(b"[11.5745, 48.1374]]]}}",
+                                        b"[11.5745, 48.1374]], [[11.5746, 48.1375], "
+                                        b"[11.5747, 48.1375], [11.5747, 48.1375], "
+                                        b"[11.5746, 48.1375]]]}}", 1),
+        "bad-projected-positions.geojson": doc.replace(b"[11.5740, 48.13705]",
+                                                       b"[691234.5, 5334567.8]", 1),
+    }
+    for name, data in refused.items():
+        if data == doc:
+            raise SystemExit(f"site seed {name}: the replacement did not apply")
+        write("site_file", name, data)
+
+
 def main():
     config_seeds()
     sequence_seeds()
     dtm_seeds()
     mavlink_seeds()
     output_file_seeds()
+    site_seeds()
     onnx_seed()
     return 0
 
