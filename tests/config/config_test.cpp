@@ -330,7 +330,9 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
   const std::pair<const QosProfile*, const QosProfile*> profiles[] = {
       {&dds.vehicleState, &defaults.vehicleState},
       {&dds.droneStatus, &defaults.droneStatus},
-      {&dds.occupancy, &defaults.occupancy}};
+      {&dds.occupancy, &defaults.occupancy},
+      {&dds.trafficStatistics, &defaults.trafficStatistics},
+      {&dds.trafficEvents, &defaults.trafficEvents}};
   for (const auto& [got, want] : profiles) {
     EXPECT_EQ(got->reliability, want->reliability);
     EXPECT_EQ(got->maxBlocking_s, want->maxBlocking_s);
