@@ -34,6 +34,14 @@ std::optional<FeatureKind> featureKindFromString(const std::string& text);
 // Areas are Polygons; lanes and gates are LineStrings.
 bool isArea(FeatureKind kind);
 
+// What a zone is for (its optional `role`): a plain counting zone (occupancy, dwell), the queue
+// upstream of a stop line (its `lane` ends there), or a box junction (no vehicle may stop in it).
+enum class ZoneRole : std::uint8_t { Count, Queue, BoxJunction };
+const char* toString(ZoneRole role);  // the file's word: "count", "queue", "box_junction"
+std::optional<ZoneRole> zoneRoleFromString(const std::string& text);
+
+constexpr double kDefaultLaneWidth_m = 3.5;
+
 struct Feature {
   FeatureKind kind = FeatureKind::Drivable;
   std::string id;
@@ -44,6 +52,9 @@ struct Feature {
   std::uint32_t count = 0;
   Eigen::Vector2d min_m{0.0, 0.0};  // bounding box, ENU east/north
   Eigen::Vector2d max_m{0.0, 0.0};
+  double width_m = kDefaultLaneWidth_m;  // a lane's width (`width_m`), > 0
+  ZoneRole role = ZoneRole::Count;       // a zone's `role`
+  std::string lane;                      // a queue zone's `lane`: the id of an existing lane
 };
 
 // Where a world point lies on the site.
