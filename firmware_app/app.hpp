@@ -127,6 +127,8 @@ class App final : public CounterSource {
   shape::ActiveShapeModel asm_;
   georef::GroundView groundView_;  // with georef.gcp_file: the fixed view lifting uses
   site::Site site_;                // with site.file: the site map the scene prior uses
+  // The traffic analysis' options (the `traffic:` section; defaults until it is read).
+  traffic::TrafficAnalyzerOptions trafficOptions_{};
 
   // The loop's books, borrowed by the units (processing thread; capture's counts are its own).
   LoopCounters counters_{};
