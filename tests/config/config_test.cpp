@@ -214,6 +214,17 @@ georef:
 site:
   file: maps/site.geojson
   off_road: flag
+traffic:
+  period_s: 30.0
+  stop_speed_mps: 0.5
+  lane_heading_tolerance_deg: 30.0
+  wrong_way_angle_deg: 150.0
+  wrong_way_speed_mps: 3.0
+  wrong_way_s: 2.0
+  box_junction_stop_s: 4.0
+  max_tracks: 512
+  max_events_per_step: 128
+  max_lane_samples: 300
 app:
   queue_depth: 2
   frame_pool_size: 6
@@ -862,6 +873,27 @@ const MalformedCase kMalformedCases[] = {
     {"file: maps/site.geojson", "file: ''", "site.file", "must not be empty"},
     {"off_road: flag", "off_road: ignore", "site.off_road",
      "unknown value 'ignore' (expected drop, flag, keep)"},
+    // traffic
+    {"traffic:\n  period_s", "traffic: 1\nx:\n  period_s", "traffic", "expected a map, got '1'"},
+    {"traffic:\n  period_s", "traffic:\n  enabled: maybe\n  period_s", "traffic.enabled",
+     "expected true or false"},
+    {"period_s: 30.0", "period_s: 0.5", "traffic.period_s", "must be in [1, 86400], got 0.5"},
+    {"stop_speed_mps: 0.5", "stop_speed_mps: 11", "traffic.stop_speed_mps",
+     "must be in [0, 10], got 11"},
+    {"lane_heading_tolerance_deg: 30.0", "lane_heading_tolerance_deg: 0",
+     "traffic.lane_heading_tolerance_deg", "must be in (0, 90], got 0"},
+    {"wrong_way_angle_deg: 150.0", "wrong_way_angle_deg: 180", "traffic.wrong_way_angle_deg",
+     "must be in [90, 179], got 180"},
+    {"wrong_way_speed_mps: 3.0", "wrong_way_speed_mps: -1", "traffic.wrong_way_speed_mps",
+     "must be in [0, 50], got -1"},
+    {"wrong_way_s: 2.0", "wrong_way_s: 61", "traffic.wrong_way_s", "must be in [0, 60], got 61"},
+    {"box_junction_stop_s: 4.0", "box_junction_stop_s: 601", "traffic.box_junction_stop_s",
+     "must be in [0, 600], got 601"},
+    {"max_tracks: 512", "max_tracks: 0", "traffic.max_tracks", "must be in [1, 65536], got 0"},
+    {"max_events_per_step: 128", "max_events_per_step: 70000", "traffic.max_events_per_step",
+     "must be in [1, 65536], got 70000"},
+    {"max_lane_samples: 300", "max_lane_samples: 1.5", "traffic.max_lane_samples",
+     "expected an integer"},
     // app
     {"app:\n  queue_depth", "app: 1\nx:\n  queue_depth", "app", "expected a map, got '1'"},
     {"queue_depth: 2", "queue_depth: 9", "app.queue_depth", "must be in [1, 8], got 9"},
@@ -1082,6 +1114,18 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "site",
                                                "site.file",
                                                "site.off_road",
+                                               "traffic",
+                                               "traffic.enabled",
+                                               "traffic.period_s",
+                                               "traffic.stop_speed_mps",
+                                               "traffic.lane_heading_tolerance_deg",
+                                               "traffic.wrong_way_angle_deg",
+                                               "traffic.wrong_way_speed_mps",
+                                               "traffic.wrong_way_s",
+                                               "traffic.box_junction_stop_s",
+                                               "traffic.max_tracks",
+                                               "traffic.max_events_per_step",
+                                               "traffic.max_lane_samples",
                                                "app",
                                                "app.queue_depth",
                                                "app.frame_pool_size",
@@ -1653,6 +1697,33 @@ TEST(ConfigLoop, TheSiteFileIsRelativeToTheConfigurationAndOffRoadIsRead) {
   EXPECT_TRUE(none.site.file.empty());
   EXPECT_EQ(parse(edited("off_road: flag", "off_road: keep")).site.offRoad,
             site::OffRoadPolicy::Keep);
+}
+
+TEST(ConfigLoop, TheTrafficSectionFillsTheAnalyzersOptions) {
+  const AppConfig full = parse(kFullConfig);
+  EXPECT_TRUE(full.traffic.enabled);  // absent: the default
+  EXPECT_FALSE(parse(edited("traffic:\n  period_s", "traffic:\n  enabled: false\n  period_s"))
+                   .traffic.enabled);
+  EXPECT_EQ(full.traffic.period_s, 30.0);
+  EXPECT_EQ(full.traffic.stopSpeed_mps, 0.5);
+  EXPECT_EQ(full.traffic.laneHeadingTolerance_deg, 30.0);
+  EXPECT_EQ(full.traffic.wrongWayAngle_deg, 150.0);
+  EXPECT_EQ(full.traffic.wrongWaySpeed_mps, 3.0);
+  EXPECT_EQ(full.traffic.wrongWay_s, 2.0);
+  EXPECT_EQ(full.traffic.boxJunctionStop_s, 4.0);
+  EXPECT_EQ(full.traffic.maxTracks, 512U);
+  EXPECT_EQ(full.traffic.maxEventsPerStep, 128U);
+  EXPECT_EQ(full.traffic.maxLaneSamples, 300U);
+  // What the file sets, the analyzer accepts.
+  site::Site site("s");
+  site::Feature zone;
+  zone.kind = site::FeatureKind::Zone;
+  zone.id = "z";
+  const std::vector<Eigen::Vector2d> ring = {{0, 0}, {1, 0}, {1, 1}};
+  site.append(zone, ring);
+  traffic::TrafficAnalyzer analyzer;
+  std::string why;
+  EXPECT_TRUE(analyzer.init(site, full.traffic, &why)) << why;
 }
 
 TEST(ConfigLoop, GroundControlPointsNeedTelemetryOffAndResolveTheirPath) {

@@ -48,11 +48,12 @@ bool TrafficAnalyzer::init(const site::Site& site, const TrafficAnalyzerOptions&
   if (!inRange(options.stopSpeed_mps, 0.0, 10.0)) {
     return range("stop_speed_mps", options.stopSpeed_mps, "[0, 10]");
   }
-  if (!inRange(options.laneHeadingTolerance_deg, 1e-9, 90.0 - 1e-9)) {
-    return range("lane_heading_tolerance_deg", options.laneHeadingTolerance_deg, "(0, 90)");
+  if (!inRange(options.laneHeadingTolerance_deg, 0.0, 90.0) ||
+      options.laneHeadingTolerance_deg == 0.0) {
+    return range("lane_heading_tolerance_deg", options.laneHeadingTolerance_deg, "(0, 90]");
   }
-  if (!inRange(options.wrongWayAngle_deg, 90.0, 180.0 - 1e-9)) {
-    return range("wrong_way_angle_deg", options.wrongWayAngle_deg, "[90, 180)");
+  if (!inRange(options.wrongWayAngle_deg, 90.0, 179.0)) {
+    return range("wrong_way_angle_deg", options.wrongWayAngle_deg, "[90, 179]");
   }
   if (!inRange(options.wrongWaySpeed_mps, 0.0, 50.0)) {
     return range("wrong_way_speed_mps", options.wrongWaySpeed_mps, "[0, 50]");

@@ -59,8 +59,8 @@ struct TrafficAnalyzerOptions {
   bool enabled = true;                     // runs when the site has gates, zones or lanes
   double period_s = 60.0;                  // statistics period, [1, 86400]
   double stopSpeed_mps = 1.0;              // below: stopped (queues, dwell, box junction), [0, 10]
-  double laneHeadingTolerance_deg = 45.0;  // along a lane within this, (0, 90)
-  double wrongWayAngle_deg = 135.0;        // against a lane beyond this, [90, 180)
+  double laneHeadingTolerance_deg = 45.0;  // along a lane within this, (0, 90]
+  double wrongWayAngle_deg = 135.0;        // against a lane beyond this, [90, 179]
   double wrongWaySpeed_mps = 2.0;          // wrong-way only when moving at least this, [0, 50]
   double wrongWay_s = 1.0;                 // ... for at least this long, [0, 60]
   double boxJunctionStop_s = 5.0;          // stopped in a box junction this long, [0, 600]
