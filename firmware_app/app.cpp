@@ -69,7 +69,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   wiring.shapeModel = &asm_;
   wiring.site = config_.site.file.empty() ? nullptr : &site_;
   wiring.offRoad = config_.site.offRoad;
-  wiring.traffic = &trafficOptions_;
+  wiring.traffic = &config_.traffic;
   wiring.droneId = config_.dds.droneId;
   wiring.sourceOnMonotonicClock = capture_.source().capturesOnMonotonicClock();
   wiring.fixedView = !config_.georef.gcpFile.empty();

@@ -100,6 +100,11 @@ class App final : public CounterSource {
   std::string summaryLine() const;  // machine-readable totals of the run (for the benchmark)
   // The vehicle-state writer (0 with DDS off), e.g. to wait until a reader has matched.
   dds_entity_t vehicleStateWriter() const { return dds_ ? dds_->states().writer() : 0; }
+  // The native traffic writers (0 with DDS off or without the traffic analysis).
+  dds_entity_t trafficStatisticsWriter() const {
+    return dds_ ? dds_->traffic().statisticsWriter() : 0;
+  }
+  dds_entity_t trafficEventsWriter() const { return dds_ ? dds_->traffic().eventsWriter() : 0; }
 
  private:
   bool initSource(std::string* why);
@@ -127,8 +132,6 @@ class App final : public CounterSource {
   shape::ActiveShapeModel asm_;
   georef::GroundView groundView_;  // with georef.gcp_file: the fixed view lifting uses
   site::Site site_;                // with site.file: the site map the scene prior uses
-  // The traffic analysis' options (the `traffic:` section; defaults until it is read).
-  traffic::TrafficAnalyzerOptions trafficOptions_{};
 
   // The loop's books, borrowed by the units (processing thread; capture's counts are its own).
   LoopCounters counters_{};
