@@ -81,6 +81,22 @@ dds:
       deadline_s: 0.0
       lifespan_s: 2.0
       liveliness_lease_s: 0.0
+    traffic_statistics:
+      reliability: best_effort
+      max_blocking_s: 0.05
+      durability: volatile
+      history_depth: 7
+      deadline_s: 120.0
+      lifespan_s: 0.0
+      liveliness_lease_s: 7.0
+    traffic_events:
+      reliability: best_effort
+      max_blocking_s: 0.06
+      durability: volatile
+      history_depth: 64
+      deadline_s: 2.0
+      lifespan_s: 30.0
+      liveliness_lease_s: 8.0
   occupancy_grid:
     origin_east_m: -40.0
     origin_north_m: -30.0
@@ -235,6 +251,7 @@ app:
   stats_period_s: 10.0
   trajectory_csv: out/tracks.csv
   detections_csv: out/detections.csv
+  traffic_dir: out/traffic
   annotated_video: out/annotated.avi
   annotated_video_fps: 5.0
   record:
@@ -632,6 +649,43 @@ const MalformedCase kMalformedCases[] = {
      "expected a number, got 'two'"},
     {"liveliness_lease_s: 0.0", "liveliness_lease_s: -1", "dds.qos.occupancy.liveliness_lease_s",
      "must be in [0, 3600], got -1"},
+    {"    traffic_statistics:\n", "    traffic_statistics: 1\n    x:\n",
+     "dds.qos.traffic_statistics", "expected a map, got '1'"},
+    {"reliability: best_effort\n      max_blocking_s: 0.05",
+     "reliability: sometimes\n      max_blocking_s: 0.05", "dds.qos.traffic_statistics.reliability",
+     "unknown value 'sometimes'"},
+    {"max_blocking_s: 0.05", "max_blocking_s: 12", "dds.qos.traffic_statistics.max_blocking_s",
+     "must be in [0, 10], got 12"},
+    {"durability: volatile\n      history_depth: 7",
+     "durability: persistent\n      history_depth: 7", "dds.qos.traffic_statistics.durability",
+     "unknown value 'persistent'"},
+    {"history_depth: 7", "history_depth: 1001", "dds.qos.traffic_statistics.history_depth",
+     "must be in [1, 1000], got 1001"},
+    {"deadline_s: 120.0", "deadline_s: -2", "dds.qos.traffic_statistics.deadline_s",
+     "must be in [0, 3600], got -2"},
+    {"lifespan_s: 0.0\n      liveliness_lease_s: 7.0",
+     "lifespan_s: x\n      liveliness_lease_s: 7.0", "dds.qos.traffic_statistics.lifespan_s",
+     "expected a number, got 'x'"},
+    {"liveliness_lease_s: 7.0", "liveliness_lease_s: 4000",
+     "dds.qos.traffic_statistics.liveliness_lease_s", "must be in [0, 3600], got 4000"},
+    {"    traffic_events:\n", "    traffic_events: [2]\n    x:\n", "dds.qos.traffic_events",
+     "expected a map, got a sequence"},
+    {"reliability: best_effort\n      max_blocking_s: 0.06",
+     "reliability: often\n      max_blocking_s: 0.06", "dds.qos.traffic_events.reliability",
+     "unknown value 'often'"},
+    {"max_blocking_s: 0.06", "max_blocking_s: -1", "dds.qos.traffic_events.max_blocking_s",
+     "must be in [0, 10], got -1"},
+    {"durability: volatile\n      history_depth: 64",
+     "durability: durable\n      history_depth: 64", "dds.qos.traffic_events.durability",
+     "unknown value 'durable'"},
+    {"history_depth: 64", "history_depth: 0", "dds.qos.traffic_events.history_depth",
+     "must be in [1, 1000], got 0"},
+    {"deadline_s: 2.0", "deadline_s: 3601", "dds.qos.traffic_events.deadline_s",
+     "must be in [0, 3600], got 3601"},
+    {"lifespan_s: 30.0", "lifespan_s: -30", "dds.qos.traffic_events.lifespan_s",
+     "must be in [0, 3600], got -30"},
+    {"liveliness_lease_s: 8.0", "liveliness_lease_s: 9999",
+     "dds.qos.traffic_events.liveliness_lease_s", "must be in [0, 3600], got 9999"},
     {"  occupancy_grid:\n", "  occupancy_grid: none\n  x:\n", "dds.occupancy_grid",
      "expected a map, got 'none'"},
     {"origin_east_m: -40.0", "origin_east_m: 1e6", "dds.occupancy_grid.origin_east_m",
@@ -917,6 +971,7 @@ const MalformedCase kMalformedCases[] = {
      "must not be empty"},
     {"detections_csv: out/detections.csv", "detections_csv: [a]", "app.detections_csv",
      "expected a string, got a sequence of 1 element(s)"},
+    {"traffic_dir: out/traffic", "traffic_dir: ''", "app.traffic_dir", "must not be empty"},
     {"annotated_video: out/annotated.avi", "annotated_video: {a: b}", "app.annotated_video",
      "expected a string, got a map"},
     {"annotated_video_fps: 5.0", "annotated_video_fps: 0", "app.annotated_video_fps",
@@ -1136,6 +1191,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "app.stats_period_s",
                                                "app.trajectory_csv",
                                                "app.detections_csv",
+                                               "app.traffic_dir",
                                                "app.annotated_video",
                                                "app.annotated_video_fps",
                                                "app.record",
@@ -1148,7 +1204,8 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "app.record.on_full"};
   // Every key of the three QoS profiles.
   std::vector<std::string> keys = schemaKeys;
-  for (const char* topic : {"vehicle_state", "drone_status", "occupancy"}) {
+  for (const char* topic :
+       {"vehicle_state", "drone_status", "occupancy", "traffic_statistics", "traffic_events"}) {
     const std::string profile = std::string("dds.qos.") + topic;
     keys.push_back(profile);
     for (const char* key : {"reliability", "max_blocking_s", "durability", "history_depth",
@@ -1328,6 +1385,12 @@ TEST(ConfigDds, AbsentSectionGivesTheDocumentedDefaults) {
   EXPECT_EQ(dds.occupancy.reliability, Reliability::BestEffort);
   EXPECT_DOUBLE_EQ(dds.occupancy.deadline_s, 0.0);
   EXPECT_DOUBLE_EQ(dds.occupancy.lifespan_s, 1.0);
+  EXPECT_EQ(dds.trafficStatistics.reliability, Reliability::Reliable);
+  EXPECT_EQ(dds.trafficStatistics.durability, Durability::TransientLocal);
+  EXPECT_EQ(dds.trafficStatistics.historyDepth, 4);
+  EXPECT_EQ(dds.trafficEvents.reliability, Reliability::Reliable);
+  EXPECT_EQ(dds.trafficEvents.durability, Durability::Volatile);
+  EXPECT_EQ(dds.trafficEvents.historyDepth, 256);
   EXPECT_DOUBLE_EQ(dds.grid.originEast_m, -50.0);
   EXPECT_DOUBLE_EQ(dds.grid.originNorth_m, -50.0);
   EXPECT_DOUBLE_EQ(dds.grid.resolution_m, 0.5);
@@ -1382,6 +1445,19 @@ TEST(ConfigDds, FullSectionReadsEveryKey) {
   EXPECT_DOUBLE_EQ(oc.maxBlocking_s, 0.04);
   EXPECT_EQ(oc.historyDepth, 4);
   EXPECT_DOUBLE_EQ(oc.lifespan_s, 2.0);
+  const QosProfile& ts = dds.trafficStatistics;
+  EXPECT_EQ(ts.reliability, Reliability::BestEffort);
+  EXPECT_DOUBLE_EQ(ts.maxBlocking_s, 0.05);
+  EXPECT_EQ(ts.durability, Durability::Volatile);
+  EXPECT_EQ(ts.historyDepth, 7);
+  EXPECT_DOUBLE_EQ(ts.deadline_s, 120.0);
+  EXPECT_DOUBLE_EQ(ts.livelinessLease_s, 7.0);
+  const QosProfile& te = dds.trafficEvents;
+  EXPECT_DOUBLE_EQ(te.maxBlocking_s, 0.06);
+  EXPECT_EQ(te.historyDepth, 64);
+  EXPECT_DOUBLE_EQ(te.deadline_s, 2.0);
+  EXPECT_DOUBLE_EQ(te.lifespan_s, 30.0);
+  EXPECT_DOUBLE_EQ(te.livelinessLease_s, 8.0);
   EXPECT_DOUBLE_EQ(dds.grid.originEast_m, -40.0);
   EXPECT_DOUBLE_EQ(dds.grid.originNorth_m, -30.0);
   EXPECT_DOUBLE_EQ(dds.grid.resolution_m, 0.25);
@@ -1623,6 +1699,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(app.statsPeriod_s, 10.0);
   EXPECT_EQ(app.trajectoryCsv, "/data/site/out/tracks.csv");
   EXPECT_EQ(app.detectionsCsv, "/data/site/out/detections.csv");
+  EXPECT_EQ(app.trafficDir, "/data/site/out/traffic");
   EXPECT_EQ(app.annotatedVideo, "/data/site/out/annotated.avi");
   EXPECT_DOUBLE_EQ(app.annotatedVideoFps, 5.0);
   EXPECT_EQ(app.record.dir, "/data/site/out/flight1");
@@ -1671,6 +1748,7 @@ TEST(ConfigLoop, AbsentSectionsGiveTheDocumentedDefaults) {
   EXPECT_DOUBLE_EQ(config.app.statsPeriod_s, 5.0);
   EXPECT_TRUE(config.app.trajectoryCsv.empty());
   EXPECT_TRUE(config.app.detectionsCsv.empty());
+  EXPECT_TRUE(config.app.trafficDir.empty());
   EXPECT_TRUE(config.app.annotatedVideo.empty());
 }
 

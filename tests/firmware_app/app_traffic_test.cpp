@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -52,8 +53,8 @@ void takeAll(dds_entity_t reader, Copy&& copy) {
 std::vector<std::vector<std::string>> readRows(const std::string& dir, TrafficFile file) {
   output_files::TrafficFileRows rows;
   std::string why;
-  EXPECT_TRUE(output_files::readTrafficFile(dir + "/" + output_files::fileName(file), file, &rows,
-                                            &why))
+  EXPECT_TRUE(
+      output_files::readTrafficFile(dir + "/" + output_files::fileName(file), file, &rows, &why))
       << why;
   return rows.rows;
 }
@@ -93,7 +94,8 @@ TEST(AppTraffic, StatisticsAndEventsOverDdsAgreeWithTheTrafficFiles) {
   config::QosProfile eventsQos = config.dds.trafficEvents;
   eventsQos.historyDepth = 1000;
   ASSERT_TRUE(
-      statisticsReader.open(participant, statisticsTopic, statisticsQos, config.dds.partition).ok());
+      statisticsReader.open(participant, statisticsTopic, statisticsQos, config.dds.partition)
+          .ok());
   ASSERT_TRUE(eventsReader.open(participant, eventsTopic, eventsQos, config.dds.partition).ok());
 
   LoopCounters counters;
@@ -115,6 +117,11 @@ TEST(AppTraffic, StatisticsAndEventsOverDdsAgreeWithTheTrafficFiles) {
     counters = app.counters();
     summary = app.summaryLine();
   }
+  std::printf(
+      "traffic on the simulated intersection: %llu periods, %llu events, %llu gate crossings\n",
+      static_cast<unsigned long long>(counters.trafficPeriods),
+      static_cast<unsigned long long>(counters.trafficEvents),
+      static_cast<unsigned long long>(counters.gateCrossings));
   EXPECT_TRUE(counters.traffic);
   EXPECT_EQ(counters.trafficErrors, 0U);
   EXPECT_EQ(counters.outputErrors, 0U);
@@ -194,6 +201,70 @@ TEST(AppTraffic, StatisticsAndEventsOverDdsAgreeWithTheTrafficFiles) {
   // Every crossing is an event and is counted in its period's statistics.
   EXPECT_EQ(crossingEvents, counters.gateCrossings);
   EXPECT_EQ(countedCrossings, crossingEvents);
+}
+
+// The roadside unit: vp_rsu_subscriber with the sequence's site prints each period's gate
+// counts and the totals, which add up to the app's crossings, and draws its bird's-eye view.
+TEST(AppTraffic, TheSubscriberPrintsEachPeriodsCountsAndDrawsTheSite) {
+  test::useLoopbackDds();
+  const std::string dir = test::loopSequence();
+  ASSERT_FALSE(dir.empty());
+  const std::string out = test::scratchDir("traffic_rsu");
+  config::AppConfig config = test::defaultConfigFor(dir);
+  config.dds = test::uniqueDdsConfig();
+  config.dds.droneId = 9;
+  config.dds.ros2.enabled = false;
+  config.app.statsPeriod_s = 3600.0;
+  config.source.paced = false;
+  config.traffic.period_s = 1.0;
+  const std::string log = out + "/subscriber.log";
+  const std::string command =
+      std::string(VP_RSU_SUBSCRIBER) + " --domain " + std::to_string(config.dds.domainId) +
+      " --partition " + config.dds.partition + " --site " + dir + "/site.geojson" + " --bev-png " +
+      out + "/bev.png --until-writers-gone" + " --duration-s 60 >/dev/null 2>" + log;
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  LoopCounters counters;
+  bool matched = false;
+  {
+    App app;
+    AppSeams seams;
+    auto truth = std::make_unique<test::TruthPerception>();
+    std::string why;
+    ASSERT_TRUE(truth->init(dir, &why)) << why;
+    seams.perception = std::move(truth);
+    ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
+    matched = test::waitForMatch(app.trafficEventsWriter(), 1, 15000ms) &&
+              test::waitForMatch(app.vehicleStateWriter(), 1, 15000ms);
+    std::this_thread::sleep_for(500ms);  // the subscriber's side of discovery
+    ASSERT_TRUE(app.run(&why)) << why;
+    EXPECT_EQ(dds_wait_for_acks(app.trafficEventsWriter(), DDS_SECS(5)), DDS_RETCODE_OK);
+    EXPECT_EQ(dds_wait_for_acks(app.trafficStatisticsWriter(), DDS_SECS(5)), DDS_RETCODE_OK);
+    counters = app.counters();
+  }  // the writers leave: the subscriber stops
+  EXPECT_EQ(pclose(pipe), 0);
+  ASSERT_TRUE(matched) << "the subscriber process was not discovered";
+  const std::string text = test::readText(log);
+  EXPECT_NE(text.find("site " + dir + "/site.geojson (26 features)"), std::string::npos) << text;
+  std::size_t periodLines = 0;
+  for (std::size_t at = text.find("traffic: drone 9 period "); at != std::string::npos;
+       at = text.find("traffic: drone 9 period ", at + 1)) {
+    ++periodLines;
+  }
+  EXPECT_EQ(periodLines, counters.trafficPeriods) << text;
+  // The totals line: forward + backward of every gate = the app's crossings.
+  const std::size_t totals = text.find("traffic totals: ");
+  ASSERT_NE(totals, std::string::npos) << text;
+  const std::string line = text.substr(totals, text.find('\n', totals) - totals);
+  std::uint64_t sum = 0;
+  for (const char* word : {" forward ", " backward "}) {
+    for (std::size_t at = line.find(word); at != std::string::npos; at = line.find(word, at + 1)) {
+      sum += std::stoull(line.substr(at + std::string(word).size()));
+    }
+  }
+  EXPECT_EQ(sum, counters.gateCrossings) << line;
+  EXPECT_GT(sum, 0U);
+  EXPECT_TRUE(std::filesystem::exists(out + "/bev.png"));
 }
 
 TEST(AppTraffic, OffWithoutTheOptionAndWithoutASite) {
