@@ -59,9 +59,14 @@ std::vector<std::vector<std::string>> readRows(const std::string& dir, TrafficFi
   return rows.rows;
 }
 
+// 8 s of the simulated intersection (small frames: the truth is what counts here).
+std::string trafficSequence() {
+  return test::simulatedSequence("traffic", 80, test::kLoopWidth_px, test::kLoopHeight_px, 7);
+}
+
 TEST(AppTraffic, StatisticsAndEventsOverDdsAgreeWithTheTrafficFiles) {
   test::useLoopbackDds();
-  const std::string dir = test::loopSequence();
+  const std::string dir = trafficSequence();
   ASSERT_FALSE(dir.empty());
   const std::string out = test::scratchDir("traffic");
   config::AppConfig config = test::defaultConfigFor(dir);
@@ -71,7 +76,7 @@ TEST(AppTraffic, StatisticsAndEventsOverDdsAgreeWithTheTrafficFiles) {
   config.app.statsPeriod_s = 3600.0;
   config.app.trafficDir = out;
   config.source.paced = false;
-  config.traffic.period_s = 1.0;  // 24 frames at 10 Hz: two periods in the run, one at its end
+  config.traffic.period_s = 2.0;  // 80 frames at 10 Hz: three periods in the run, one at its end
 
   platform::dds::Participant participant;
   ASSERT_TRUE(participant.open(config.dds).ok());
@@ -125,8 +130,8 @@ TEST(AppTraffic, StatisticsAndEventsOverDdsAgreeWithTheTrafficFiles) {
   EXPECT_TRUE(counters.traffic);
   EXPECT_EQ(counters.trafficErrors, 0U);
   EXPECT_EQ(counters.outputErrors, 0U);
-  EXPECT_GE(counters.trafficPeriods, 2U);
-  EXPECT_GT(counters.gateCrossings, 0U) << "vehicles cross the intersection's gates";
+  EXPECT_GE(counters.trafficPeriods, 4U);
+  EXPECT_GE(counters.gateCrossings, 3U) << "vehicles cross the intersection's gates";
   EXPECT_NE(summary.find(" gate_crossings=" + std::to_string(counters.gateCrossings) + " "),
             std::string::npos)
       << summary;
