@@ -1,6 +1,7 @@
 // tools/rsu_subscriber/bev_view: OpenCV drawing of the bird's-eye view.
 #include "bev_view.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
@@ -42,8 +43,11 @@ void drawSite(cv::Mat& image, const site::Site& site, const BevOverlay& overlay,
                   cv::Scalar(0, 220, 220), 1);
     } else if (f.kind == site::FeatureKind::Lane) {
       cv::polylines(image, line, false, cv::Scalar(200, 200, 0), 1, cv::LINE_AA);
+      // A head of about 10 px on the last segment, whatever its length.
+      const cv::Point2d last = line.back() - line[line.size() - 2];
+      const double length_px = std::max(1.0, std::hypot(last.x, last.y));
       cv::arrowedLine(image, line[line.size() - 2], line.back(), cv::Scalar(200, 200, 0), 1,
-                      cv::LINE_AA, 0, 0.2);
+                      cv::LINE_AA, 0, std::min(0.5, 10.0 / length_px));
     } else if (f.kind == site::FeatureKind::Gate) {
       cv::polylines(image, line, false, cv::Scalar(255, 0, 255), 2, cv::LINE_AA);
       std::string text = f.id;
