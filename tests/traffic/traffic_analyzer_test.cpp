@@ -342,6 +342,31 @@ TEST(TrafficAnalyzer, PeriodsCloseInTheStepThatReachesTheirEnd) {
   EXPECT_FALSE(a.step(0, {}));  // time went backwards
 }
 
+TEST(TrafficAnalyzer, AGapLongerThanAPeriodClosesOneAndRestartsOnTheGrid) {
+  const site::Site site = testSite();
+  TrafficAnalyzer a;
+  initOrFail(a, site, options(10.0));
+  ASSERT_TRUE(a.step(0, {}));
+  ASSERT_TRUE(a.step(kSecond_ns, {}));
+  EXPECT_EQ(a.completedPeriod(), nullptr);
+  ASSERT_TRUE(a.step(35 * kSecond_ns, {}));  // periods [10, 20) and [20, 30) had no frame
+  const TrafficStatistics* first = a.completedPeriod();
+  ASSERT_NE(first, nullptr);
+  const std::int64_t firstStart_ns = first->start_ns;
+  const std::int64_t firstEnd_ns = first->end_ns;
+  EXPECT_EQ(firstStart_ns, 0);
+  EXPECT_EQ(firstEnd_ns, 10 * kSecond_ns);
+  a.finish(38 * kSecond_ns);
+  const TrafficStatistics* last = a.lastPeriod();
+  ASSERT_NE(last, nullptr);
+  const std::uint64_t sequence = last->sequence;
+  const std::int64_t lastStart_ns = last->start_ns;
+  const std::int64_t lastEnd_ns = last->end_ns;
+  EXPECT_EQ(sequence, 1U);
+  EXPECT_EQ(lastStart_ns, 30 * kSecond_ns);
+  EXPECT_EQ(lastEnd_ns, 38 * kSecond_ns);
+}
+
 TEST(TrafficAnalyzer, BadOptionsAndSitesAreRefusedNamingTheKeyOrFeature) {
   const site::Site site = testSite();
   TrafficAnalyzer a;

@@ -38,6 +38,7 @@ bool TrafficAnalyzer::init(const site::Site& site, const TrafficAnalyzerOptions&
     }
     return false;
   };
+  active_ = false;  // until the site and the options are accepted
   const auto range = [&fail](const char* key, double value, const char* interval) {
     return fail(std::string("traffic.") + key + " must be in " + interval + ", got " +
                 std::to_string(value));
