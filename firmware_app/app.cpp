@@ -69,6 +69,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   wiring.shapeModel = &asm_;
   wiring.site = config_.site.file.empty() ? nullptr : &site_;
   wiring.offRoad = config_.site.offRoad;
+  wiring.traffic = &config_.traffic;
   wiring.droneId = config_.dds.droneId;
   wiring.sourceOnMonotonicClock = capture_.source().capturesOnMonotonicClock();
   wiring.fixedView = !config_.georef.gcpFile.empty();
@@ -93,7 +94,8 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   outputs.gammaColumns = asm_.componentCount();
   outputs.model = step_.perception().modelId();
   outputs.source = sourceName();
-  if (!step_.openOutputs(outputs, why)) {
+  if (!step_.openOutputs(outputs, why) ||
+      !step_.openTraffic(config_.app.trafficDir, config_.dds, why)) {
     return false;
   }
   std::string problem;

@@ -100,6 +100,11 @@ class App final : public CounterSource {
   std::string summaryLine() const;  // machine-readable totals of the run (for the benchmark)
   // The vehicle-state writer (0 with DDS off), e.g. to wait until a reader has matched.
   dds_entity_t vehicleStateWriter() const { return dds_ ? dds_->states().writer() : 0; }
+  // The native traffic writers (0 with DDS off or without the traffic analysis).
+  dds_entity_t trafficStatisticsWriter() const {
+    return dds_ ? dds_->traffic().statisticsWriter() : 0;
+  }
+  dds_entity_t trafficEventsWriter() const { return dds_ ? dds_->traffic().eventsWriter() : 0; }
 
  private:
   bool initSource(std::string* why);

@@ -47,6 +47,7 @@ Usage: vp_firmware_app --config FILE [options]
   --max-frames N         stop after N frames taken from the source (0 = no limit)
   --trajectory-csv F     write the trajectory CSV (docs/tracking.md) to F
   --detections-csv F     write the detections file (docs/detections_file.md) to F
+  --traffic-dir D        write the traffic files (docs/traffic_files.md) into folder D
   --annotated-video F    write the annotated frames to F (MJPG in AVI; allocates per frame)
   --record DIR           record what the loop sees (frames as JPEG, their times, the pose
                          samples as received, the rig and the DTM) as a recorded sequence in
@@ -101,8 +102,8 @@ ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* ou
       line.quiet = true;
     } else if (arg == "--config" || arg == "--sequence" || arg == "--camera" ||
                arg == "--camera-bus" || arg == "--trajectory-csv" || arg == "--detections-csv" ||
-               arg == "--annotated-video" || arg == "--record" || arg == "--max-frames" ||
-               arg == "--threads") {
+               arg == "--traffic-dir" || arg == "--annotated-video" || arg == "--record" ||
+               arg == "--max-frames" || arg == "--threads") {
       if (!value(&text)) {
         return fail(std::string(arg) + ": needs a value");
       }
@@ -118,6 +119,8 @@ ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* ou
         line.trajectoryCsv = text;
       } else if (arg == "--detections-csv") {
         line.detectionsCsv = text;
+      } else if (arg == "--traffic-dir") {
+        line.trafficDir = text;
       } else if (arg == "--annotated-video") {
         line.annotatedVideo = text;
       } else if (arg == "--record") {
@@ -185,6 +188,9 @@ void applyCommandLine(const CommandLine& line, config::AppConfig& config) {
   }
   if (line.detectionsCsv) {
     config.app.detectionsCsv = absolute(*line.detectionsCsv);
+  }
+  if (line.trafficDir) {
+    config.app.trafficDir = absolute(*line.trafficDir);
   }
   if (line.annotatedVideo) {
     config.app.annotatedVideo = absolute(*line.annotatedVideo);

@@ -39,6 +39,7 @@ struct CommandLine {
   std::int64_t maxFrames = 0;
   std::optional<std::string> trajectoryCsv;
   std::optional<std::string> detectionsCsv;
+  std::optional<std::string> trafficDir;
   std::optional<std::string> annotatedVideo;
   std::optional<std::string> recordDir;
   std::optional<int> threads;

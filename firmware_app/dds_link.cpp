@@ -36,6 +36,17 @@ bool DdsWriters::open(const config::DdsConfig& config, std::string* why) {
                     check(rosOccupancy_.open(participant_, config), "ROS 2 occupancy"));
 }
 
+bool DdsWriters::openTraffic(const config::DdsConfig& config,
+                             const platform::dds::TrafficFeatureIdViews& ids,
+                             const geodesy::LocalFrame& world, std::string* why) {
+  std::string problem;
+  const platform::dds::DdsResult result = traffic_.open(participant_, config, ids, world, &problem);
+  if (!result.ok() && why) {
+    *why = "dds traffic topics: " + (problem.empty() ? platform::dds::describe(result) : problem);
+  }
+  return result.ok();
+}
+
 platform::dds::PublishResult DdsWriters::publish(const messages::VehicleState& state) {
   platform::dds::PublishResult result;
   if (native_) {

@@ -23,6 +23,7 @@
 #include "platform/dds/perception_publisher.hpp"
 #include "platform/dds/ros2_publisher.hpp"
 #include "platform/dds/telemetry_subscriber.hpp"
+#include "platform/dds/traffic_publisher.hpp"
 
 namespace vp::app {
 
@@ -37,6 +38,20 @@ class DdsWriters {
   platform::dds::FrameSummary endFrame(std::int64_t time_ns);
   platform::dds::DdsResult writeStatus(const messages::DroneStatus& status);
   platform::dds::DdsResult writeOccupancy(const messages::OccupancyGrid& grid);
+  // The traffic topics (native and/or ROS 2 as the other outputs), after open(), when the app
+  // runs the traffic analysis; start-up.
+  bool openTraffic(const config::DdsConfig& config, const platform::dds::TrafficFeatureIdViews& ids,
+                   const geodesy::LocalFrame& world, std::string* why);
+  bool trafficOpen() const { return traffic_.isOpen(); }
+  platform::dds::DdsResult writeTrafficStatistics(const traffic::TrafficStatistics& statistics,
+                                                  std::int64_t timeUtc_ns) {
+    return traffic_.writeStatistics(statistics, timeUtc_ns);
+  }
+  platform::dds::DdsResult writeTrafficEvent(const traffic::TrafficEvent& event,
+                                             std::int64_t timeUtc_ns) {
+    return traffic_.writeEvent(event, timeUtc_ns);
+  }
+  const platform::dds::TrafficPublisher& traffic() const { return traffic_; }
 
   const platform::dds::VehicleStatePublisher& states() const { return states_; }  // native
   const platform::dds::Ros2StatePublisher& rosStates() const { return rosStates_; }
@@ -53,6 +68,7 @@ class DdsWriters {
   platform::dds::Ros2StatePublisher rosStates_;
   platform::dds::Ros2DroneStatusWriter rosStatus_;
   platform::dds::Ros2OccupancyWriter rosOccupancy_;
+  platform::dds::TrafficPublisher traffic_;
 };
 
 class DdsPoseInput final : public PoseInput {

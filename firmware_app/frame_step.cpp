@@ -49,11 +49,111 @@ bool FrameStep::init(const FrameStepWiring& wiring, std::unique_ptr<FramePercept
   }
   states_.resize(static_cast<std::size_t>(tracker.maxTracks));
   published_.resize(static_cast<std::size_t>(tracker.maxTracks));
+  if (wiring_.traffic != nullptr && wiring_.site != nullptr) {
+    if (!traffic_.init(*wiring_.site, *wiring_.traffic, &problem)) {
+      if (why) {
+        *why = "traffic: " + problem;
+      }
+      return false;
+    }
+    if (traffic_.active()) {
+      for (const site::Feature* gate : traffic_.gates()) {
+        trafficIds_.gates.push_back(gate->id);
+      }
+      for (const site::Feature* zone : traffic_.zones()) {
+        trafficIds_.zones.push_back(zone->id);
+      }
+      for (const site::Feature* lane : traffic_.lanes()) {
+        trafficIds_.lanes.push_back(lane->id);
+      }
+      wiring_.counters->traffic = true;
+      logLine("traffic: analysing %zu gates, %zu zones, %zu lanes; period %.0f s",
+              trafficIds_.gates.size(), trafficIds_.zones.size(), trafficIds_.lanes.size(),
+              wiring_.traffic->period_s);
+    }
+  }
   return true;
 }
 
 bool FrameStep::openOutputs(const OutputSpec& spec, std::string* why) {
   return outputs_.open(spec, why);
+}
+
+bool FrameStep::openTraffic(const std::string& dir, const config::DdsConfig& dds,
+                            std::string* why) {
+  if (!traffic_.active()) {
+    return true;
+  }
+  if (!dir.empty()) {
+    std::string problem;
+    if (!outputs_.openTraffic(dir, trafficIds_, *wiring_.world, &problem)) {
+      if (why) {
+        *why = "app.traffic_dir: " + problem;
+      }
+      return false;
+    }
+  }
+  if (wiring_.dds != nullptr &&
+      !wiring_.dds->openTraffic(dds,
+                                platform::dds::TrafficFeatureIdViews{
+                                    trafficIds_.gates, trafficIds_.zones, trafficIds_.lanes},
+                                *wiring_.world, why)) {
+    return false;
+  }
+  return true;
+}
+
+void FrameStep::stepTraffic(std::int64_t timestamp_ns, std::size_t published) {
+  if (!traffic_.active()) {
+    return;
+  }
+  LoopCounters& counters = *wiring_.counters;
+  if (!traffic_.step(timestamp_ns,
+                     std::span<const tracking::TrackState>(published_.data(), published))) {
+    // Cannot happen behind the frame-time check above; counted all the same.
+    ++counters.trafficErrors;
+    return;
+  }
+  reportTraffic();
+}
+
+void FrameStep::reportTraffic() {
+  LoopCounters& counters = *wiring_.counters;
+  DdsWriters* dds = wiring_.dds != nullptr && wiring_.dds->trafficOpen() ? wiring_.dds : nullptr;
+  const auto ddsFailed = [&](const platform::dds::DdsResult& result, const char* what) {
+    ++counters.trafficErrors;
+    if (trafficDdsErrors_++ == 0) {
+      logLine("publishing the traffic %s failed: %s (further failures are only counted)", what,
+              platform::dds::describe(result).c_str());
+    }
+  };
+  for (const traffic::TrafficEvent& event : traffic_.events()) {
+    ++counters.trafficEvents;
+    outputs_.writeTrafficEvent(event);
+    if (dds != nullptr) {
+      const platform::dds::DdsResult result =
+          dds->writeTrafficEvent(event, event.time_ns + toUtcNs_);
+      if (!result.ok()) {
+        ddsFailed(result, "event");
+      }
+    }
+  }
+  const traffic::TrafficStatistics* period = traffic_.completedPeriod();
+  if (period != nullptr) {
+    ++counters.trafficPeriods;
+    outputs_.writeTrafficStatistics(*period);
+    if (dds != nullptr) {
+      const platform::dds::DdsResult result =
+          dds->writeTrafficStatistics(*period, period->end_ns + toUtcNs_);
+      if (!result.ok()) {
+        ddsFailed(result, "statistics");
+      }
+    }
+  }
+  const traffic::TrafficAnalyzerStats& stats = traffic_.stats();
+  counters.gateCrossings = traffic_.gateCounter().stats().crossings;
+  counters.trafficErrors =
+      trafficDdsErrors_ + outputs_.trafficErrors() + stats.stepsRefused + stats.eventsDropped;
 }
 
 FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
@@ -131,6 +231,7 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
   const std::int64_t publishStart_ns = clock.now_ns();
   stats.record(Stage::Track, publishStart_ns - trackStart_ns);
   const std::span<const messages::VehicleState> states = publish(t, frame.frameId);
+  stepTraffic(t, states.size());
   const std::int64_t published_ns = clock.now_ns();
   stats.record(Stage::Publish, published_ns - publishStart_ns);
   stats.record(Stage::EndToEnd, published_ns - capture_ns);
@@ -252,6 +353,14 @@ std::span<const messages::VehicleState> FrameStep::publish(std::int64_t timestam
 
 void FrameStep::finish() {
   LoopCounters& counters = *wiring_.counters;
+  if (traffic_.active() && haveUtcOffset_) {
+    // The last period, closed at the last frame's time (completedPeriod() then), and the
+    // events of the tracks it ends (turning movements, dwell).
+    traffic_.finish(lastTimestampNs_);
+    reportTraffic();
+    outputs_.endFrame(-1);
+    counters.outputErrors = outputs_.errors();
+  }
   if (DdsWriters* dds = wiring_.dds) {
     // A frame without tracks: endFrame() disposes every published instance.
     const platform::dds::FrameSummary summary = dds->endFrame(realtimeNow_ns());

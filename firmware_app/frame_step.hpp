@@ -1,5 +1,7 @@
 // firmware_app/frame_step: the work of one frame on the processing thread: pose -> perception
-// -> tracker -> outputs (DDS vehicle states, trajectory and detections rows, annotated frame).
+// -> tracker -> outputs (DDS vehicle states, trajectory and detections rows, annotated frame)
+// -> traffic analysis of the published tracks (events and period statistics to the traffic
+// files and topics).
 //
 // Contract: start-up runs in the order its errors are reported: initPoseBuffer() ("pose:
 // ..."), init() (takes the perception stage and the pose input over: FrameStep owns them, the
@@ -11,7 +13,13 @@
 // reported as not processed, the caller gives the frame back to the pool either way. A
 // tracker error or a failed write is logged once where it happens, counted, and the frame
 // goes on. The FrameOutcome stays valid until the next process(). finish() (shutdown)
-// disposes every published DDS instance and closes the files.
+// closes the traffic analysis' last period (written and published), disposes every published
+// DDS instance and closes the files.
+// Traffic: with wiring.traffic enabled and a site with gates, zones or lanes, init() starts a
+// traffic::TrafficAnalyzer on the site ("traffic: ..." on a bad option or feature) and
+// openTraffic() opens its files and topics; process() steps it with the frame's published
+// tracks after the tracker, and its events and completed periods go to the files and the
+// topics in the same frame (the files commit with the frame's other rows).
 //
 // Time: the first frame fixes the UTC offset of its source (camera: CLOCK_REALTIME -
 // CLOCK_MONOTONIC; replay: the wall clock at that frame minus its recorded time).
@@ -38,6 +46,7 @@
 #include "telemetry/pose_buffer.hpp"
 #include "terrain/terrain_model.hpp"
 #include "tracking/track_manager.hpp"
+#include "traffic/traffic_analyzer.hpp"
 
 namespace vp::app {
 
@@ -68,7 +77,8 @@ struct FrameStepWiring {
   const geodesy::LocalFrame* world = nullptr;
   const terrain::TerrainModel* terrain = nullptr;
   const shape::ActiveShapeModel* shapeModel = nullptr;
-  const site::Site* site = nullptr;  // the site map (null: no scene prior)
+  const site::Site* site = nullptr;                          // the site map (null: no scene prior)
+  const traffic::TrafficAnalyzerOptions* traffic = nullptr;  // null: no traffic analysis
   site::OffRoadPolicy offRoad = site::OffRoadPolicy::Drop;
   std::uint32_t droneId = 0;
   bool sourceOnMonotonicClock = false;  // camera stamps: CLOCK_MONOTONIC
@@ -83,6 +93,11 @@ class FrameStep {
             std::unique_ptr<PoseInput> poseInput, const tracking::TrackerConfig& tracker,
             std::string* why);
   bool openOutputs(const OutputSpec& spec, std::string* why);
+  // After openOutputs() and the DDS writers' open(): the traffic files in dir (empty: none)
+  // and the traffic topics (with DDS). Does nothing when the analysis is not active.
+  bool openTraffic(const std::string& dir, const config::DdsConfig& dds, std::string* why);
+  bool trafficActive() const { return traffic_.active(); }
+  const traffic::TrafficAnalyzer& trafficAnalyzer() const { return traffic_; }
 
   FrameOutcome process(const Frame& frame, std::int64_t capture_ns);
   void finish();
@@ -98,6 +113,8 @@ class FrameStep {
                       const telemetry::PoseEstimate& pose);
   std::span<const messages::VehicleState> publish(std::int64_t timestamp_ns, std::int64_t frameId);
   void logWorkingScale(std::int64_t frameId);
+  void stepTraffic(std::int64_t timestamp_ns, std::size_t published);
+  void reportTraffic();  // the analyzer's events and completed period to files and topics
 
   FrameStepWiring wiring_{};
   std::unique_ptr<FramePerception> perception_;
@@ -105,6 +122,9 @@ class FrameStep {
   std::unique_ptr<PoseInput> poseInput_;
   tracking::TrackManager tracker_;
   LoopOutputs outputs_;
+  traffic::TrafficAnalyzer traffic_;
+  output_files::TrafficFeatureIds trafficIds_;  // the analysis' gates, zones, lanes (site order)
+  std::uint64_t trafficDdsErrors_ = 0;
 
   // Per-frame arrays, sized at init.
   std::vector<tracking::WorldDetection> worldDetections_;

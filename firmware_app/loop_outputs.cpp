@@ -127,6 +127,42 @@ bool LoopOutputs::open(const OutputSpec& spec, std::string* why) {
   return true;
 }
 
+bool LoopOutputs::openTraffic(const std::string& dir, const output_files::TrafficFeatureIds& ids,
+                              const geodesy::LocalFrame& world, std::string* why) {
+  trafficErrors_ = {csv::shortened(dir) + "/traffic_*.csv", 0};
+  return traffic_.open(dir, ids, world, why);
+}
+
+void LoopOutputs::trafficFailed(output_files::TrafficWriteStatus status, const char* at,
+                                std::int64_t value) {
+  ++errors_;
+  if (trafficErrors_.count++ == 0) {
+    logLine("%s: rows not written (%s %lld): %s; further errors of these files are only counted",
+            trafficErrors_.logPath.c_str(), at, static_cast<long long>(value),
+            output_files::toString(status));
+  }
+}
+
+void LoopOutputs::writeTrafficEvent(const traffic::TrafficEvent& event) {
+  if (!traffic_.isOpen()) {
+    return;
+  }
+  const output_files::TrafficWriteStatus status = traffic_.writeEvent(event);
+  if (status != output_files::TrafficWriteStatus::Ok) {
+    trafficFailed(status, "event time_ns", event.time_ns);
+  }
+}
+
+void LoopOutputs::writeTrafficStatistics(const traffic::TrafficStatistics& statistics) {
+  if (!traffic_.isOpen()) {
+    return;
+  }
+  const output_files::TrafficWriteStatus status = traffic_.writeStatistics(statistics);
+  if (status != output_files::TrafficWriteStatus::Ok) {
+    trafficFailed(status, "period", static_cast<std::int64_t>(statistics.sequence));
+  }
+}
+
 void LoopOutputs::writeTracks(std::int64_t frameId, std::span<const tracking::TrackState> tracks,
                               std::span<const messages::VehicleState> states) {
   if (!trajectory_.isOpen()) {
@@ -185,6 +221,12 @@ void LoopOutputs::endFrame(std::int64_t frameId) {
   if (detections_.isOpen() && !detections_.commit()) {
     writeFailed(detectionsErrors_, frameId, detections_.lastErrno());
   }
+  if (traffic_.isOpen()) {
+    const output_files::TrafficWriteStatus status = traffic_.commit();
+    if (status != output_files::TrafficWriteStatus::Ok) {
+      trafficFailed(status, "frame", frameId);
+    }
+  }
 }
 
 void LoopOutputs::writeVideo(const cv::Mat& correctedFrame,
@@ -209,6 +251,9 @@ bool LoopOutputs::close(std::string* why) {
     ok = false;
   }
   if (detections_.isOpen() && !detections_.close(&problem) && detectionsErrors_.count == 0) {
+    ok = false;
+  }
+  if (traffic_.isOpen() && !traffic_.close(&problem) && trafficErrors_.count == 0) {
     ok = false;
   }
   if (video_.isOpened()) {

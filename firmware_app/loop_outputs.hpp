@@ -28,6 +28,7 @@
 #include "config/config.hpp"
 #include "messages/messages.hpp"
 #include "output_files/detections_file.hpp"
+#include "output_files/traffic_files.hpp"
 #include "output_files/trajectory_file.hpp"
 #include "perception/detection_lifter.hpp"
 
@@ -57,6 +58,13 @@ class LoopOutputs {
   LoopOutputs& operator=(const LoopOutputs&) = delete;
 
   bool open(const OutputSpec& spec, std::string* why);
+  // The traffic files (app.traffic_dir, output_files/traffic_files) of the analysis' features,
+  // after open(); start-up. Their rows go out with the frame's (endFrame()); a refused row or a
+  // failed write is counted and logged once like the other files'.
+  bool openTraffic(const std::string& dir, const output_files::TrafficFeatureIds& ids,
+                   const geodesy::LocalFrame& world, std::string* why);
+  void writeTrafficEvent(const traffic::TrafficEvent& event);
+  void writeTrafficStatistics(const traffic::TrafficStatistics& statistics);
   // Published tracks of one frame; states[i] (its WGS84 position) is tracks[i]'s message.
   void writeTracks(std::int64_t frameId, std::span<const tracking::TrackState> tracks,
                    std::span<const messages::VehicleState> states);
@@ -72,6 +80,7 @@ class LoopOutputs {
 
   std::uint64_t errors() const { return errors_; }
   std::uint64_t trajectoryRows() const { return trajectoryRows_; }
+  std::uint64_t trafficErrors() const { return trafficErrors_.count; }
 
  private:
   // One output file's error state: the first error is logged, every one counted.
@@ -81,6 +90,7 @@ class LoopOutputs {
   };
   void rowRefused(FileErrors& file, std::int64_t frameId);
   void writeFailed(FileErrors& file, std::int64_t frameId, int error);
+  void trafficFailed(output_files::TrafficWriteStatus status, const char* at, std::int64_t value);
 
   OutputSpec spec_{};
   output_files::TrajectoryFileWriter trajectory_;
@@ -91,6 +101,8 @@ class LoopOutputs {
   cv::Mat annotated_;
   FileErrors trajectoryErrors_;
   FileErrors detectionsErrors_;
+  output_files::TrafficFilesWriter traffic_;
+  FileErrors trafficErrors_;
   std::uint64_t errors_ = 0;
 };
 

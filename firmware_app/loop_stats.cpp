@@ -77,6 +77,12 @@ int formatStatsLine(std::span<char> out, const LoopCounters& c, const LoopStats&
       static_cast<unsigned long long>(c.statesPublished),
       static_cast<unsigned long long>(c.tracksDisposed),
       static_cast<unsigned long long>(c.publishErrors));
+  if (c.traffic) {
+    append(out, &length, " | crossings %llu traffic_events %llu periods %llu",
+           static_cast<unsigned long long>(c.gateCrossings),
+           static_cast<unsigned long long>(c.trafficEvents),
+           static_cast<unsigned long long>(c.trafficPeriods));
+  }
   if (c.recording) {
     append(out, &length, " | recorded %llu record_dropped %llu",
            static_cast<unsigned long long>(c.recordFrames),
@@ -123,6 +129,14 @@ int formatSummaryLine(std::span<char> out, const LoopCounters& c, const LoopStat
   append(out, &length, " telemetry_samples=%llu telemetry_rejected=%llu",
          static_cast<unsigned long long>(c.telemetrySamples),
          static_cast<unsigned long long>(c.telemetryRejected));
+  if (c.traffic) {
+    append(out, &length,
+           " gate_crossings=%llu traffic_events=%llu traffic_periods=%llu traffic_errors=%llu",
+           static_cast<unsigned long long>(c.gateCrossings),
+           static_cast<unsigned long long>(c.trafficEvents),
+           static_cast<unsigned long long>(c.trafficPeriods),
+           static_cast<unsigned long long>(c.trafficErrors));
+  }
   if (c.recording) {
     append(out, &length,
            " record_frames=%llu record_dropped=%llu record_skipped=%llu record_removed=%llu "

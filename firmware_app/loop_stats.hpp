@@ -54,6 +54,12 @@ struct LoopCounters {
   std::uint64_t tracksDisposed = 0;
   std::uint64_t publishErrors = 0;
   std::uint64_t outputErrors = 0;  // CSV / video write failures
+  // The traffic analysis (traffic: with a site that has gates, zones or lanes):
+  bool traffic = false;
+  std::uint64_t gateCrossings = 0;
+  std::uint64_t trafficEvents = 0;   // every kind, crossings included
+  std::uint64_t trafficPeriods = 0;  // statistics periods closed (written and published)
+  std::uint64_t trafficErrors = 0;   // steps refused, events dropped, refused or failed writes
   // The recording (app.record, recorder.hpp); at the end of a run that records:
   // framesIn == recordFrames + recordDropped + recordSkipped.
   bool recording = false;

@@ -41,6 +41,12 @@ void applyProfile(const config::QosProfile& profile, Qos& qos) {
                                      ? DDS_DURABILITY_TRANSIENT_LOCAL
                                      : DDS_DURABILITY_VOLATILE);
   dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, profile.historyDepth);
+  if (profile.durability == config::Durability::TransientLocal) {
+    // What a late reader gets is the durability service's history (Cyclone's default: the
+    // last sample per instance); keep as many as the history depth says.
+    dds_qset_durability_service(qos.get(), 0, DDS_HISTORY_KEEP_LAST, profile.historyDepth,
+                                DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+  }
   dds_qset_deadline(qos.get(), toDuration(profile.deadline_s));
   dds_qset_lifespan(qos.get(), toDuration(profile.lifespan_s));
   dds_qset_liveliness(qos.get(), DDS_LIVELINESS_AUTOMATIC, toDuration(profile.livelinessLease_s));

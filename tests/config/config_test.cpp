@@ -81,6 +81,22 @@ dds:
       deadline_s: 0.0
       lifespan_s: 2.0
       liveliness_lease_s: 0.0
+    traffic_statistics:
+      reliability: best_effort
+      max_blocking_s: 0.05
+      durability: volatile
+      history_depth: 7
+      deadline_s: 120.0
+      lifespan_s: 0.0
+      liveliness_lease_s: 7.0
+    traffic_events:
+      reliability: best_effort
+      max_blocking_s: 0.06
+      durability: volatile
+      history_depth: 64
+      deadline_s: 2.0
+      lifespan_s: 30.0
+      liveliness_lease_s: 8.0
   occupancy_grid:
     origin_east_m: -40.0
     origin_north_m: -30.0
@@ -214,6 +230,17 @@ georef:
 site:
   file: maps/site.geojson
   off_road: flag
+traffic:
+  period_s: 30.0
+  stop_speed_mps: 0.5
+  lane_heading_tolerance_deg: 30.0
+  wrong_way_angle_deg: 150.0
+  wrong_way_speed_mps: 3.0
+  wrong_way_s: 2.0
+  box_junction_stop_s: 4.0
+  max_tracks: 512
+  max_events_per_step: 128
+  max_lane_samples: 300
 app:
   queue_depth: 2
   frame_pool_size: 6
@@ -224,6 +251,7 @@ app:
   stats_period_s: 10.0
   trajectory_csv: out/tracks.csv
   detections_csv: out/detections.csv
+  traffic_dir: out/traffic
   annotated_video: out/annotated.avi
   annotated_video_fps: 5.0
   record:
@@ -330,7 +358,9 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
   const std::pair<const QosProfile*, const QosProfile*> profiles[] = {
       {&dds.vehicleState, &defaults.vehicleState},
       {&dds.droneStatus, &defaults.droneStatus},
-      {&dds.occupancy, &defaults.occupancy}};
+      {&dds.occupancy, &defaults.occupancy},
+      {&dds.trafficStatistics, &defaults.trafficStatistics},
+      {&dds.trafficEvents, &defaults.trafficEvents}};
   for (const auto& [got, want] : profiles) {
     EXPECT_EQ(got->reliability, want->reliability);
     EXPECT_EQ(got->maxBlocking_s, want->maxBlocking_s);
@@ -619,6 +649,43 @@ const MalformedCase kMalformedCases[] = {
      "expected a number, got 'two'"},
     {"liveliness_lease_s: 0.0", "liveliness_lease_s: -1", "dds.qos.occupancy.liveliness_lease_s",
      "must be in [0, 3600], got -1"},
+    {"    traffic_statistics:\n", "    traffic_statistics: 1\n    x:\n",
+     "dds.qos.traffic_statistics", "expected a map, got '1'"},
+    {"reliability: best_effort\n      max_blocking_s: 0.05",
+     "reliability: sometimes\n      max_blocking_s: 0.05", "dds.qos.traffic_statistics.reliability",
+     "unknown value 'sometimes'"},
+    {"max_blocking_s: 0.05", "max_blocking_s: 12", "dds.qos.traffic_statistics.max_blocking_s",
+     "must be in [0, 10], got 12"},
+    {"durability: volatile\n      history_depth: 7",
+     "durability: persistent\n      history_depth: 7", "dds.qos.traffic_statistics.durability",
+     "unknown value 'persistent'"},
+    {"history_depth: 7", "history_depth: 1001", "dds.qos.traffic_statistics.history_depth",
+     "must be in [1, 1000], got 1001"},
+    {"deadline_s: 120.0", "deadline_s: -2", "dds.qos.traffic_statistics.deadline_s",
+     "must be in [0, 3600], got -2"},
+    {"lifespan_s: 0.0\n      liveliness_lease_s: 7.0",
+     "lifespan_s: x\n      liveliness_lease_s: 7.0", "dds.qos.traffic_statistics.lifespan_s",
+     "expected a number, got 'x'"},
+    {"liveliness_lease_s: 7.0", "liveliness_lease_s: 4000",
+     "dds.qos.traffic_statistics.liveliness_lease_s", "must be in [0, 3600], got 4000"},
+    {"    traffic_events:\n", "    traffic_events: [2]\n    x:\n", "dds.qos.traffic_events",
+     "expected a map, got a sequence"},
+    {"reliability: best_effort\n      max_blocking_s: 0.06",
+     "reliability: often\n      max_blocking_s: 0.06", "dds.qos.traffic_events.reliability",
+     "unknown value 'often'"},
+    {"max_blocking_s: 0.06", "max_blocking_s: -1", "dds.qos.traffic_events.max_blocking_s",
+     "must be in [0, 10], got -1"},
+    {"durability: volatile\n      history_depth: 64",
+     "durability: durable\n      history_depth: 64", "dds.qos.traffic_events.durability",
+     "unknown value 'durable'"},
+    {"history_depth: 64", "history_depth: 0", "dds.qos.traffic_events.history_depth",
+     "must be in [1, 1000], got 0"},
+    {"deadline_s: 2.0", "deadline_s: 3601", "dds.qos.traffic_events.deadline_s",
+     "must be in [0, 3600], got 3601"},
+    {"lifespan_s: 30.0", "lifespan_s: -30", "dds.qos.traffic_events.lifespan_s",
+     "must be in [0, 3600], got -30"},
+    {"liveliness_lease_s: 8.0", "liveliness_lease_s: 9999",
+     "dds.qos.traffic_events.liveliness_lease_s", "must be in [0, 3600], got 9999"},
     {"  occupancy_grid:\n", "  occupancy_grid: none\n  x:\n", "dds.occupancy_grid",
      "expected a map, got 'none'"},
     {"origin_east_m: -40.0", "origin_east_m: 1e6", "dds.occupancy_grid.origin_east_m",
@@ -860,6 +927,27 @@ const MalformedCase kMalformedCases[] = {
     {"file: maps/site.geojson", "file: ''", "site.file", "must not be empty"},
     {"off_road: flag", "off_road: ignore", "site.off_road",
      "unknown value 'ignore' (expected drop, flag, keep)"},
+    // traffic
+    {"traffic:\n  period_s", "traffic: 1\nx:\n  period_s", "traffic", "expected a map, got '1'"},
+    {"traffic:\n  period_s", "traffic:\n  enabled: maybe\n  period_s", "traffic.enabled",
+     "expected true or false"},
+    {"period_s: 30.0", "period_s: 0.5", "traffic.period_s", "must be in [1, 86400], got 0.5"},
+    {"stop_speed_mps: 0.5", "stop_speed_mps: 11", "traffic.stop_speed_mps",
+     "must be in [0, 10], got 11"},
+    {"lane_heading_tolerance_deg: 30.0", "lane_heading_tolerance_deg: 0",
+     "traffic.lane_heading_tolerance_deg", "must be in (0, 90], got 0"},
+    {"wrong_way_angle_deg: 150.0", "wrong_way_angle_deg: 180", "traffic.wrong_way_angle_deg",
+     "must be in [90, 179], got 180"},
+    {"wrong_way_speed_mps: 3.0", "wrong_way_speed_mps: -1", "traffic.wrong_way_speed_mps",
+     "must be in [0, 50], got -1"},
+    {"wrong_way_s: 2.0", "wrong_way_s: 61", "traffic.wrong_way_s", "must be in [0, 60], got 61"},
+    {"box_junction_stop_s: 4.0", "box_junction_stop_s: 601", "traffic.box_junction_stop_s",
+     "must be in [0, 600], got 601"},
+    {"max_tracks: 512", "max_tracks: 0", "traffic.max_tracks", "must be in [1, 65536], got 0"},
+    {"max_events_per_step: 128", "max_events_per_step: 70000", "traffic.max_events_per_step",
+     "must be in [1, 65536], got 70000"},
+    {"max_lane_samples: 300", "max_lane_samples: 1.5", "traffic.max_lane_samples",
+     "expected an integer"},
     // app
     {"app:\n  queue_depth", "app: 1\nx:\n  queue_depth", "app", "expected a map, got '1'"},
     {"queue_depth: 2", "queue_depth: 9", "app.queue_depth", "must be in [1, 8], got 9"},
@@ -883,6 +971,7 @@ const MalformedCase kMalformedCases[] = {
      "must not be empty"},
     {"detections_csv: out/detections.csv", "detections_csv: [a]", "app.detections_csv",
      "expected a string, got a sequence of 1 element(s)"},
+    {"traffic_dir: out/traffic", "traffic_dir: ''", "app.traffic_dir", "must not be empty"},
     {"annotated_video: out/annotated.avi", "annotated_video: {a: b}", "app.annotated_video",
      "expected a string, got a map"},
     {"annotated_video_fps: 5.0", "annotated_video_fps: 0", "app.annotated_video_fps",
@@ -1080,6 +1169,18 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "site",
                                                "site.file",
                                                "site.off_road",
+                                               "traffic",
+                                               "traffic.enabled",
+                                               "traffic.period_s",
+                                               "traffic.stop_speed_mps",
+                                               "traffic.lane_heading_tolerance_deg",
+                                               "traffic.wrong_way_angle_deg",
+                                               "traffic.wrong_way_speed_mps",
+                                               "traffic.wrong_way_s",
+                                               "traffic.box_junction_stop_s",
+                                               "traffic.max_tracks",
+                                               "traffic.max_events_per_step",
+                                               "traffic.max_lane_samples",
                                                "app",
                                                "app.queue_depth",
                                                "app.frame_pool_size",
@@ -1090,6 +1191,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "app.stats_period_s",
                                                "app.trajectory_csv",
                                                "app.detections_csv",
+                                               "app.traffic_dir",
                                                "app.annotated_video",
                                                "app.annotated_video_fps",
                                                "app.record",
@@ -1102,7 +1204,8 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "app.record.on_full"};
   // Every key of the three QoS profiles.
   std::vector<std::string> keys = schemaKeys;
-  for (const char* topic : {"vehicle_state", "drone_status", "occupancy"}) {
+  for (const char* topic :
+       {"vehicle_state", "drone_status", "occupancy", "traffic_statistics", "traffic_events"}) {
     const std::string profile = std::string("dds.qos.") + topic;
     keys.push_back(profile);
     for (const char* key : {"reliability", "max_blocking_s", "durability", "history_depth",
@@ -1282,6 +1385,12 @@ TEST(ConfigDds, AbsentSectionGivesTheDocumentedDefaults) {
   EXPECT_EQ(dds.occupancy.reliability, Reliability::BestEffort);
   EXPECT_DOUBLE_EQ(dds.occupancy.deadline_s, 0.0);
   EXPECT_DOUBLE_EQ(dds.occupancy.lifespan_s, 1.0);
+  EXPECT_EQ(dds.trafficStatistics.reliability, Reliability::Reliable);
+  EXPECT_EQ(dds.trafficStatistics.durability, Durability::TransientLocal);
+  EXPECT_EQ(dds.trafficStatistics.historyDepth, 4);
+  EXPECT_EQ(dds.trafficEvents.reliability, Reliability::Reliable);
+  EXPECT_EQ(dds.trafficEvents.durability, Durability::Volatile);
+  EXPECT_EQ(dds.trafficEvents.historyDepth, 256);
   EXPECT_DOUBLE_EQ(dds.grid.originEast_m, -50.0);
   EXPECT_DOUBLE_EQ(dds.grid.originNorth_m, -50.0);
   EXPECT_DOUBLE_EQ(dds.grid.resolution_m, 0.5);
@@ -1336,6 +1445,19 @@ TEST(ConfigDds, FullSectionReadsEveryKey) {
   EXPECT_DOUBLE_EQ(oc.maxBlocking_s, 0.04);
   EXPECT_EQ(oc.historyDepth, 4);
   EXPECT_DOUBLE_EQ(oc.lifespan_s, 2.0);
+  const QosProfile& ts = dds.trafficStatistics;
+  EXPECT_EQ(ts.reliability, Reliability::BestEffort);
+  EXPECT_DOUBLE_EQ(ts.maxBlocking_s, 0.05);
+  EXPECT_EQ(ts.durability, Durability::Volatile);
+  EXPECT_EQ(ts.historyDepth, 7);
+  EXPECT_DOUBLE_EQ(ts.deadline_s, 120.0);
+  EXPECT_DOUBLE_EQ(ts.livelinessLease_s, 7.0);
+  const QosProfile& te = dds.trafficEvents;
+  EXPECT_DOUBLE_EQ(te.maxBlocking_s, 0.06);
+  EXPECT_EQ(te.historyDepth, 64);
+  EXPECT_DOUBLE_EQ(te.deadline_s, 2.0);
+  EXPECT_DOUBLE_EQ(te.lifespan_s, 30.0);
+  EXPECT_DOUBLE_EQ(te.livelinessLease_s, 8.0);
   EXPECT_DOUBLE_EQ(dds.grid.originEast_m, -40.0);
   EXPECT_DOUBLE_EQ(dds.grid.originNorth_m, -30.0);
   EXPECT_DOUBLE_EQ(dds.grid.resolution_m, 0.25);
@@ -1577,6 +1699,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(app.statsPeriod_s, 10.0);
   EXPECT_EQ(app.trajectoryCsv, "/data/site/out/tracks.csv");
   EXPECT_EQ(app.detectionsCsv, "/data/site/out/detections.csv");
+  EXPECT_EQ(app.trafficDir, "/data/site/out/traffic");
   EXPECT_EQ(app.annotatedVideo, "/data/site/out/annotated.avi");
   EXPECT_DOUBLE_EQ(app.annotatedVideoFps, 5.0);
   EXPECT_EQ(app.record.dir, "/data/site/out/flight1");
@@ -1625,6 +1748,7 @@ TEST(ConfigLoop, AbsentSectionsGiveTheDocumentedDefaults) {
   EXPECT_DOUBLE_EQ(config.app.statsPeriod_s, 5.0);
   EXPECT_TRUE(config.app.trajectoryCsv.empty());
   EXPECT_TRUE(config.app.detectionsCsv.empty());
+  EXPECT_TRUE(config.app.trafficDir.empty());
   EXPECT_TRUE(config.app.annotatedVideo.empty());
 }
 
@@ -1651,6 +1775,33 @@ TEST(ConfigLoop, TheSiteFileIsRelativeToTheConfigurationAndOffRoadIsRead) {
   EXPECT_TRUE(none.site.file.empty());
   EXPECT_EQ(parse(edited("off_road: flag", "off_road: keep")).site.offRoad,
             site::OffRoadPolicy::Keep);
+}
+
+TEST(ConfigLoop, TheTrafficSectionFillsTheAnalyzersOptions) {
+  const AppConfig full = parse(kFullConfig);
+  EXPECT_TRUE(full.traffic.enabled);  // absent: the default
+  EXPECT_FALSE(parse(edited("traffic:\n  period_s", "traffic:\n  enabled: false\n  period_s"))
+                   .traffic.enabled);
+  EXPECT_EQ(full.traffic.period_s, 30.0);
+  EXPECT_EQ(full.traffic.stopSpeed_mps, 0.5);
+  EXPECT_EQ(full.traffic.laneHeadingTolerance_deg, 30.0);
+  EXPECT_EQ(full.traffic.wrongWayAngle_deg, 150.0);
+  EXPECT_EQ(full.traffic.wrongWaySpeed_mps, 3.0);
+  EXPECT_EQ(full.traffic.wrongWay_s, 2.0);
+  EXPECT_EQ(full.traffic.boxJunctionStop_s, 4.0);
+  EXPECT_EQ(full.traffic.maxTracks, 512U);
+  EXPECT_EQ(full.traffic.maxEventsPerStep, 128U);
+  EXPECT_EQ(full.traffic.maxLaneSamples, 300U);
+  // What the file sets, the analyzer accepts.
+  site::Site site("s");
+  site::Feature zone;
+  zone.kind = site::FeatureKind::Zone;
+  zone.id = "z";
+  const std::vector<Eigen::Vector2d> ring = {{0, 0}, {1, 0}, {1, 1}};
+  site.append(zone, ring);
+  traffic::TrafficAnalyzer analyzer;
+  std::string why;
+  EXPECT_TRUE(analyzer.init(site, full.traffic, &why)) << why;
 }
 
 TEST(ConfigLoop, GroundControlPointsNeedTelemetryOffAndResolveTheirPath) {

@@ -199,6 +199,22 @@ TEST(DefaultYaml, SiteIsTheSiteMapsDefaults) {
   EXPECT_EQ(file.offRoad, code.offRoad);
 }
 
+TEST(DefaultYaml, TrafficIsTheAnalyzersDefaults) {
+  const traffic::TrafficAnalyzerOptions code;
+  const traffic::TrafficAnalyzerOptions file = shippedDefaults().traffic;
+  EXPECT_EQ(file.enabled, code.enabled);
+  EXPECT_EQ(file.period_s, code.period_s);
+  EXPECT_EQ(file.stopSpeed_mps, code.stopSpeed_mps);
+  EXPECT_EQ(file.laneHeadingTolerance_deg, code.laneHeadingTolerance_deg);
+  EXPECT_EQ(file.wrongWayAngle_deg, code.wrongWayAngle_deg);
+  EXPECT_EQ(file.wrongWaySpeed_mps, code.wrongWaySpeed_mps);
+  EXPECT_EQ(file.wrongWay_s, code.wrongWay_s);
+  EXPECT_EQ(file.boxJunctionStop_s, code.boxJunctionStop_s);
+  EXPECT_EQ(file.maxTracks, code.maxTracks);
+  EXPECT_EQ(file.maxEventsPerStep, code.maxEventsPerStep);
+  EXPECT_EQ(file.maxLaneSamples, code.maxLaneSamples);
+}
+
 // Every key of the file is one the loader reads (else it would keep a default the file only
 // pretends to set).
 TEST(DefaultYaml, RecordIsTheRecordersDefaults) {

@@ -96,11 +96,15 @@ TEST(AppLoop, ZeroAllocationsWithInjectedVehiclesAndTracksAndTheFigureWithDds) {
   const std::string dir = sequence();
   ASSERT_FALSE(dir.empty());
   const std::string out = test::scratchDir("alloc_truth");
-  // DDS off: the whole loop, tracker and trajectory rows included, allocates nothing.
+  // DDS off: the whole loop, tracker and trajectory rows included, allocates nothing; so does
+  // the traffic analysis on the intersection's site (gates, lanes, zones) with its files, two
+  // periods closing inside the counted frames.
   {
     config::AppConfig config = loopConfig(dir);
     config.app.trajectoryCsv = out + "/tracks.csv";
     config.app.detectionsCsv = out + "/detections.csv";
+    config.app.trafficDir = out;
+    config.traffic.period_s = 1.0;
     test::AllocationWindow window(5, kFrames);
     App app;
     AppSeams seams;
@@ -112,6 +116,10 @@ TEST(AppLoop, ZeroAllocationsWithInjectedVehiclesAndTracksAndTheFigureWithDds) {
     const LoopCounters c = app.counters();
     EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames));
     EXPECT_GT(c.lifted, static_cast<std::uint64_t>(kFrames));  // vehicles in every frame
+    EXPECT_TRUE(c.traffic);
+    EXPECT_GE(c.trafficPeriods, 2U);
+    EXPECT_GT(c.gateCrossings, 0U);
+    EXPECT_EQ(c.trafficErrors, 0U);
     ASSERT_TRUE(window.counted());
     std::printf(
         "truth vehicles, DDS off: %llu observations, %llu lifted; processing-thread "
@@ -135,6 +143,7 @@ TEST(AppLoop, ZeroAllocationsWithInjectedVehiclesAndTracksAndTheFigureWithDds) {
     config.dds.enabled = true;
     config.dds.domainId = static_cast<std::uint32_t>(1 + getpid() % 200);
     config.dds.partition = "alloc_" + std::to_string(getpid());
+    config.traffic.period_s = 1.0;  // the traffic topics written in the counted frames too
     test::AllocationWindow window(5, kFrames);
     App app;
     AppSeams seams;

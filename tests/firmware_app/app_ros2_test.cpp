@@ -198,6 +198,9 @@ TEST(AppRos2, ReaderProcessReceivesEveryArrayAndObjectListFieldByFieldAndEveryRe
   config.dds.autoware.topic = "/perception/app_test_" + std::to_string(getpid()) + "/objects";
   config.app.statsPeriod_s = 3600.0;
   config.source.paced = true;  // 10 Hz, as live
+  // The vehicle-state family only: the traffic topics (the sequence's site has gates) are read
+  // back in tests/platform/dds/traffic_publisher_test.cpp and AppTraffic.*.
+  config.traffic.enabled = false;
 
   const std::string command =
       std::string(VP_ROS2_READER) + " --domain " + std::to_string(config.dds.domainId) +

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The evaluation scripts end to end on a tiny simulated sequence (8 frames, 648 x 512):
-# scripts/eval_detector.sh and scripts/eval_tracking.sh run the real binaries and leave
-# reports with the measures the docs quote; scripts/make_eval_data.sh knows its sets and
+# scripts/eval_detector.sh, scripts/eval_tracking.sh and scripts/eval_traffic.sh run the real
+# binaries and leave reports with the measures the docs quote; scripts/make_eval_data.sh knows its sets and
 # refuses unknown ones; bad arguments exit 2 with a message.
 #   tests/scripts/eval_scripts_test.sh BUILD_DIR
 set -euo pipefail
@@ -50,6 +50,15 @@ sums = [e["squared_error_sum"] for e in errors]
 assert sums == sorted(sums, reverse=True), sums
 assert all(e["samples"] > 0 and e["input"].endswith("intersection_7") for e in errors)
 PY
+
+# Traffic: the app's tracks and the ground truth through vp_traffic_eval, figures printed and kept.
+"$root/scripts/eval_traffic.sh" --build "$build" --details "$work/trf" "$seq" > "$work/trf.out" \
+  || fail "eval_traffic.sh failed"
+[[ -f "$work/trf/intersection_7_tracks.csv" ]] || fail "eval_traffic.sh wrote no trajectory file"
+grep -q "^intersection_7: 8 frames" "$work/trf/traffic.txt" || fail "eval_traffic.sh: no figures"
+for figure in "gate counts: truth" "turning movements: " "queue length: "; do
+  grep -q "$figure" "$work/trf.out" || fail "eval_traffic.sh printed no '$figure'"
+done
 
 # Bad arguments: exit 2 and say why.
 set +e

@@ -149,6 +149,70 @@ TEST(SiteLoader, RefusesAnUnknownPropertyOrKind) {
   EXPECT_NE(why.find("unknown kind \"roof\""), std::string::npos) << why;
 }
 
+TEST(SiteLoader, ReadsLaneWidthsAndZoneRolesWithTheirDefaults) {
+  std::vector<std::string> features = goodFeatures();
+  features[3] =
+      feature("lane", "lane-1", "LineString",
+              "[" + position(-100, -5) + ", " + position(100, -5) + "]", R"(, "width_m": 3.2)");
+  features.push_back(feature("lane", "lane-2", "LineString",
+                             "[" + position(100, 5) + ", " + position(-100, 5) + "]"));
+  features.push_back(feature("zone", "queue-1", "Polygon", rectangle(-40, -10, 0, 0),
+                             R"(, "role": "queue", "lane": "lane-1")"));
+  features.push_back(feature("zone", "box-1", "Polygon", rectangle(0, -10, 10, 10),
+                             R"(, "role": "box_junction")"));
+  features.push_back(feature("zone", "count-1", "Polygon", rectangle(10, -10, 20, 10)));
+  Site site;
+  std::string why;
+  ASSERT_TRUE(parseSite(collection(features), "site.geojson", kFrame, &site, &why)) << why;
+  const auto f = site.features();
+  ASSERT_EQ(f.size(), 9u);
+  EXPECT_DOUBLE_EQ(f[3].width_m, 3.2);
+  EXPECT_DOUBLE_EQ(f[5].width_m, kDefaultLaneWidth_m);
+  EXPECT_EQ(f[6].role, ZoneRole::Queue);
+  EXPECT_EQ(f[6].lane, "lane-1");
+  EXPECT_EQ(f[7].role, ZoneRole::BoxJunction);
+  EXPECT_TRUE(f[7].lane.empty());
+  EXPECT_EQ(f[8].role, ZoneRole::Count);
+  EXPECT_STREQ(toString(ZoneRole::BoxJunction), "box_junction");
+}
+
+TEST(SiteLoader, RefusesBadLaneWidthsRolesAndLaneReferences) {
+  const auto withFeature = [](const std::string& extraFeature) {
+    std::vector<std::string> features = goodFeatures();
+    features.push_back(extraFeature);
+    return collection(features);
+  };
+  const std::string lane = "[" + position(-100, 5) + ", " + position(100, 5) + "]";
+  std::string why =
+      refusal(withFeature(feature("lane", "lane-9", "LineString", lane, R"(, "width_m": -1)")));
+  EXPECT_NE(why.find("feature 5 (id \"lane-9\", line"), std::string::npos) << why;
+  EXPECT_NE(why.find("\"width_m\" must be in (0, 50] m, got -1"), std::string::npos) << why;
+  why =
+      refusal(withFeature(feature("lane", "lane-9", "LineString", lane, R"(, "width_m": "wide")")));
+  EXPECT_NE(why.find("\"width_m\" must be a number"), std::string::npos) << why;
+  why = refusal(
+      withFeature(feature("zone", "z-9", "Polygon", rectangle(-5, -5, 5, 5), R"(, "width_m": 3)")));
+  EXPECT_NE(why.find("(id \"z-9\""), std::string::npos) << why;
+  EXPECT_NE(why.find("\"width_m\" is for lanes only"), std::string::npos) << why;
+  why = refusal(withFeature(
+      feature("zone", "z-9", "Polygon", rectangle(-5, -5, 5, 5), R"(, "role": "parking")")));
+  EXPECT_NE(why.find("unknown role \"parking\" (expected count, queue or box_junction)"),
+            std::string::npos)
+      << why;
+  why = refusal(withFeature(feature("lane", "lane-9", "LineString", lane, R"(, "role": "queue")")));
+  EXPECT_NE(why.find("\"role\" is for zones only"), std::string::npos) << why;
+  why = refusal(withFeature(feature("zone", "z-9", "Polygon", rectangle(-5, -5, 5, 5),
+                                    R"(, "role": "queue", "lane": "lane-7")")));
+  EXPECT_NE(why.find("feature 5 (id \"z-9\", line"), std::string::npos) << why;
+  EXPECT_NE(why.find("lane \"lane-7\" does not exist"), std::string::npos) << why;
+  why = refusal(withFeature(feature("zone", "z-9", "Polygon", rectangle(-5, -5, 5, 5),
+                                    R"(, "role": "queue", "lane": "gate-1")")));
+  EXPECT_NE(why.find("lane \"gate-1\" is a gate, not a lane"), std::string::npos) << why;
+  why = refusal(withFeature(
+      feature("zone", "z-9", "Polygon", rectangle(-5, -5, 5, 5), R"(, "lane": "lane-1")")));
+  EXPECT_NE(why.find("\"lane\" is for queue zones only"), std::string::npos) << why;
+}
+
 TEST(SiteLoader, RefusesAWrongGeometryADuplicateIdAndACrossedRing) {
   std::vector<std::string> features = goodFeatures();
   features[4] = feature("gate", "gate-1", "Polygon", rectangle(0, 0, 1, 1));

@@ -8,13 +8,22 @@
 // wireframe (the mesh's edges in plan, blue). Occupied grid cells are grey, free cells
 // dark, unobserved cells black. write() returns false with a message when OpenCV cannot
 // write the file (written to a temporary name first, then renamed, so a viewer never sees a
-// half-written PNG).
+// half-written PNG). With an overlay, the site map is drawn under the vehicles (drivable
+// areas dark grey, parking dark blue, exclusions dark red, zones yellow outlines, lanes cyan
+// lines with an arrow at their end, gates magenta lines with their id and, when given, their
+// label such as the counts), the recent events as white rings, and the overlay's text lines
+// in the top-left corner.
 #pragma once
 
+#include <map>
 #include <span>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "messages/messages.hpp"
+#include "site/site.hpp"
 
 namespace vp::rsu {
 
@@ -25,7 +34,15 @@ struct BevSettings {
   int size_px = 800;
 };
 
+struct BevOverlay {
+  const site::Site* site = nullptr;              // in the drones' world ENU frame
+  std::map<std::string, std::string> gateLabel;  // gate id -> text beside it (counts)
+  std::vector<Eigen::Vector2d> eventMarks_m;     // recent events, world ENU
+  std::vector<std::string> lines;                // text panel, top left
+};
+
 bool writeBev(const BevSettings& settings, std::span<const messages::VehicleState> vehicles,
-              const messages::OccupancyGrid* grid, const std::string& path, std::string* why);
+              const messages::OccupancyGrid* grid, const std::string& path, std::string* why,
+              const BevOverlay* overlay = nullptr);
 
 }  // namespace vp::rsu

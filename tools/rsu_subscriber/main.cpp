@@ -3,7 +3,10 @@
 // every disposed track) as a CSV row or a JSON line, measures the latency from the frame
 // capture time (DDS source timestamp) to reception, and periodically draws a bird's-eye PNG.
 // It also reports the vehicle-state reader's QoS events: a track whose deadline passed without
-// a state, and a drone whose writer lost its liveliness or left (qos_events.hpp).
+// a state, and a drone whose writer lost its liveliness or left (qos_events.hpp). It receives
+// the traffic analysis' outputs too (traffic_board.hpp): each period's gate counts and each
+// event are printed on stderr, and the bird's-eye view draws the site map (--site) with the
+// gates' totals and the last events.
 #include <dds/dds.h>
 
 #include <algorithm>
@@ -25,8 +28,11 @@
 #include "config/config.hpp"
 #include "platform/dds/conversion.hpp"
 #include "platform/dds/dds_handles.hpp"
+#include "platform/dds/traffic_publisher.hpp"
 #include "qos_events.hpp"
+#include "site/site.hpp"
 #include "state_format.hpp"
+#include "traffic_board.hpp"
 
 namespace {
 
@@ -52,6 +58,8 @@ struct Options {
   long long maxEvents = 0;     // 0 = unlimited
   double statsPeriod_s = 0.0;  // 0 = only at exit
   bool untilWritersGone = false;
+  std::string sitePath;                              // --site: drawn in the bird's-eye view
+  std::optional<vp::geodesy::GeodeticPoint> origin;  // --origin: the drones' world origin
 };
 
 void printHelp() {
@@ -76,6 +84,12 @@ Usage: vp_rsu_subscriber [options]
   --max-events N        stop after N events (states + disposals)
   --stats-period-s S    print latency statistics to stderr every S seconds (always at exit)
   --until-writers-gone  stop once every vehicle-state writer seen has left (end of a replay)
+  --site FILE           the site map (site.geojson, docs/site_map.md) the drones analyse:
+                        drawn in the bird's-eye view (areas, lanes, gates with their ids and
+                        counts, zones)
+  --origin LAT,LON,H    the drones' world ENU origin (WGS84 degrees, ellipsoidal metres), to
+                        place the site; default: taken from the first vehicle state or
+                        traffic event received (each gives a point in both frames)
   --help                this text
 
 Each event is one row: event (state|disposed), drone_id, track_id, measurement_time_ns,
@@ -85,7 +99,12 @@ columns: deadline_missed (a track got no state within dds.qos.vehicle_state.dead
 per silence of the track), writer_alive and writer_lost (a drone's writer matched or regained
 its liveliness / its liveliness lease expired or it left); measurement_time_ns is then the
 newest state of that track or drone and latency_ms the time since it. They are also reported
-as a line on stderr. The network is configured as usual for Cyclone DDS
+as a line on stderr.
+
+Traffic (docs/traffic.md): the statistics of each period (<prefix>/traffic_statistics) are
+printed on stderr as one line, "traffic: drone D period P [start, end) ns: gate G forward F
+backward B (total F/B); ...; movements A->B N; ...", each event (<prefix>/traffic_events) as
+"traffic event: drone D KIND track T FEATURE ...", and the totals of every gate at exit. The network is configured as usual for Cyclone DDS
 (CYCLONEDDS_URI). Exit status: 0 on success, 2 on a usage error, 1 on a DDS error.
 )";
 }
@@ -158,6 +177,16 @@ Options parseOptions(int argc, char** argv) {
       o.duration_s = parseNumber(arg, value);
     } else if (arg == "--max-events") {
       o.maxEvents = static_cast<long long>(parseNumber(arg, value));
+    } else if (arg == "--site") {
+      o.sitePath = value;
+    } else if (arg == "--origin") {
+      vp::geodesy::GeodeticPoint p;
+      if (std::sscanf(value, "%lf,%lf,%lf", &p.latitude_deg, &p.longitude_deg, &p.height_m) != 3 ||
+          !(std::abs(p.latitude_deg) <= 90.0) || !(std::abs(p.longitude_deg) <= 180.0)) {
+        usageError("--origin: expected LAT,LON,H (degrees, degrees, metres), got '" +
+                   std::string(value) + "'");
+      }
+      o.origin = p;
     } else if (arg == "--stats-period-s") {
       o.statsPeriod_s = parseNumber(arg, value);
     } else {
@@ -208,6 +237,36 @@ int main(int argc, char** argv) {
   }
   std::ostream& out = options.outPath.empty() ? std::cout : file;
 
+  // The site map: checked now (a bad file is a usage error), placed once the origin is known.
+  vp::site::Site site;
+  bool sitePlaced = false;
+  const auto placeSite = [&](const vp::geodesy::GeodeticPoint& origin, const char* from) {
+    std::string why;
+    if (!vp::site::loadSite(options.sitePath, vp::geodesy::LocalFrame(origin), &site, &why)) {
+      std::cerr << "vp_rsu_subscriber: --site: " << why << "\n";
+      return false;
+    }
+    sitePlaced = true;
+    std::cerr << "vp_rsu_subscriber: site " << options.sitePath << " (" << site.features().size()
+              << " features) placed at the origin " << origin.latitude_deg << ", "
+              << origin.longitude_deg << " (" << from << ")\n";
+    return true;
+  };
+  if (!options.sitePath.empty()) {
+    if (options.origin) {
+      if (!placeSite(*options.origin, "--origin")) {
+        return 2;
+      }
+    } else {
+      vp::site::Site check;
+      std::string why;
+      if (!vp::site::loadSite(options.sitePath, vp::geodesy::LocalFrame(), &check, &why)) {
+        std::cerr << "vp_rsu_subscriber: --site: " << why << "\n";
+        return 2;
+      }
+    }
+  }
+
   // Declared before the participant: the reader's listener calls into it until the reader is
   // deleted with the participant.
   vp::rsu::QosEventMonitor qosEvents;
@@ -218,6 +277,10 @@ int main(int argc, char** argv) {
   dds::Reader stateReader;
   dds::Reader statusReader;
   dds::Reader gridReader;
+  dds::Topic trafficStatisticsTopic;
+  dds::Topic trafficEventsTopic;
+  dds::Reader trafficStatisticsReader;
+  dds::Reader trafficEventsReader;
   if (auto r = participant.open(config); !r.ok()) {
     return fail(r, "cannot create the DDS participant (domain, CYCLONEDDS_URI, security files?)");
   }
@@ -235,6 +298,17 @@ int main(int argc, char** argv) {
                               dds::occupancyTopicName(config), config.occupancy);
       !r.ok()) {
     return fail(r, "occupancy topic");
+  }
+  if (auto r = trafficStatisticsTopic.open(participant, vp_msg_TrafficStatistics_desc,
+                                           dds::trafficStatisticsTopicName(config),
+                                           config.trafficStatistics);
+      !r.ok()) {
+    return fail(r, "traffic statistics topic");
+  }
+  if (auto r = trafficEventsTopic.open(participant, vp_msg_TrafficEvent_desc,
+                                       dds::trafficEventsTopicName(config), config.trafficEvents);
+      !r.ok()) {
+    return fail(r, "traffic events topic");
   }
   const dds_entity_t waitset = dds_create_waitset(participant.get());
   if (waitset < 0) {
@@ -257,7 +331,19 @@ int main(int argc, char** argv) {
     return fail(r, "occupancy reader");
   }
 
-  for (const dds_entity_t reader : {stateReader.get(), statusReader.get(), gridReader.get()}) {
+  if (auto r = trafficStatisticsReader.open(participant, trafficStatisticsTopic,
+                                            config.trafficStatistics, config.partition);
+      !r.ok()) {
+    return fail(r, "traffic statistics reader");
+  }
+  if (auto r = trafficEventsReader.open(participant, trafficEventsTopic, config.trafficEvents,
+                                        config.partition);
+      !r.ok()) {
+    return fail(r, "traffic events reader");
+  }
+
+  for (const dds_entity_t reader : {stateReader.get(), statusReader.get(), gridReader.get(),
+                                    trafficStatisticsReader.get(), trafficEventsReader.get()}) {
     const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
     if (condition < 0) {
       return fail(dds::DdsResult::failure("dds_create_readcondition", condition), "read condition");
@@ -271,7 +357,9 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, onSignal);
   std::cerr << "vp_rsu_subscriber: domain " << config.domainId << ", partition '"
             << config.partition << "', topics " << dds::vehicleStateTopicName(config) << ", "
-            << dds::droneStatusTopicName(config) << ", " << dds::occupancyTopicName(config) << "\n";
+            << dds::droneStatusTopicName(config) << ", " << dds::occupancyTopicName(config) << ", "
+            << dds::trafficStatisticsTopicName(config) << ", "
+            << dds::trafficEventsTopicName(config) << "\n";
   if (!options.json) {
     out << vp::rsu::csvHeader() << "\n" << std::flush;
   }
@@ -285,12 +373,24 @@ int main(int argc, char** argv) {
   std::map<std::pair<std::uint32_t, std::uint32_t>, msg::VehicleState> tracks;
   msg::OccupancyGrid lastGrid;
   std::set<std::pair<std::uint32_t, std::uint32_t>> disposed;
+  vp::rsu::TrafficBoard traffic;
   long long events = 0;
   const std::size_t csvColumns =
       static_cast<std::size_t>(
           std::count(vp::rsu::csvHeader().begin(), vp::rsu::csvHeader().end(), ',')) +
       1;
   std::vector<std::string> qosErrors;
+  const auto drawBev = [&](std::string* why) {
+    std::vector<msg::VehicleState> current;
+    for (const auto& entry : tracks) {
+      current.push_back(entry.second);
+    }
+    vp::rsu::BevOverlay overlay;
+    overlay.site = sitePlaced ? &site : nullptr;
+    traffic.fillOverlay(overlay);
+    return vp::rsu::writeBev(options.bev, current, lastGrid.cells.empty() ? nullptr : &lastGrid,
+                             options.bevPath, why, &overlay);
+  };
   constexpr int kBatch = 64;
   void* samples[kBatch];
   dds_sample_info_t infos[kBatch];
@@ -325,6 +425,11 @@ int main(int argc, char** argv) {
       const auto& sample = *static_cast<const vp_msg_VehicleState*>(samples[k]);
       const double ms = latency_ms(infos[k]);
       msg::VehicleState state = dds::fromSample(sample);  // key fields are valid for disposals
+      if (!options.sitePath.empty() && !sitePlaced && infos[k].valid_data &&
+          !placeSite(vp::rsu::originFrom(state.position, state.enu_m.data()),
+                     "from a vehicle state")) {
+        return 2;
+      }
       const auto key = std::make_pair(state.droneId, state.trackId);
       qosEvents.noteSample(infos[k], state.droneId, state.trackId, state.measurementTime_ns);
       if (infos[k].valid_data) {
@@ -395,14 +500,44 @@ int main(int argc, char** argv) {
       dds_return_loan(gridReader.get(), samples, n);
     }
 
-    if (!options.bevPath.empty() && Clock::now() >= nextBev) {
-      std::vector<msg::VehicleState> current;
-      for (const auto& entry : tracks) {
-        current.push_back(entry.second);
+    // Traffic: each period's counts and each event as a line on stderr.
+    samples[0] = nullptr;
+    n = dds_take(trafficStatisticsReader.get(), samples, infos, kBatch, kBatch);
+    for (int k = 0; k < n; ++k) {
+      if (infos[k].valid_data) {
+        const auto& statistics = *static_cast<const vp_msg_TrafficStatistics*>(samples[k]);
+        if (traffic.addStatistics(statistics)) {
+          std::cerr << "vp_rsu_subscriber: " << traffic.periodLine(statistics) << "\n";
+        }
       }
+    }
+    if (n > 0) {
+      dds_return_loan(trafficStatisticsReader.get(), samples, n);
+    }
+    samples[0] = nullptr;
+    n = dds_take(trafficEventsReader.get(), samples, infos, kBatch, kBatch);
+    for (int k = 0; k < n; ++k) {
+      if (infos[k].valid_data) {
+        const auto& event = *static_cast<const vp_msg_TrafficEvent*>(samples[k]);
+        if (!options.sitePath.empty() && !sitePlaced) {
+          const vp::geodesy::GeodeticPoint position{event.position.latitude_deg,
+                                                    event.position.longitude_deg, 0.0};
+          const double enu[3] = {event.enu_m[0], event.enu_m[1], 0.0};
+          if (!placeSite(vp::rsu::originFrom(position, enu), "from a traffic event")) {
+            return 2;
+          }
+        }
+        traffic.addEvent(event);
+        std::cerr << "vp_rsu_subscriber: " << vp::rsu::TrafficBoard::eventLine(event) << "\n";
+      }
+    }
+    if (n > 0) {
+      dds_return_loan(trafficEventsReader.get(), samples, n);
+    }
+
+    if (!options.bevPath.empty() && (Clock::now() >= nextBev || gStop)) {
       std::string why;
-      if (!vp::rsu::writeBev(options.bev, current, lastGrid.cells.empty() ? nullptr : &lastGrid,
-                             options.bevPath, &why)) {
+      if (!drawBev(&why)) {
         std::cerr << "vp_rsu_subscriber: bird's-eye view: " << why << "\n";
       }
       nextBev = Clock::now() + std::chrono::duration_cast<Clock::duration>(
@@ -414,6 +549,14 @@ int main(int argc, char** argv) {
       nextStats = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double>(options.statsPeriod_s));
     }
+  }
+  if (traffic.periods() > 0 || traffic.events() > 0) {
+    std::cerr << "vp_rsu_subscriber: traffic totals: " << traffic.periods() << " periods, "
+              << traffic.events() << " events";
+    for (const auto& [gate, total] : traffic.totals()) {
+      std::cerr << "; gate " << gate << " forward " << total.first << " backward " << total.second;
+    }
+    std::cerr << "\n";
   }
   std::cerr << "vp_rsu_subscriber: " << events << " events, latency " << latency.summary() << "\n";
   return 0;

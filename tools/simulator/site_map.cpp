@@ -10,23 +10,25 @@
 namespace vp::sim {
 namespace {
 
+constexpr double kQueueZoneLength_m = 40.0;  // a queue zone's length upstream of the stop line
+
 class GeoJsonWriter {
  public:
   explicit GeoJsonWriter(const geodesy::LocalFrame& frame) : frame_(frame) {}
 
   void polygon(const char* kind, const std::string& id, const std::string& name,
-               const std::vector<Eigen::Vector2d>& ring) {
+               const std::vector<Eigen::Vector2d>& ring, const std::string& extra = "") {
     std::string coordinates = "[[";
     for (const Eigen::Vector2d& p : ring) {
       coordinates += position(p) + ", ";
     }
     coordinates += position(ring.front()) + "]]";  // RFC 7946: the ring is closed
-    feature(kind, id, name, "Polygon", coordinates);
+    feature(kind, id, name, "Polygon", coordinates, extra);
   }
 
   void line(const char* kind, const std::string& id, const std::string& name,
-            const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
-    feature(kind, id, name, "LineString", "[" + position(from) + ", " + position(to) + "]");
+            const Eigen::Vector2d& from, const Eigen::Vector2d& to, const std::string& extra = "") {
+    feature(kind, id, name, "LineString", "[" + position(from) + ", " + position(to) + "]", extra);
   }
 
   std::string text() const {
@@ -43,15 +45,16 @@ class GeoJsonWriter {
     return buffer;
   }
 
+  // extra: further properties, each as `, "key": value`.
   void feature(const char* kind, const std::string& id, const std::string& name, const char* type,
-               const std::string& coordinates) {
+               const std::string& coordinates, const std::string& extra) {
     if (count_++ > 0) {
       features_ << ",\n";
     }
     features_ << "  {\"type\": \"Feature\", \"properties\": {\"kind\": \"" << kind
-              << "\", \"id\": \"" << id << "\", \"name\": \"" << name
-              << "\"}, \"geometry\": {\"type\": \"" << type
-              << "\", \"coordinates\": " << coordinates << "}}";
+              << "\", \"id\": \"" << id << "\", \"name\": \"" << name << "\"" << extra
+              << "}, \"geometry\": {\"type\": \"" << type << "\", \"coordinates\": " << coordinates
+              << "}}";
   }
 
   const geodesy::LocalFrame& frame_;
@@ -88,19 +91,42 @@ std::string siteGeoJson(const SceneSpec& scene, const geodesy::LocalFrame& frame
     out.polygon(
         "drivable", rid, "road " + std::to_string(r + 1),
         rectangle(centre, road.dir, half_m, (road.leftHalf_m() + road.rightHalf_m()) / 2.0));
-    for (int lane = 0; lane < road.lanesForward; ++lane) {
-      const Eigen::Vector2d offset = left * road.laneOffset_m(true, lane);
-      out.line("lane", rid + "-forward-" + std::to_string(lane + 1),
-               "road " + std::to_string(r + 1) + " forward lane " + std::to_string(lane + 1),
-               road.centre + road.dir * from_m + offset, road.centre + road.dir * to_m + offset);
+    const bool stopLines = intersection && road.stopDistance_m < 1e8;
+    char widthText[48];
+    std::snprintf(widthText, sizeof widthText, ", \"width_m\": %.3f", road.laneWidth_m);
+    const std::string width = widthText;
+    // Each travel lane in its driving direction. At an intersection a lane ends at its stop line
+    // (the queue zone before it names it) and its continuation starts beyond the junction.
+    for (const bool forward : {true, false}) {
+      const int lanes = forward ? road.lanesForward : road.lanesBackward;
+      const double sign = forward ? 1.0 : -1.0;  // along the driving direction
+      const double start_m = forward ? from_m : to_m;
+      const double end_m = forward ? to_m : from_m;
+      const std::string way = forward ? "forward" : "backward";
+      for (int lane = 0; lane < lanes; ++lane) {
+        const Eigen::Vector2d offset = left * road.laneOffset_m(forward, lane);
+        const auto at = [&](double along_m) { return road.centre + road.dir * along_m + offset; };
+        const std::string id = rid + "-" + way + "-" + std::to_string(lane + 1);
+        const std::string name =
+            "road " + std::to_string(r + 1) + " " + way + " lane " + std::to_string(lane + 1);
+        const double stop_m = -sign * road.stopDistance_m;  // the approach's stop line
+        if (!stopLines || sign * (stop_m - start_m) < 1.0) {
+          out.line("lane", id, name, at(start_m), at(end_m), width);
+          continue;
+        }
+        out.line("lane", id, name + " (approach)", at(start_m), at(stop_m), width);
+        if (sign * (end_m + stop_m) > 1.0) {
+          out.line("lane", id + "-exit", name + " (exit)", at(-stop_m), at(end_m), width);
+        }
+        // The queue: the lane's width over kQueueZoneLength_m upstream of the stop line.
+        const double length_m = std::min(kQueueZoneLength_m, sign * (stop_m - start_m));
+        const Eigen::Vector2d middle = at(stop_m - sign * length_m / 2.0);
+        out.polygon("zone", id + "-queue", name + " queue",
+                    rectangle(middle, road.dir, length_m / 2.0, road.laneWidth_m / 2.0),
+                    ", \"role\": \"queue\", \"lane\": \"" + id + "\"");
+      }
     }
-    for (int lane = 0; lane < road.lanesBackward; ++lane) {
-      const Eigen::Vector2d offset = left * road.laneOffset_m(false, lane);
-      out.line("lane", rid + "-backward-" + std::to_string(lane + 1),
-               "road " + std::to_string(r + 1) + " backward lane " + std::to_string(lane + 1),
-               road.centre + road.dir * to_m + offset, road.centre + road.dir * from_m + offset);
-    }
-    if (intersection && road.stopDistance_m < 1e8) {
+    if (stopLines) {
       // The two approaches: the forward lanes arrive from -dir, the backward ones from +dir.
       for (const double side : {-1.0, 1.0}) {
         const Eigen::Vector2d at = road.centre + road.dir * (side * road.stopDistance_m);
@@ -121,6 +147,31 @@ std::string siteGeoJson(const SceneSpec& scene, const geodesy::LocalFrame& frame
     }
     out.polygon("drivable", "junction", "junction",
                 rectangle(scene.junction, scene.roads[0].dir, half_m, half_m));
+    // The box junction: where the two carriageways' travel lanes cross (a parallelogram).
+    const Road& a = scene.roads[0];
+    const Road& b = scene.roads[1];
+    const auto travelRight = [](const Road& road) {
+      return road.medianHalf_m + road.lanesForward * road.laneWidth_m;
+    };
+    const auto travelLeft = [](const Road& road) {
+      return road.medianHalf_m + road.lanesBackward * road.laneWidth_m;
+    };
+    const Eigen::Vector2d na = a.leftNormal();
+    const Eigen::Vector2d nb = b.leftNormal();
+    const double det = na.x() * nb.y() - na.y() * nb.x();
+    if (std::abs(det) > 0.2) {
+      // The point whose lateral offsets are la from road a's centre line and lb from b's.
+      const auto corner = [&](double la, double lb) {
+        const double ca = la + na.dot(a.centre);
+        const double cb = lb + nb.dot(b.centre);
+        return Eigen::Vector2d((ca * nb.y() - na.y() * cb) / det,
+                               (na.x() * cb - ca * nb.x()) / det);
+      };
+      out.polygon("zone", "junction-box", "box junction",
+                  {corner(-travelRight(a), -travelRight(b)), corner(travelLeft(a), -travelRight(b)),
+                   corner(travelLeft(a), travelLeft(b)), corner(-travelRight(a), travelLeft(b))},
+                  ", \"role\": \"box_junction\"");
+    }
   }
   for (std::size_t i = 0; i < scene.lots.size(); ++i) {
     const ParkingLot& lot = scene.lots[i];

@@ -68,6 +68,7 @@ LoopConfig readLoop(MapReader section, const std::string& baseDir) {
   a.statsPeriod_s = section.number("stats_period_s", kStatsPeriodRangeS, d.statsPeriod_s);
   a.trajectoryCsv = readOptionalPath(section, "trajectory_csv", baseDir, "");
   a.detectionsCsv = readOptionalPath(section, "detections_csv", baseDir, "");
+  a.trafficDir = readOptionalPath(section, "traffic_dir", baseDir, "");
   a.annotatedVideo = readOptionalPath(section, "annotated_video", baseDir, "");
   a.annotatedVideoFps = section.number("annotated_video_fps", kVideoFpsRange, d.annotatedVideoFps);
   a.record = readRecord(section.section("record"), baseDir);

@@ -34,6 +34,7 @@ AppConfig parseConfig(const std::string& yamlText, const std::string& sourceName
   config.telemetry = detail::readTelemetryLink(root.section("telemetry"));
   config.georef = detail::readGeoref(root.section("georef"), baseDir);
   config.site = detail::readSite(root.section("site"), baseDir);
+  config.traffic = detail::readTraffic(root.section("traffic"));
   config.app = detail::readLoop(root.section("app"), baseDir);
   if (config.telemetry.source == TelemetrySourceKind::Dds &&
       config.dds.telemetry.source == TelemetrySource::None) {

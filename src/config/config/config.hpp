@@ -7,7 +7,8 @@
 // `perception:`, `pose:` and `tracking:` as the options structs of the modules they configure
 // (perception::PipelineOptions, telemetry::PoseBufferConfig, tracking::TrackerConfig: one
 // definition of each knob and its default, beside the module's code), `source:`,
-// `telemetry:`, `georef:` (georef::GeorefOptions), `app:` (config/loop_config.hpp) and `dds:`
+// `telemetry:`, `georef:` (georef::GeorefOptions), `site:`, `traffic:`
+// (traffic::TrafficAnalyzerOptions), `app:` (config/loop_config.hpp) and `dds:`
 // (config/dds_config.hpp). Keys the schema does not know are not fatal: they are listed in
 // AppConfig::warnings
 // ("site.yaml: unknown key 'camera.fxx'"). Relative paths in the file are resolved
@@ -34,6 +35,7 @@
 #include "telemetry/pose_buffer.hpp"
 #include "terrain/terrain_model.hpp"
 #include "tracking/track_manager.hpp"
+#include "traffic/traffic_analyzer.hpp"
 
 namespace vp::config {
 
@@ -60,6 +62,7 @@ struct AppConfig {
   TelemetryLinkConfig telemetry{};
   georef::GeorefOptions georef{};  // ground control points of a fixed view (telemetry off)
   site::SiteOptions site{};        // the site map and its scene prior (site.file absolute)
+  traffic::TrafficAnalyzerOptions traffic{};  // the traffic analysis on the site's features
   LoopConfig app{};
   std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
 };

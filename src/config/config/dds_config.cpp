@@ -42,6 +42,27 @@ QosProfile DdsConfig::defaultOccupancyQos() {
   return qos;
 }
 
+QosProfile DdsConfig::defaultTrafficStatisticsQos() {
+  // One sample per period (a minute by default): reliable, and transient-local with the last 4
+  // periods so that a roadside unit joining late gets the recent counts at once.
+  QosProfile qos;
+  qos.reliability = Reliability::Reliable;
+  qos.durability = Durability::TransientLocal;
+  qos.historyDepth = 4;
+  return qos;
+}
+
+QosProfile DdsConfig::defaultTrafficEventsQos() {
+  // Every event matters (a count a roadside unit keeps from them): reliable with a deep history
+  // (KEEP_LAST 256 per drone: a burst of events is not lost while a resend is pending), bounded
+  // so that a reader that stops acknowledging cannot grow the writer's memory.
+  QosProfile qos;
+  qos.reliability = Reliability::Reliable;
+  qos.durability = Durability::Volatile;
+  qos.historyDepth = 256;
+  return qos;
+}
+
 const char* defaultDdsPluginDir() {
   return VP_DEFAULT_DDS_PLUGIN_DIR;
 }

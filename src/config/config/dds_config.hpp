@@ -108,6 +108,10 @@ struct DdsConfig {
   QosProfile vehicleState = defaultVehicleStateQos();
   QosProfile droneStatus = defaultDroneStatusQos();
   QosProfile occupancy = defaultOccupancyQos();
+  // The traffic analysis' outputs (docs/dds.md, "Traffic"): <prefix>/traffic_statistics and
+  // <prefix>/traffic_events, and their ROS 2 topics.
+  QosProfile trafficStatistics = defaultTrafficStatisticsQos();
+  QosProfile trafficEvents = defaultTrafficEventsQos();
   double statusRate_hz = 1.0;
   double occupancyRate_hz = 2.0;  // 0 = do not publish the grid
   OccupancyGridSpec grid{};
@@ -120,6 +124,8 @@ struct DdsConfig {
   static QosProfile defaultVehicleStateQos();
   static QosProfile defaultDroneStatusQos();
   static QosProfile defaultOccupancyQos();
+  static QosProfile defaultTrafficStatisticsQos();
+  static QosProfile defaultTrafficEventsQos();
 };
 
 const char* toString(Reliability reliability);

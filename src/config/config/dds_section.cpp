@@ -225,6 +225,8 @@ DdsConfig readDds(MapReader section, const std::string& baseDir) {
     dds.vehicleState = readQos(qos.section("vehicle_state"), defaults.vehicleState);
     dds.droneStatus = readQos(qos.section("drone_status"), defaults.droneStatus);
     dds.occupancy = readQos(qos.section("occupancy"), defaults.occupancy);
+    dds.trafficStatistics = readQos(qos.section("traffic_statistics"), defaults.trafficStatistics);
+    dds.trafficEvents = readQos(qos.section("traffic_events"), defaults.trafficEvents);
     qos.warnUnknownKeys();
   }
   {

@@ -98,7 +98,8 @@ struct LoopConfig {
   double statsPeriod_s = 5.0;       // one statistics line per period
   std::string trajectoryCsv;        // absolute; empty = not written
   std::string detectionsCsv;        // absolute; empty = not written
-  std::string annotatedVideo;       // absolute; empty = not written (MJPG AVI)
+  std::string trafficDir;  // the traffic files' folder (must exist), absolute; empty = not written
+  std::string annotatedVideo;  // absolute; empty = not written (MJPG AVI)
   double annotatedVideoFps = 10.0;
   RecordConfig record{};
 };

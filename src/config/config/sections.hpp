@@ -25,6 +25,7 @@ TelemetryLinkConfig readTelemetryLink(MapReader section);                // tele
 georef::GeorefOptions readGeoref(MapReader section,                      // georef_section.cpp
                                  const std::string& baseDir);
 site::SiteOptions readSite(MapReader section, const std::string& baseDir);  // site_section
+traffic::TrafficAnalyzerOptions readTraffic(MapReader section);             // traffic_section
 LoopConfig readLoop(MapReader section, const std::string& baseDir);         // app_section.cpp
 
 }  // namespace vp::config::detail

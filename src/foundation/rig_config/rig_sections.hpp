@@ -22,7 +22,8 @@ TerrainConfig readTerrain(MapReader section, const std::string& baseDir);
 
 // The top-level sections config::parseConfig() reads besides the rig's (config/sections.hpp):
 // parseRigConfig() leaves them to it instead of reporting them as unknown keys.
-inline constexpr std::array<std::string_view, 9> kLoopSectionNames = {
-    "dds", "perception", "pose", "tracking", "source", "telemetry", "georef", "site", "app"};
+inline constexpr std::array<std::string_view, 10> kLoopSectionNames = {
+    "dds",       "perception", "pose", "tracking", "source",
+    "telemetry", "georef",     "site", "traffic",  "app"};
 
 }  // namespace vp::config::detail

@@ -107,6 +107,7 @@ class Reader {
     for (std::size_t i = 0; i < features.size(); ++i) {
       readFeature(features[i], i, ids, site);
     }
+    checkLaneReferences(site);
     if (site.count(FeatureKind::Drivable) + site.count(FeatureKind::Parking) == 0) {
       fail("",
            "no drivable area: the site needs at least one feature of kind drivable or "
@@ -154,6 +155,7 @@ class Reader {
     Feature feature;
     feature.index = index;
     std::optional<FeatureKind> kind;
+    std::vector<std::pair<std::string, YAML::Node>> extras;  // read once the kind is known
     for (const auto& p : properties) {
       const std::string key = p.first.Scalar();
       if (key == "kind") {
@@ -168,12 +170,21 @@ class Reader {
         }
       } else if (key == "name") {
         feature.name = text(p.second);
+      } else if (key == "width_m" || key == "role" || key == "lane") {
+        extras.emplace_back(key, p.second);
       } else {
-        fail(where, "unknown property \"" + key + "\" (expected kind, id and name)");
+        fail(where, "unknown property \"" + key +
+                        "\" (expected kind, id, name; width_m on a lane; role, lane on a zone)");
       }
     }
     if (!kind) {
       fail(where, "no property \"kind\"");
+    }
+    for (const auto& [key, value] : extras) {
+      readExtra(key, value, *kind, where, feature);
+    }
+    if (!feature.lane.empty() && feature.role != ZoneRole::Queue) {
+      fail(where, "property \"lane\" is for queue zones only (role \"queue\")");
     }
     if (id.empty()) {
       fail(where, "no property \"id\"");
@@ -221,6 +232,61 @@ class Reader {
     site.append(std::move(feature), points);
   }
 
+  // The kind-specific properties: a lane's width, a zone's role and (queue zones) lane.
+  void readExtra(const std::string& key, const YAML::Node& value, FeatureKind kind,
+                 const std::string& where, Feature& feature) {
+    if (key == "width_m") {
+      if (kind != FeatureKind::Lane) {
+        fail(where, "property \"width_m\" is for lanes only");
+      }
+      double width_m = 0.0;
+      try {
+        width_m = value.as<double>();
+      } catch (const YAML::Exception&) {
+        fail(where, "property \"width_m\" must be a number (metres)");
+      }
+      if (!std::isfinite(width_m) || width_m <= 0.0 || width_m > 50.0) {
+        fail(where, "property \"width_m\" must be in (0, 50] m, got " + text(value));
+      }
+      feature.width_m = width_m;
+    } else if (key == "role") {
+      if (kind != FeatureKind::Zone) {
+        fail(where, "property \"role\" is for zones only");
+      }
+      const std::optional<ZoneRole> role = zoneRoleFromString(text(value));
+      if (!role) {
+        fail(where, "unknown role \"" + text(value) + "\" (expected count, queue or box_junction)");
+      }
+      feature.role = *role;
+    } else if (key == "lane") {
+      if (kind != FeatureKind::Zone) {
+        fail(where, "property \"lane\" is for zones only");
+      }
+      if (text(value).empty()) {
+        fail(where, "property \"lane\" must be a lane's id");
+      }
+      feature.lane = text(value);
+      laneRefs_.emplace_back(where, feature.lane);
+    }
+  }
+
+ public:
+  // After every feature: a queue zone's lane must name a lane of the file.
+  void checkLaneReferences(const Site& site) const {
+    for (const auto& [where, lane] : laneRefs_) {
+      const auto features = site.features();
+      const auto found = std::find_if(features.begin(), features.end(),
+                                      [&](const Feature& f) { return f.id == lane; });
+      if (found == features.end()) {
+        fail(where, "lane \"" + lane + "\" does not exist");
+      }
+      if (found->kind != FeatureKind::Lane) {
+        fail(where, "lane \"" + lane + "\" is a " + toString(found->kind) + ", not a lane");
+      }
+    }
+  }
+
+ private:
   std::vector<Eigen::Vector2d> readPositions(const YAML::Node& list, const std::string& where) {
     if (!list.IsSequence()) {
       fail(where, "coordinates must be an array of positions");
@@ -255,6 +321,7 @@ class Reader {
   std::string source_;
   const geodesy::LocalFrame& frame_;
   std::vector<Eigen::Vector2d> lonLat_;  // the last positions read, as written (closure check)
+  std::vector<std::pair<std::string, std::string>> laneRefs_;  // (where, lane id) of zones
 };
 
 }  // namespace
@@ -281,6 +348,27 @@ std::optional<FeatureKind> featureKindFromString(const std::string& text) {
   for (const FeatureKind kind : kKinds) {
     if (text == toString(kind)) {
       return kind;
+    }
+  }
+  return std::nullopt;
+}
+
+const char* toString(ZoneRole role) {
+  switch (role) {
+    case ZoneRole::Count:
+      return "count";
+    case ZoneRole::Queue:
+      return "queue";
+    case ZoneRole::BoxJunction:
+      return "box_junction";
+  }
+  return "unknown";
+}
+
+std::optional<ZoneRole> zoneRoleFromString(const std::string& text) {
+  for (const ZoneRole role : {ZoneRole::Count, ZoneRole::Queue, ZoneRole::BoxJunction}) {
+    if (text == toString(role)) {
+      return role;
     }
   }
   return std::nullopt;

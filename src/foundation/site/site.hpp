@@ -3,15 +3,19 @@
 //
 // Contract: parseSite()/loadSite() read a GeoJSON FeatureCollection (RFC 7946: WGS84
 // longitude/latitude, no other CRS) whose features carry the properties `kind`, `id` and
-// `name` only. Areas (`drivable`, `parking`, `exclusion`, `zone`) are Polygons with one closed,
-// simple outer ring; `lane` (driving direction = vertex order) and `gate` (a counting line) are
-// LineStrings. A file that is not such a collection, a feature with a wrong geometry, an open or
-// self-intersecting ring, a CRS other than WGS84, an unknown property or kind, a duplicate id or
-// a site without a drivable or parking area is refused, the message naming the file, the
-// feature (index and id, line) and the problem. Every vertex is converted once to the world ENU
-// frame (geodesy::LocalFrame, east/north in metres). After loading, a Site is immutable: its
-// queries (contains(), classify()) are const, never allocate and never throw, so the loop may
-// call them per detection; it is safe to share read-only between threads.
+// `name`, and optionally `width_m` on a lane (default 3.5 m) and `role` (count, queue,
+// box_junction; default count) and, on a queue zone, `lane` (the id of a lane of the file whose
+// end is the stop line) on a zone; nothing else. Areas (`drivable`, `parking`, `exclusion`, `zone`)
+// are Polygons with one closed, simple outer ring; `lane` (driving direction = vertex order) and
+// `gate` (a counting line) are LineStrings. A file that is not such a collection, a feature with a
+// wrong geometry, an open or self-intersecting ring, a CRS other than WGS84, an unknown property or
+// kind, a duplicate id, a property on the wrong kind, a width out of (0, 50] m, an unknown role, a
+// zone's lane that is not a lane of the file, or a site without a drivable or parking area is
+// refused, the message naming the file, the feature (index and id, line) and the problem. Every
+// vertex is converted once to the world ENU frame (geodesy::LocalFrame, east/north in metres).
+// After loading, a Site is immutable: its queries (contains(), classify()) are const, never
+// allocate and never throw, so the loop may call them per detection; it is safe to share read-only
+// between threads.
 #pragma once
 
 #include <cstddef>
@@ -34,6 +38,14 @@ std::optional<FeatureKind> featureKindFromString(const std::string& text);
 // Areas are Polygons; lanes and gates are LineStrings.
 bool isArea(FeatureKind kind);
 
+// What a zone is for (its optional `role`): a plain counting zone (occupancy, dwell), the queue
+// upstream of a stop line (its `lane` ends there), or a box junction (no vehicle may stop in it).
+enum class ZoneRole : std::uint8_t { Count, Queue, BoxJunction };
+const char* toString(ZoneRole role);  // the file's word: "count", "queue", "box_junction"
+std::optional<ZoneRole> zoneRoleFromString(const std::string& text);
+
+constexpr double kDefaultLaneWidth_m = 3.5;
+
 struct Feature {
   FeatureKind kind = FeatureKind::Drivable;
   std::string id;
@@ -44,6 +56,9 @@ struct Feature {
   std::uint32_t count = 0;
   Eigen::Vector2d min_m{0.0, 0.0};  // bounding box, ENU east/north
   Eigen::Vector2d max_m{0.0, 0.0};
+  double width_m = kDefaultLaneWidth_m;  // a lane's width (`width_m`), > 0
+  ZoneRole role = ZoneRole::Count;       // a zone's `role`
+  std::string lane;                      // a queue zone's `lane`: the id of an existing lane
 };
 
 // Where a world point lies on the site.
