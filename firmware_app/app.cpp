@@ -261,6 +261,14 @@ bool App::initSurface(std::string* why) {
   if (path.empty()) {
     return true;
   }
+  if (!config_.georef.gcpFile.empty()) {
+    if (why) {
+      *why =
+          "terrain.dsm_path: the surface model follows viewing rays from the camera's pose; a "
+          "fixed view placed by ground control points (georef.gcp_file) lifts through a plane";
+    }
+    return false;
+  }
   std::string problem;
   terrain::TerrainGrid grid;
   if (!io::loadDtm(path, config_.terrain.crs, grid, &problem, config_.terrain.load)) {

@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <chrono>
 #include <cstddef>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -191,6 +193,30 @@ TEST(SurfacePrior, DeckVehiclesAreLiftedOntoTheDeckAndRoofVehiclesDropped) {
   EXPECT_EQ(kept.written, 3U);
   EXPECT_EQ(kept.onStructure, 1U);
   EXPECT_FALSE(out[2].onStructure);
+}
+
+TEST(SurfacePrior, CostPerObservation) {
+  // One ray march over the DSM per lifted observation (two more height lookups), and a full lift
+  // for a deck's vehicle: printed for the record, bounded loosely (the loop's budget is ~100 ms
+  // per frame for up to kMaxDetectionsPerFrame detections).
+  Fixture f;
+  const site::Site site = deckSite();
+  const SurfacePrior prior = f.prior(&site, site::OffRoadPolicy::Drop);
+  std::array<VehicleObservation, 3> out{};
+  constexpr int kRounds = 300;
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t written = 0;
+  for (int i = 0; i < kRounds; ++i) {
+    written += prior.screen(f.pose, f.observations, out).written;
+  }
+  const double perObservation_us =
+      std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count() /
+      (kRounds * 3.0);
+  EXPECT_EQ(written, kRounds * 2U);
+  std::printf("surface prior: %.1f us per lifted observation (ground, deck, roof mix)\n",
+              perObservation_us);
+  RecordProperty("surface_prior_us_per_observation", std::to_string(perObservation_us));
+  EXPECT_LT(perObservation_us, 2000.0);
 }
 
 TEST(SurfacePrior, WithoutASiteTheDeckIsAStructureAndWithoutADsmNothingChanges) {
