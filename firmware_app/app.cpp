@@ -172,8 +172,9 @@ bool App::initSource(std::string* why) {
     config_.mount = {rig.mount, rig.gimbal};
     config_.terrain.dtmPath = rig.dtmPath;  // the DTM load options stay the application's
     config_.terrain.crs = rig.crs;
-    // The recording's surface model, unless the configuration names one (as the site map).
-    if (config_.terrain.dsmPath.empty()) {
+    // The recording's surface model, unless the configuration names one (as the site map) or
+    // a fixed view placed by ground control points lifts through a plane (no viewing rays).
+    if (config_.terrain.dsmPath.empty() && config_.georef.gcpFile.empty()) {
       config_.terrain.dsmPath = rig.dsmPath;
     }
     // The recording's site map (its rig.yaml's site.file), unless the configuration names one.

@@ -6,7 +6,8 @@
 // (on_structure) and dropped before the tracker, and no truth vehicle is touched (on-road recall
 // unchanged), allocation-free; with site.on_structure: keep they are counted and tracked; without
 // a DSM nothing is counted and the tracker gets what it gets with keep. A DSM that cannot be read,
-// does not cover the DTM, or is missing stops the start-up with a message naming the file.
+// does not cover the DTM, or is missing, or one named with a fixed view placed by ground control
+// points, stops the start-up with a message naming the file or the key.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -289,6 +290,19 @@ TEST(AppSurface, ADsmThatCannotBeReadOrDoesNotCoverTheDtmStopsTheStartUp) {
     EXPECT_GT(std::stod(why.substr(at + 17)), -20.0) << why;
     EXPECT_LT(std::stod(why.substr(at + 17)), 20.0) << why;
     EXPECT_NE(why.find("32768 of 65536 DTM points checked"), std::string::npos) << why;
+  }
+  {
+    // Named with a fixed view placed by ground control points: refused (no viewing rays).
+    config::AppConfig config = test::defaultConfigFor(source);
+    config.dds.enabled = false;
+    config.terrain.dsmPath = source + "/dsm.tif";
+    config.georef.gcpFile = source + "/gcp.csv";
+    App app;
+    std::string why;
+    EXPECT_FALSE(app.init(config, RunSettings{}, AppSeams{}, &why));
+    EXPECT_NE(why.find("terrain.dsm_path: the surface model follows viewing rays"),
+              std::string::npos)
+        << why;
   }
   {
     const std::string dir = test::copySequence(source, "dsm_missing");
