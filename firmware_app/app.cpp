@@ -1,6 +1,8 @@
 #include "app.hpp"
 
+#include <cstdio>
 #include <optional>
+#include <string>
 #include <utility>
 
 #include "csv/csv_io.hpp"
@@ -70,6 +72,10 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   wiring.site = config_.site.file.empty() ? nullptr : &site_;
   wiring.offRoad = config_.site.offRoad;
   wiring.traffic = &config_.traffic;
+  wiring.dsm = config_.terrain.dsmPath.empty() ? nullptr : &dsm_;
+  wiring.maxStructureHeight_m = config_.site.maxStructureHeight_m;
+  wiring.onStructure = config_.site.onStructure;
+  wiring.lift = config_.perception.lift;
   wiring.droneId = config_.dds.droneId;
   wiring.sourceOnMonotonicClock = capture_.source().capturesOnMonotonicClock();
   wiring.fixedView = !config_.georef.gcpFile.empty();
@@ -169,6 +175,11 @@ bool App::initSource(std::string* why) {
     config_.mount = {rig.mount, rig.gimbal};
     config_.terrain.dtmPath = rig.dtmPath;  // the DTM load options stay the application's
     config_.terrain.crs = rig.crs;
+    // The recording's surface model, unless the configuration names one (as the site map) or
+    // a fixed view placed by ground control points lifts through a plane (no viewing rays).
+    if (config_.terrain.dsmPath.empty() && config_.georef.gcpFile.empty()) {
+      config_.terrain.dsmPath = rig.dsmPath;
+    }
     // The recording's site map (its rig.yaml's site.file), unless the configuration names one.
     if (config_.site.file.empty()) {
       config_.site.file = rig.sitePath;
@@ -214,6 +225,9 @@ bool App::initWorld(std::string* why) {
     }
     return false;
   }
+  if (!initSurface(why)) {
+    return false;
+  }
   if (!camera_.init(config_.camera.intrinsics, config_.camera.distortion, &problem)) {
     if (why) {
       *why = "camera: " + problem;
@@ -242,6 +256,68 @@ bool App::initWorld(std::string* why) {
     return false;
   }
   perception_ = std::move(pipeline);
+  return true;
+}
+
+bool App::initSurface(std::string* why) {
+  // The surface model (docs/field_data.md): buildings, bridges and decks above the DTM.
+  const std::string& path = config_.terrain.dsmPath;
+  if (path.empty()) {
+    return true;
+  }
+  if (!config_.georef.gcpFile.empty()) {
+    if (why) {
+      *why =
+          "terrain.dsm_path: the surface model follows viewing rays from the camera's pose; a "
+          "fixed view placed by ground control points (georef.gcp_file) lifts through a plane";
+    }
+    return false;
+  }
+  std::string problem;
+  terrain::TerrainGrid grid;
+  if (!io::loadDtm(path, config_.terrain.crs, grid, &problem, config_.terrain.load)) {
+    if (why) {
+      *why = "terrain.dsm_path: " + problem;
+    }
+    return false;
+  }
+  if (!dsm_.init(std::move(grid), frame_, &problem)) {
+    if (why) {
+      *why = "terrain.dsm_path " + csv::shortened(path) + ": " + problem;
+    }
+    return false;
+  }
+  // It must have a height wherever the DTM has one: the prior compares the two.
+  const terrain::Coverage c = terrain::coverage(terrain_, dsm_);
+  const auto box = [](const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+    char text[160];
+    std::snprintf(text, sizeof(text), "east %.1f..%.1f m, north %.1f..%.1f m of the world frame",
+                  lo.x(), hi.x(), lo.y(), hi.y());
+    return std::string(text);
+  };
+  if (c.outside > 0) {
+    if (why) {
+      *why = "terrain.dsm_path " + csv::shortened(path) + ": does not cover the DTM " +
+             csv::shortened(config_.terrain.dtmPath) + ": " + std::to_string(c.outside) + " of " +
+             std::to_string(c.checked) + " DTM points checked lie off it (" +
+             box(c.outsideMin_m, c.outsideMax_m) + ")";
+    }
+    return false;
+  }
+  if (c.noData > 0) {
+    logLine(
+        "warning: terrain.dsm_path %s has no data at %zu of %zu DTM points checked (%s): no "
+        "structure is seen there",
+        csv::shortened(path).c_str(), c.noData, c.checked,
+        box(c.noDataMin_m, c.noDataMax_m).c_str());
+  }
+  logLine(
+      "surface model: %s (%dx%d samples, heights %.1f..%.1f m); detections more than %.1f m "
+      "above the DTM: on a deck when a drivable or parking area marks it, else on a structure "
+      "(%s)",
+      csv::shortened(path).c_str(), dsm_.grid().cols, dsm_.grid().rows,
+      static_cast<double>(dsm_.minHeight_m()), static_cast<double>(dsm_.maxHeight_m()),
+      config_.site.maxStructureHeight_m, site::toString(config_.site.onStructure));
   return true;
 }
 

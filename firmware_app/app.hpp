@@ -111,6 +111,7 @@ class App final : public CounterSource {
   bool initWorld(std::string* why);
   bool initGroundView(std::string* why);
   bool initSite(std::string* why);
+  bool initSurface(std::string* why);
   bool initPose(std::string* why);
   bool startRealtime(std::string* why);
   bool openRecorder(std::string* why);
@@ -132,6 +133,7 @@ class App final : public CounterSource {
   shape::ActiveShapeModel asm_;
   georef::GroundView groundView_;  // with georef.gcp_file: the fixed view lifting uses
   site::Site site_;                // with site.file: the site map the scene prior uses
+  terrain::TerrainModel dsm_;      // with terrain.dsm_path: the surface model the prior uses
 
   // The loop's books, borrowed by the units (processing thread; capture's counts are its own).
   LoopCounters counters_{};

@@ -43,6 +43,19 @@ bool FrameStep::init(const FrameStepWiring& wiring, std::unique_ptr<FramePercept
     return false;
   }
   worldDetections_.resize(detection::kMaxDetectionsPerFrame);
+  if (wiring_.dsm != nullptr) {
+    site::SiteOptions surface;
+    surface.maxStructureHeight_m = wiring_.maxStructureHeight_m;
+    surface.onStructure = wiring_.onStructure;
+    if (!surfacePrior_.init(*wiring_.terrain, wiring_.dsm, perception_->lifter(), *wiring_.world,
+                            *wiring_.shapeModel, wiring_.lift, wiring_.site, surface, &problem)) {
+      if (why) {
+        *why = "terrain.dsm_path: " + problem;
+      }
+      return false;
+    }
+    surfaced_.resize(detection::kMaxDetectionsPerFrame);
+  }
   sitePrior_.init(wiring_.site, wiring_.offRoad);
   if (sitePrior_.active()) {
     screened_.resize(detection::kMaxDetectionsPerFrame);
@@ -264,7 +277,14 @@ void FrameStep::countObservations() {
 }
 
 std::span<const perception::VehicleObservation> FrameStep::screenObservations() {
-  const std::span<const perception::VehicleObservation> observations = perception_->observations();
+  std::span<const perception::VehicleObservation> observations = perception_->observations();
+  if (surfacePrior_.active()) {
+    const perception::SurfaceScreening surface =
+        surfacePrior_.screen(perception_->liftSummary().cameraPose, observations, surfaced_);
+    wiring_.counters->onDeck += surface.onDeck;
+    wiring_.counters->onStructure += surface.onStructure;
+    observations = {surfaced_.data(), surface.written};
+  }
   if (!sitePrior_.active()) {
     return observations;
   }
@@ -321,8 +341,13 @@ std::span<const messages::VehicleState> FrameStep::publish(std::int64_t timestam
     if (track.status == tracking::TrackStatus::Tentative || count >= states_.size()) {
       continue;
     }
-    states_[count] = toVehicleState(track, wiring_.droneId, toUtcNs_, *wiring_.world,
-                                    wiring_.terrain, wiring_.shapeModel);
+    // A track on a deck the site marks stands on the surface model, every other on the DTM.
+    const terrain::TerrainModel* ground =
+        surfacePrior_.active()
+            ? &surfacePrior_.standingSurface({track.centreEnu.x(), track.centreEnu.y(), 0.0})
+            : wiring_.terrain;
+    states_[count] = toVehicleState(track, wiring_.droneId, toUtcNs_, *wiring_.world, ground,
+                                    wiring_.shapeModel);
     published_[count] = track;
     ++count;
   }

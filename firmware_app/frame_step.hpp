@@ -40,6 +40,7 @@
 #include "loop_stats.hpp"
 #include "messages/messages.hpp"
 #include "perception/site_prior.hpp"
+#include "perception/surface_prior.hpp"
 #include "perception_stage.hpp"
 #include "shape/vehicle_model.hpp"
 #include "site/site.hpp"
@@ -80,6 +81,12 @@ struct FrameStepWiring {
   const site::Site* site = nullptr;                          // the site map (null: no scene prior)
   const traffic::TrafficAnalyzerOptions* traffic = nullptr;  // null: no traffic analysis
   site::OffRoadPolicy offRoad = site::OffRoadPolicy::Drop;
+  // The surface model (terrain.dsm_path; null: none) and its prior's options (site:), with the
+  // perception stage's lift options (a deck's vehicle is lifted again as perception lifts).
+  const terrain::TerrainModel* dsm = nullptr;
+  double maxStructureHeight_m = site::SiteOptions{}.maxStructureHeight_m;
+  site::OffRoadPolicy onStructure = site::OffRoadPolicy::Drop;
+  perception::DetectionLifterOptions lift{};
   std::uint32_t droneId = 0;
   bool sourceOnMonotonicClock = false;  // camera stamps: CLOCK_MONOTONIC
   bool fixedView = false;               // georeferenced by ground control points: no pose is needed
@@ -107,7 +114,8 @@ class FrameStep {
 
  private:
   void countObservations();
-  // The observations the tracker and the files get: perception's, screened by the site's prior.
+  // The observations the tracker and the files get: perception's, screened by the surface
+  // model's prior and the site's.
   std::span<const perception::VehicleObservation> screenObservations();
   void logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameId,
                       const telemetry::PoseEstimate& pose);
@@ -128,6 +136,8 @@ class FrameStep {
 
   // Per-frame arrays, sized at init.
   std::vector<tracking::WorldDetection> worldDetections_;
+  perception::SurfacePrior surfacePrior_;
+  std::vector<perception::VehicleObservation> surfaced_;  // the surface prior's output (active)
   perception::SitePrior sitePrior_;
   std::vector<perception::VehicleObservation> screened_;  // the prior's output (when active)
   std::vector<messages::VehicleState> states_;   // this frame's published (confirmed, lost) tracks

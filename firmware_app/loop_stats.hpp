@@ -50,6 +50,10 @@ struct LoopCounters {
   std::uint64_t lifted = 0;
   std::uint64_t outsideDtm = 0;  // observations off the DTM (outside_dtm, no_data, no_intersection)
   std::uint64_t offSite = 0;  // lifted observations off the site's roads (site.off_road: drop/flag)
+  // With a surface model (terrain.dsm_path): lifted observations lifted again onto a deck that a
+  // drivable or parking area marks, and those on a structure no such area marks (a roof).
+  std::uint64_t onDeck = 0;
+  std::uint64_t onStructure = 0;
   std::uint64_t statesPublished = 0;
   std::uint64_t tracksDisposed = 0;
   std::uint64_t publishErrors = 0;

@@ -948,6 +948,10 @@ const MalformedCase kMalformedCases[] = {
      "must be in [1, 65536], got 70000"},
     {"max_lane_samples: 300", "max_lane_samples: 1.5", "traffic.max_lane_samples",
      "expected an integer"},
+    {"off_road: flag", "off_road: flag\n  max_structure_height_m: 0.2",
+     "site.max_structure_height_m", "must be in [0.5, 50], got 0.2"},
+    {"off_road: flag", "off_road: flag\n  on_structure: ignore", "site.on_structure",
+     "unknown value 'ignore' (expected drop, flag, keep)"},
     // app
     {"app:\n  queue_depth", "app: 1\nx:\n  queue_depth", "app", "expected a map, got '1'"},
     {"queue_depth: 2", "queue_depth: 9", "app.queue_depth", "must be in [1, 8], got 9"},
@@ -1802,6 +1806,20 @@ TEST(ConfigLoop, TheTrafficSectionFillsTheAnalyzersOptions) {
   traffic::TrafficAnalyzer analyzer;
   std::string why;
   EXPECT_TRUE(analyzer.init(site, full.traffic, &why)) << why;
+}
+
+TEST(ConfigLoop, TheSurfaceModelIsOptionalBesideTheDtmAndItsPriorIsRead) {
+  const AppConfig full = parse(kFullConfig);
+  EXPECT_TRUE(full.terrain.dsmPath.empty());
+  EXPECT_EQ(full.site.maxStructureHeight_m, 2.5);
+  EXPECT_EQ(full.site.onStructure, site::OffRoadPolicy::Drop);
+  const AppConfig with = parse(edited("  dtm_path: dtm/site.tif\n",
+                                      "  dtm_path: dtm/site.tif\n  dsm_path: dtm/surface.tif\n"));
+  EXPECT_EQ(with.terrain.dsmPath, "/data/site/dtm/surface.tif");
+  const AppConfig options = parse(edited(
+      "off_road: flag", "off_road: flag\n  max_structure_height_m: 4\n  on_structure: flag"));
+  EXPECT_EQ(options.site.maxStructureHeight_m, 4.0);
+  EXPECT_EQ(options.site.onStructure, site::OffRoadPolicy::Flag);
 }
 
 TEST(ConfigLoop, GroundControlPointsNeedTelemetryOffAndResolveTheirPath) {

@@ -657,3 +657,49 @@ class ReportAccuracy : public ::testing::Environment {
 
 }  // namespace
 }  // namespace vp::terrain
+
+namespace vp::terrain {
+namespace {
+
+// coverage(): a surface model over the same area covers the DTM; one missing its eastern part
+// is found off it there, NoData holes are told apart, and samplePosition() places sample centres.
+TEST(TerrainCoverage, FindsThePartOfTheDtmASurfaceModelMisses) {
+  const auto flat = [](double, double) { return 260.0; };
+  const TerrainModel dtm = makeModel(makeUtmGrid({41, 41, 5.0, flat}));  // +-100 m
+  const TerrainModel same = makeModel(makeUtmGrid({81, 81, 2.5, flat}));
+  const Coverage full = coverage(dtm, same);
+  EXPECT_EQ(full.checked, 41U * 41U);
+  EXPECT_EQ(full.outside + full.noData, 0U);
+
+  // +-60 m: the DTM's ring beyond 60 m is off it, on every side.
+  const TerrainModel smaller = makeModel(makeUtmGrid({25, 25, 5.0, flat}));
+  const Coverage part = coverage(dtm, smaller);
+  EXPECT_EQ(part.checked, 41U * 41U);
+  EXPECT_EQ(part.outside, 41U * 41U - 25U * 25U);
+  // The grid's corners in ENU: UTM grid north is 1.6 degrees off true north here (2.8 m at
+  // 100 m).
+  EXPECT_NEAR(part.outsideMin_m.x(), -100.0, 4.0);
+  EXPECT_NEAR(part.outsideMax_m.y(), 100.0, 4.0);
+
+  // NoData in the cover: counted apart, where it is.
+  TerrainGrid holed = makeUtmGrid({41, 41, 5.0, flat});
+  holed.noData = -9999.0F;
+  holed.heights_m[20 * 41 + 30] = -9999.0F;  // 50 m east of the centre
+  const Coverage holes = coverage(dtm, makeModel(holed));
+  EXPECT_EQ(holes.outside, 0U);
+  EXPECT_GT(holes.noData, 0U);
+  // The points whose interpolation touches the hole: within a cell of it.
+  EXPECT_GE(holes.noDataMin_m.x(), 44.0);
+  EXPECT_LE(holes.noDataMax_m.x(), 56.0);
+  EXPECT_LE(holes.noDataMin_m.x(), 50.5);
+  EXPECT_GE(holes.noDataMax_m.x(), 49.5);
+
+  const auto centre = dtm.samplePosition(20, 20);
+  ASSERT_TRUE(centre.hasValue());
+  EXPECT_NEAR(centre->latitude_deg, kOrigin.latitude_deg, 1e-7);
+  EXPECT_NEAR(centre->longitude_deg, kOrigin.longitude_deg, 1e-7);
+  EXPECT_FALSE(dtm.samplePosition(41, 0).hasValue());
+}
+
+}  // namespace
+}  // namespace vp::terrain

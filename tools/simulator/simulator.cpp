@@ -14,6 +14,7 @@
 #include "ground_truth.hpp"
 #include "io/dtm_file.hpp"
 #include "site_map.hpp"
+#include "surface_model.hpp"
 
 #ifndef VP_SOURCE_DIR
 #define VP_SOURCE_DIR "."
@@ -321,6 +322,7 @@ std::string Simulator::rigYaml() const {
     << "\n    roll_deg: 0\n    pitch_deg: " << num(-90.0 + rig_.tilt_deg)
     << "\n    yaw_deg: " << num(earth ? wrap_deg(rig_.viewAzimuth_deg) : 0.0) << "\n";
   y << "terrain:\n  dtm_path: dtm.tif\n  crs: auto\n";
+  y << "  dsm_path: dsm.tif  # the surface model: the DTM with the buildings (surface_model.hpp)\n";
   y << "site:\n  file: site.geojson  # the scene's site map (docs/site_map.md)\n";
   return y.str();
 }
@@ -413,6 +415,13 @@ bool Simulator::write(std::string* why, const std::function<void(const FrameOutp
   fs::remove(staging, ignored);
   if (!opened) {
     return false;
+  }
+  {
+    // The surface model rig.yaml names (surface_model.hpp), in the DTM's format and grid.
+    const fs::path dsmPath = fs::path(options_.outDir) / "dsm.tif";
+    if (!io::writeDtmGeoTiff(dsmPath.string(), surfaceGrid(scene_, world_), why)) {
+      return false;
+    }
   }
   {
     // The site map rig.yaml names (site_map.hpp).

@@ -116,7 +116,7 @@ class Simulator {
   const Traffic& traffic() const { return traffic_; }
   const shape::ActiveShapeModel& asmModel() const { return asm_; }
   const PinholeView& view() const { return view_; }
-  // rig.yaml text (application configuration schema) naming dtm.tif.
+  // rig.yaml text (application configuration schema) naming dtm.tif, dsm.tif and site.geojson.
   std::string rigYaml() const;
   // One-line summary of the drawn parameters (sequence.yaml notes).
   std::string summary() const;

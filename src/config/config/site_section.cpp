@@ -21,6 +21,12 @@ site::SiteOptions readSite(MapReader section, const std::string& baseDir) {
   s.file = readOptionalPath(section, "file", baseDir, d.file);
   s.offRoad = section.choice<site::OffRoadPolicy>("off_road", site::offRoadPolicyFromString,
                                                   kOffRoadNames, d.offRoad);
+  s.maxStructureHeight_m =
+      section.number("max_structure_height_m",
+                     Range::closed(site::kMinStructureHeight_m, site::kMaxStructureHeight_m),
+                     d.maxStructureHeight_m);
+  s.onStructure = section.choice<site::OffRoadPolicy>("on_structure", site::offRoadPolicyFromString,
+                                                      kOffRoadNames, d.onStructure);
   section.warnUnknownKeys();
   return s;
 }

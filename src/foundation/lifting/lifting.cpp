@@ -72,6 +72,17 @@ bool Lifter::init(const camera::CameraModel& camera, const geodesy::CameraMount&
   return true;
 }
 
+bool Lifter::initOnSurface(const Lifter& other, const terrain::TerrainModel& surface,
+                           std::string* why) {
+  if (!other.initialised()) {
+    if (why != nullptr) {
+      *why = "lifting: the lifter to copy is not initialised";
+    }
+    return false;
+  }
+  return init(*other.camera_, other.mount_, surface, *other.frame_, why);
+}
+
 Expected<CameraPoseWorld, LiftError> Lifter::cameraPose(const DronePose& pose) const {
   const Eigen::Vector4d q = pose.bodyToNed.coeffs();
   const auto finite = [](const geodesy::EulerAnglesDeg& e) {

@@ -68,6 +68,13 @@ class Lifter {
             const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
             std::string* why = nullptr);
 
+  // The same camera, mount and world frame over another surface (e.g. a surface model with
+  // buildings and decks, terrain.dsm_path): borrows it as init() does. Fails (returns false)
+  // when this Lifter is not initialised or the surface is empty.
+  bool initOnSurface(const Lifter& other, const terrain::TerrainModel& surface,
+                     std::string* why = nullptr);
+  bool initialised() const { return camera_ != nullptr; }
+
   Expected<CameraPoseWorld, LiftError> cameraPose(const DronePose& pose) const;
 
   // Distorted pixel -> first point of the DTM its viewing ray meets (world ENU).
@@ -95,12 +102,13 @@ class Lifter {
       const CameraPoseWorld& pose, const Eigen::Vector3d& originEnu,
       const Eigen::Vector3d& aheadEnu, std::span<const Eigen::Vector3d> pointsEnu) const;
 
- private:
-  // The ground point below where the pixel's ray is height_m above the DTM.
+  // The ground point below where the pixel's ray is height_m above the DTM (boxToGround()'s
+  // points; pixelToWorld() with height_m = 0).
   Expected<Eigen::Vector3d, LiftError> pixelToGroundBelow(const CameraPoseWorld& pose,
                                                           const Eigen::Vector2d& pixel,
                                                           double height_m) const;
 
+ private:
   const camera::CameraModel* camera_ = nullptr;
   const terrain::TerrainModel* terrain_ = nullptr;
   const geodesy::LocalFrame* frame_ = nullptr;

@@ -42,7 +42,10 @@ struct MountConfig {
 };
 
 struct TerrainConfig {
-  std::string dtmPath;                  // absolute after loading
+  std::string dtmPath;  // absolute after loading
+  // terrain.dsm_path: the surface model (ground + buildings, bridges, decks; the DTM's formats
+  // and CRS rule), absolute after loading; empty: none (docs/field_data.md).
+  std::string dsmPath;
   std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
   io::DtmLoadOptions load{};            // terrain.max_samples
 };

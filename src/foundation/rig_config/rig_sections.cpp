@@ -189,6 +189,7 @@ MountConfig readMount(MapReader section) {
 TerrainConfig readTerrain(MapReader section, const std::string& baseDir) {
   TerrainConfig config;
   config.dtmPath = resolvePath(section.text("dtm_path", kRequired), baseDir);
+  config.dsmPath = readOptionalPath(section, "dsm_path", baseDir, "");
   config.crs = section.choice<std::optional<terrain::CrsSpec>>(
       "crs", crsSettingFromString, kCrsForms, std::optional<terrain::CrsSpec>());
   config.load.maxSamples = section.uint32(

@@ -76,10 +76,20 @@ enum class OffRoadPolicy : std::uint8_t { Drop, Flag, Keep };
 const char* toString(OffRoadPolicy policy);  // "drop", "flag", "keep"
 std::optional<OffRoadPolicy> offRoadPolicyFromString(const std::string& text);
 
+// Range of SiteOptions::maxStructureHeight_m, m.
+inline constexpr double kMinStructureHeight_m = 0.5;
+inline constexpr double kMaxStructureHeight_m = 50.0;
+
 // The `site:` section of the configuration (docs/site_map.md).
 struct SiteOptions {
   std::string file;  // the site file, absolute after loading; empty: none
   OffRoadPolicy offRoad = OffRoadPolicy::Drop;  // only with a site file
+  // With a surface model (terrain.dsm_path; with or without a site file): where the surface
+  // stands more than this above the DTM under a lifted detection, the vehicle is on a structure
+  // (a deck when a drivable or parking area marks the point, else a roof: onStructure). Above
+  // a car's height and the surface model's noise, below a storey. [0.5, 50] m.
+  double maxStructureHeight_m = 2.5;
+  OffRoadPolicy onStructure = OffRoadPolicy::Drop;  // what is done with vehicles on a roof
 };
 
 class Site {

@@ -531,4 +531,88 @@ Expected<Eigen::Vector3d, TerrainError> TerrainModel::intersectRay(
   return unexpected(previous == Previous::NoData ? TerrainError::NoData : leftTheGrid);
 }
 
+Expected<geodesy::GeodeticPoint, TerrainError> TerrainModel::samplePosition(int col,
+                                                                            int row) const {
+  if (col < 0 || row < 0 || col >= grid_.cols || row >= grid_.rows) {
+    return unexpected(TerrainError::OutsideDtm);
+  }
+  const GeoTransform& t = grid_.transform;
+  const double x = t.x0 + col * t.dxCol + row * t.dxRow;
+  const double y = t.y0 + col * t.dyCol + row * t.dyRow;
+  geodesy::GeodeticPoint p;
+  if (grid_.crs.kind == HorizontalCrs::Utm) {
+    geodesy::UtmPoint u;
+    u.zone = grid_.crs.utmZone;
+    u.northp = grid_.crs.utmNorth;
+    u.easting_m = x;
+    u.northing_m = y;
+    try {
+      p = geodesy::fromUtm(u);
+    } catch (const std::exception&) {
+      return unexpected(TerrainError::OutsideDtm);  // init() refused grids beyond their zone
+    }
+  } else {
+    p.latitude_deg = y;
+    p.longitude_deg = x;
+  }
+  p.height_m = static_cast<double>(
+      grid_.heights_m[static_cast<std::size_t>(row) * static_cast<std::size_t>(grid_.cols) +
+                      static_cast<std::size_t>(col)]);
+  return p;
+}
+
+namespace {
+
+constexpr int kCoverageLattice = 256;  // samples per axis looked at, at most
+
+void extend(const Eigen::Vector2d& point, std::size_t count, Eigen::Vector2d& lo,
+            Eigen::Vector2d& hi) {
+  if (count == 1) {
+    lo = hi = point;
+    return;
+  }
+  lo = lo.cwiseMin(point);
+  hi = hi.cwiseMax(point);
+}
+
+}  // namespace
+
+Coverage coverage(const TerrainModel& covered, const TerrainModel& cover) {
+  Coverage out;
+  const TerrainGrid& grid = covered.grid();
+  if (grid.cols < 2 || grid.rows < 2) {
+    return out;
+  }
+  const int colSteps = std::min(grid.cols, kCoverageLattice);
+  const int rowSteps = std::min(grid.rows, kCoverageLattice);
+  for (int j = 0; j < rowSteps; ++j) {
+    const int row = static_cast<int>(
+        std::lround(static_cast<double>(j) * (grid.rows - 1) / std::max(1, rowSteps - 1)));
+    for (int i = 0; i < colSteps; ++i) {
+      const int col = static_cast<int>(
+          std::lround(static_cast<double>(i) * (grid.cols - 1) / std::max(1, colSteps - 1)));
+      const auto p = covered.samplePosition(col, row);
+      if (!p) {
+        continue;
+      }
+      const float h = static_cast<float>(p->height_m);
+      if (!std::isfinite(h) || (grid.noData && h == *grid.noData)) {
+        continue;  // the covered model has no height there: nothing to compare
+      }
+      ++out.checked;
+      const auto other = cover.heightAt(p->latitude_deg, p->longitude_deg);
+      if (other) {
+        continue;
+      }
+      const Eigen::Vector2d enu = covered.frame().toEnu(*p).head<2>();
+      if (other.error() == TerrainError::NoData) {
+        extend(enu, ++out.noData, out.noDataMin_m, out.noDataMax_m);
+      } else {
+        extend(enu, ++out.outside, out.outsideMin_m, out.outsideMax_m);
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace vp::terrain

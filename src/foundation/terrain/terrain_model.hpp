@@ -94,6 +94,11 @@ class TerrainModel {
   Expected<Eigen::Vector3d, TerrainError> intersectRay(const Eigen::Vector3d& originEnu,
                                                        const Eigen::Vector3d& directionEnu) const;
 
+  // WGS84 position of the centre of sample (col, row) (height: the sample's), or OutsideDtm for
+  // an index off the grid. Start-up checks (coverage()); not for the loop.
+  Expected<geodesy::GeodeticPoint, TerrainError> samplePosition(int col, int row) const;
+  const geodesy::LocalFrame& frame() const { return frame_; }
+
  private:
   TerrainGrid grid_{};
   geodesy::LocalFrame frame_{};
@@ -114,5 +119,22 @@ class TerrainModel {
   Eigen::Vector3d boxMin_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d boxMax_ = Eigen::Vector3d::Zero();
 };
+
+// How much of one model's area another one has heights for: a surface model (DSM) must cover
+// the terrain model (DTM) it is compared with. The covered model's valid samples are looked at
+// on a lattice (every sample up to 256 x 256, evenly spaced beyond); each is outside the cover's
+// grid, on its NoData, or covered. Start-up only (allocation-free, but a few thousand lookups).
+struct Coverage {
+  std::size_t checked = 0;  // valid samples of the covered model looked at
+  std::size_t outside = 0;  // of those, off the cover's grid
+  std::size_t noData = 0;   // of those, where the cover has no data
+  // East/north bounding boxes (world ENU of the covered model's frame, m) of the two kinds;
+  // meaningful only when their count is not zero.
+  Eigen::Vector2d outsideMin_m{0.0, 0.0};
+  Eigen::Vector2d outsideMax_m{0.0, 0.0};
+  Eigen::Vector2d noDataMin_m{0.0, 0.0};
+  Eigen::Vector2d noDataMax_m{0.0, 0.0};
+};
+Coverage coverage(const TerrainModel& covered, const TerrainModel& cover);
 
 }  // namespace vp::terrain

@@ -69,7 +69,8 @@ struct Rig {
   std::string dtmPath;                  // terrain: absolute, an existing file
   std::optional<terrain::CrsSpec> crs;  // required only for world-file DTMs
   std::string sitePath;                 // site.file: the site map, absolute; empty without one
-  std::vector<std::string> warnings;    // unknown keys and other non-fatal remarks
+  std::string dsmPath;  // terrain.dsm_path: the surface model, absolute, existing; empty: none
+  std::vector<std::string> warnings;  // unknown keys and other non-fatal remarks
 };
 
 struct FrameRecord {

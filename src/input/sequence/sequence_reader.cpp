@@ -46,6 +46,10 @@ Rig readRig(const fs::path& directory) {
     throw SequenceError(shortened(path.string()) + ": terrain.dtm_path: no such file " +
                         quote(config.terrain.dtmPath));
   }
+  if (!config.terrain.dsmPath.empty() && !fs::is_regular_file(config.terrain.dsmPath, error)) {
+    throw SequenceError(shortened(path.string()) + ": terrain.dsm_path: no such file " +
+                        quote(config.terrain.dsmPath));
+  }
   // Only the rig sections: the loop's sections of a rig.yaml are the application's, not recorded.
   Rig rig;
   rig.sourcePath = config.sourcePath;
@@ -57,6 +61,7 @@ Rig readRig(const fs::path& directory) {
   rig.dtmPath = config.terrain.dtmPath;
   rig.crs = config.terrain.crs;
   rig.sitePath = config.sitePath;
+  rig.dsmPath = config.terrain.dsmPath;
   rig.warnings = std::move(config.warnings);
   return rig;
 }

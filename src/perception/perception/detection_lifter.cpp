@@ -264,6 +264,13 @@ FrameLiftSummary DetectionLifter::liftFrame(const lifting::Lifter& lifter,
   return summary;
 }
 
+double DetectionLifter::boxHeight_m(const detection::Detection& detection) const {
+  const shape::VehicleGeometry geometry =
+      shape::vehicleGeometry(*shapeModel_, mostLikelyType(detection, nullptr), detection.gamma);
+  return options_.boxHeightShare *
+         (geometry.hasKeypoints ? geometry.size_m.z() : options_.nominalHeight_m);
+}
+
 void DetectionLifter::liftOne(const lifting::Lifter& lifter,
                               const lifting::CameraPoseWorld& cameraPose,
                               VehicleObservation& observation) const {

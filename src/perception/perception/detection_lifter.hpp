@@ -78,6 +78,12 @@ struct VehicleObservation {
   // Set by the site's scene prior (site_prior.hpp, site.off_road: flag): the footprint centre
   // lies off every drivable and parking area, or on an exclusion area.
   bool offSite = false;
+  // Set by the surface prior (surface_prior.hpp, terrain.dsm_path): the vehicle stands on a
+  // structure of the surface model that no drivable or parking area marks (a roof; kept only with
+  // site.on_structure: flag or keep), or it was lifted again onto a deck (a bridge, a parking
+  // deck) whose surface its world values now lie on.
+  bool onStructure = false;
+  bool onDeck = false;
 };
 
 // What a frame's lift did.
@@ -160,6 +166,18 @@ class DetectionLifter {
                              const telemetry::PoseEstimate& pose,
                              std::span<const detection::Detection> detections,
                              std::span<VehicleObservation> out) const;
+
+  // Lifts one observation's detection with the given Lifter and camera pose, as liftFrame()
+  // does: liftStatus and the world values are set (the caller passes an observation whose world
+  // values are zero). The surface prior lifts a vehicle on a deck again with a DetectionLifter
+  // and a Lifter over the surface model. Never allocates.
+  void liftObservation(const lifting::Lifter& lifter, const lifting::CameraPoseWorld& cameraPose,
+                       VehicleObservation& observation) const {
+    liftOne(lifter, cameraPose, observation);
+  }
+  // The height above the ground at which a detection's box is lifted (the options' share of its
+  // most likely type's height).
+  double boxHeight_m(const detection::Detection& detection) const;
 
  private:
   void liftOne(const lifting::Lifter& lifter, const lifting::CameraPoseWorld& cameraPose,
