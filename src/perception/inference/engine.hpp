@@ -3,7 +3,7 @@
 // Contract:
 //  - load() reads an ONNX file in QDQ form (QuantizeLinear/DequantizeLinear around every
 //    activation, per-channel int8 weights; docs/inference.md lists the accepted patterns and
-//    the exact operator coverage) and builds one of three backends on the same file:
+//    the exact operator coverage) and builds one of these backends on the same file:
 //      XnnpackInt8  int8 activations, per-channel int8 weights (XNNPACK QS8/QC8 kernels);
 //      XnnpackFp32  the same graph in float (weights dequantized, Q/DQ pairs dropped);
 //      OpenCvFp32   OpenCV DNN on the same graph with Q/DQ folded away (the reference).
@@ -23,7 +23,8 @@
 //    dequantized for the int8 backend; the raw int8 tensor and its scale/zero point are
 //    also available there.
 //  - Everything (tensors, scratch, operator workspaces, thread pool) is allocated in load();
-//    for the XNNPACK and oneDNN backends run() performs no heap allocation. Not thread-safe: one
+//    for the XNNPACK backends run() performs no heap allocation (DnnlInt8 does: oneDNN
+//    allocates inside every primitive call, see dnnl_int8.hpp). Not thread-safe: one
 //    engine per thread; its own work is spread over `threads` pthreadpool workers.
 #pragma once
 
