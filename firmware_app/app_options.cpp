@@ -55,6 +55,8 @@ Usage: vp_firmware_app --config FILE [options]
                          docs/field_data.md
   --no-dds               publish nothing over DDS (dds.enabled false)
   --threads N            perception threads, 1..16 (perception.threads)
+  --backend NAME         inference backend of both networks: int8, fp32, opencv, int8-dnnl,
+                         auto (perception.backend; docs/inference.md)
   --quiet                no periodic statistics line (the final summary is still printed)
   --help                 this text
 
@@ -103,7 +105,7 @@ ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* ou
     } else if (arg == "--config" || arg == "--sequence" || arg == "--camera" ||
                arg == "--camera-bus" || arg == "--trajectory-csv" || arg == "--detections-csv" ||
                arg == "--traffic-dir" || arg == "--annotated-video" || arg == "--record" ||
-               arg == "--max-frames" || arg == "--threads") {
+               arg == "--max-frames" || arg == "--threads" || arg == "--backend") {
       if (!value(&text)) {
         return fail(std::string(arg) + ": needs a value");
       }
@@ -128,6 +130,12 @@ ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* ou
       } else if (arg == "--max-frames") {
         if (!parseInteger(text, &line.maxFrames) || line.maxFrames < 0) {
           return fail("--max-frames: expected an integer >= 0, got '" + text + "'");
+        }
+      } else if (arg == "--backend") {
+        line.backend = inference::backendFromString(text);
+        if (!line.backend) {
+          return fail("--backend: expected int8, fp32, opencv, int8-dnnl or auto, got '" + text +
+                      "'");
         }
       } else {
         int threads = 0;
@@ -182,6 +190,10 @@ void applyCommandLine(const CommandLine& line, config::AppConfig& config) {
     // As perception.threads: the detector's and the preprocessing's threads.
     config.perception.detection.engine.threads = *line.threads;
     config.perception.preprocess.threads = *line.threads;
+  }
+  if (line.backend) {
+    // As perception.backend: the detector's engine; the crop network follows it.
+    config.perception.detection.engine.backend = *line.backend;
   }
   if (line.trajectoryCsv) {
     config.app.trajectoryCsv = absolute(*line.trajectoryCsv);

@@ -43,6 +43,7 @@ struct CommandLine {
   std::optional<std::string> annotatedVideo;
   std::optional<std::string> recordDir;
   std::optional<int> threads;
+  std::optional<inference::Backend> backend;
 };
 
 enum class ParseOutcome { Run, Help, UsageError };

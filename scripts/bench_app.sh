@@ -7,6 +7,9 @@
 #      peak RSS (/usr/bin/time -v);
 #   2. a source faster than the loop (--fast, drop-oldest), 2 cores: drops counted, latency
 #      bounded.
+# BACKENDS="int8 int8-dnnl" (default "int8") repeats the runs per inference backend
+# (--backend; int8-dnnl needs an x86 build with oneDNN, docs/inference.md), one after the
+# other, so their fps sit side by side.
 # Without SEQUENCE_DIR, FRAMES frames are rendered with vp_simulate (seed 5) into /tmp.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -40,7 +43,7 @@ run() {  # run NAME CPUS THREADS ARGS...
     --no-dds --quiet --threads "$threads" "$@" 2>"$out/$name.log" >/dev/null
   local rss
   rss=$(awk -F: '/Maximum resident set size/ { gsub(/ /, "", $2); print $2 }' "$out/$name.log")
-  printf '%-22s %6s fps  in %4s processed %4s dropped %4s |' "$name" \
+  printf '%-32s %6s fps  in %4s processed %4s dropped %4s |' "$name" \
     "$(value fps "$out/$name.log")" "$(value frames_in "$out/$name.log")" \
     "$(value processed "$out/$name.log")" "$(value dropped "$out/$name.log")"
   for stage in preprocess detector decode crops lift track e2e queue; do
@@ -51,6 +54,8 @@ run() {  # run NAME CPUS THREADS ARGS...
 }
 
 echo "ms median/p99 per stage; e2e = capture -> published; queue = capture -> processing start"
-run every_frame_1_core 0 1 --fast --every-frame
-run every_frame_2_cores 0-1 2 --fast --every-frame
-run fast_source_2_cores 0-1 2 --fast
+for backend in ${BACKENDS:-int8}; do
+  run "every_frame_1_core_$backend" 0 1 --fast --every-frame --backend "$backend"
+  run "every_frame_2_cores_$backend" 0-1 2 --fast --every-frame --backend "$backend"
+  run "fast_source_2_cores_$backend" 0-1 2 --fast --backend "$backend"
+done

@@ -1,11 +1,11 @@
-// vp_bench_engine: Engine::run latency of the three backends on one QDQ model, side by side.
+// vp_bench_engine: Engine::run latency of the backends on one QDQ model, side by side.
 //
 // Model: --model=PATH (consumed before Google Benchmark sees the arguments), else the
 // environment variable VP_BENCH_MODEL, else /tmp/vp_bench_models/mobilenetv2_512.onnx
 // (written by tools/engine/make_test_models.py --bench). One benchmark per backend
-// {XnnpackInt8, XnnpackFp32, OpenCvFp32} x threads {1, 2}, each timing Engine::run on a
-// fixed random image (wall-clock time), with the counters MAC (= Engine::totalMacs() / time, per
-// second; 30.5G/s means 30.5 GMAC/s) and GMAC (per run).
+// {XnnpackInt8, DnnlInt8 (builds with oneDNN), XnnpackFp32, OpenCvFp32} x threads {1, 2}, each
+// timing Engine::run on a fixed random image (wall-clock time), with the counters MAC (=
+// Engine::totalMacs() / time, per second; 30.5G/s means 30.5 GMAC/s) and GMAC (per run).
 //
 // Run (medians over repetitions):
 //   vp_bench_engine --model=m.onnx --benchmark_repetitions=10
@@ -22,6 +22,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "inference/dnnl_int8.hpp"
 #include "inference/engine.hpp"
 
 namespace {
@@ -97,9 +98,17 @@ int main(int argc, char** argv) {
     Backend backend;
     const char* name;
   };
-  const Variant variants[] = {{Backend::XnnpackInt8, "XnnpackInt8"},
-                              {Backend::XnnpackFp32, "XnnpackFp32"},
-                              {Backend::OpenCvFp32, "OpenCvFp32"}};
+  // The oneDNN int8 backend only where it is built (x86 with libdnnl-dev).
+  const bool dnnl = vp::inference::dnnlInt8Available();
+  const Variant all[] = {{Backend::XnnpackInt8, "XnnpackInt8"},
+                         {Backend::DnnlInt8, "DnnlInt8"},
+                         {Backend::XnnpackFp32, "XnnpackFp32"},
+                         {Backend::OpenCvFp32, "OpenCvFp32"}};
+  std::vector<Variant> variants;
+  for (const Variant& variant : all) {
+    if (variant.backend != Backend::DnnlInt8 || dnnl)
+      variants.push_back(variant);
+  }
   for (const Variant& variant : variants) {
     const Backend backend = variant.backend;
     for (const int threads : {1, 2}) {

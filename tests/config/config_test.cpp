@@ -738,7 +738,7 @@ const MalformedCase kMalformedCases[] = {
      "expected a string, got a sequence of 1 element(s)"},
     {"asm: models/asm.yaml", "asm: {a: 1}", "perception.asm", "expected a string, got a map"},
     {"backend: fp32", "backend: int4", "perception.backend",
-     "unknown value 'int4' (expected int8, fp32, opencv)"},
+     "unknown value 'int4' (expected int8, fp32, opencv, int8-dnnl, auto)"},
     {"  threads: 2", "  threads: 0", "perception.threads", "must be in [1, 16], got 0"},
     {"crop_threads: 3", "crop_threads: 17", "perception.crop_threads",
      "must be in [1, 16], got 17"},

@@ -4,6 +4,7 @@
 #include "detection/detection_stage.hpp"
 #include "synthetic_frame.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "inference/dnnl_int8.hpp"
 
 namespace vp::detection {
 namespace {
@@ -315,6 +317,74 @@ TEST(DetectionStage, InitNamesModelProblems) {
   EXPECT_FALSE(stage.init(options, 1, &why));
   EXPECT_NE(why.find("max_crops"), std::string::npos) << why;
   EXPECT_FALSE(stage.initialised());
+}
+
+// The oneDNN int8 backend (int8-dnnl, what `auto` picks on VNNI CPUs) decodes the same
+// detections as XNNPACK's on a simulated frame. The two differ only by requantization
+// rounding (a heatmap value may move by a step), so with the test's threshold of 0 the
+// weakest local maxima can appear in one run and not the other; every detection scoring
+// above kSolidScore must have its twin in the other run: the same place (centre within 1 px,
+// length within 2 px of a ~150 px car: one or two offset/size quantization steps scaled from
+// the 4 px output grid to the frame), the same type, a score within 0.02.
+TEST(DetectionStage, OneDnnBackendDecodesTheSameDetectionsAsXnnpack) {
+  if (!inference::dnnlInt8Available())
+    GTEST_SKIP() << "this build has no oneDNN (libdnnl-dev absent at configure time)";
+  if (!inference::cpuHasVnni())
+    GTEST_SKIP() << "this CPU has no AVX512-VNNI / AVX-VNNI: int8-dnnl is not what it would use";
+  preprocess::Preprocessor pre;
+  std::string why;
+  ASSERT_TRUE(pre.init(undistorting(), camera2592(), {2592, 2048}, &why)) << why;
+  ASSERT_EQ(pre.process(sceneFrame()), preprocess::PreprocessStatus::Ok);
+  std::array<std::array<Detection, kMaxDetectionsPerFrame>, 2> out{};
+  std::array<std::size_t, 2> count{};
+  const std::array<inference::Backend, 2> backends{inference::Backend::XnnpackInt8,
+                                                   inference::Backend::DnnlInt8};
+  for (std::size_t b = 0; b < 2; ++b) {
+    DetectionStageOptions options = stageOptions(1);
+    options.engine.backend = backends[b];
+    DetectionStage stage;
+    ASSERT_TRUE(stage.init(options, static_cast<int>(pre.tileCount()), &why)) << why;
+    ASSERT_EQ(stage.run(pre.output(), out[b], &count[b]), DetectionStatus::Ok);
+  }
+  constexpr float kSolidScore = 0.05F;
+  std::size_t solid = 0;
+  double maxShift = 0.0;
+  double maxLength = 0.0;
+  double maxScore = 0.0;
+  for (std::size_t from = 0; from < 2; ++from) {
+    const std::size_t to = 1 - from;
+    for (std::size_t i = 0; i < count[from]; ++i) {
+      const Detection& d = out[from][i];
+      if (d.score < kSolidScore)
+        continue;
+      solid += from == 0 ? 1U : 0U;
+      const Detection* twin = nullptr;
+      double best = 1e9;
+      for (std::size_t j = 0; j < count[to]; ++j) {
+        const Detection& e = out[to][j];
+        const double dist = std::hypot(e.box.cx - d.box.cx, e.box.cy - d.box.cy);
+        if (dist < best) {
+          best = dist;
+          twin = &e;
+        }
+      }
+      ASSERT_NE(twin, nullptr) << "no detections from " << inference::toString(backends[to]);
+      EXPECT_LE(best, 1.0) << inference::toString(backends[from]) << " detection " << i
+                           << " has no twin";
+      maxShift = std::max(maxShift, best);
+      maxLength = std::max(maxLength, std::abs(twin->box.length - d.box.length));
+      maxScore = std::max(maxScore, static_cast<double>(std::abs(twin->score - d.score)));
+      EXPECT_EQ(topTwoTypes(*twin).first, topTwoTypes(d).first) << "detection " << i;
+    }
+  }
+  std::printf(
+      "  int8 %zu / int8-dnnl %zu detections, %zu above %.2f; twins: max centre "
+      "distance %.3f px, length difference %.3f px, score difference %.4f\n",
+      count[0], count[1], solid, static_cast<double>(kSolidScore), maxShift, maxLength, maxScore);
+  EXPECT_GT(solid, 0U) << "the frame gives no solid detection: the comparison is empty";
+  EXPECT_LE(maxShift, 1.0);
+  EXPECT_LE(maxLength, 2.0);
+  EXPECT_LE(maxScore, 0.02);
 }
 
 }  // namespace

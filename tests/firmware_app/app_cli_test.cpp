@@ -63,7 +63,8 @@ TEST(AppCli, HelpListsEveryOptionAndExitsZero) {
   for (const char* option : {"--config", "--sequence", "--camera", "--camera-bus", "--fast",
                              "--every-frame", "--loop", "--max-frames", "--trajectory-csv",
                              "--detections-csv", "--traffic-dir", "--annotated-video", "--record",
-                             "--no-dds", "--threads", "--quiet", "--help", "Exit status"}) {
+                             "--no-dds", "--threads", "--backend", "--quiet", "--help",
+                             "Exit status"}) {
     EXPECT_NE(help.output.find(option), std::string::npos) << option;
   }
 }
@@ -78,6 +79,11 @@ TEST(AppCli, UsageErrorsExitTwoNamingTheOption) {
   r = runApp("--config " + kDefaultConfig + " --threads 99");
   EXPECT_EQ(r.exitCode, 2);
   EXPECT_NE(r.output.find("--threads: expected an integer in [1, 16], got '99'"), std::string::npos)
+      << r.output;
+  r = runApp("--config " + kDefaultConfig + " --backend int4");
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.output.find("--backend: expected int8, fp32, opencv, int8-dnnl or auto, got 'int4'"),
+            std::string::npos)
       << r.output;
   r = runApp("--config " + kDefaultConfig + " --sequence a --camera /dev/video0");
   EXPECT_EQ(r.exitCode, 2);

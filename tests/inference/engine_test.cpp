@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "inference/dnnl_int8.hpp"
 #include "inference/engine.hpp"
 
 namespace fs = std::filesystem;
@@ -470,8 +471,11 @@ TEST(InferenceEngine, MatchesGeneratorReferenceOutputs) {
     const cv::Mat bgr = cv::imread(png.string(), cv::IMREAD_COLOR);
     ASSERT_FALSE(bgr.empty()) << png;
     const ImageView view{bgr.data, bgr.cols, bgr.rows, bgr.step[0]};
-    for (const Backend b : {Backend::XnnpackInt8, Backend::XnnpackFp32, Backend::OpenCvFp32}) {
-      const bool int8 = b == Backend::XnnpackInt8;
+    for (const Backend b :
+         {Backend::XnnpackInt8, Backend::DnnlInt8, Backend::XnnpackFp32, Backend::OpenCvFp32}) {
+      if (b == Backend::DnnlInt8 && !vp::inference::dnnlInt8Available())
+        continue;  // builds without oneDNN (dnnl_int8_test.cpp says so with a skip)
+      const bool int8 = b == Backend::XnnpackInt8 || b == Backend::DnnlInt8;
       const fs::path bin = kModelDir / (name + (int8 ? "_ref_int8.bin" : "_ref_fp32.bin"));
       std::ifstream in(bin, std::ios::binary);
       ASSERT_TRUE(in) << bin;

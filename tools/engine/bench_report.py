@@ -77,7 +77,7 @@ def main() -> int:
     rows = engine_rows(args.engine_json)
     errors = [r["error"] for r in rows if "error" in r]
     rows = [r for r in rows if "error" not in r]
-    order = {"XnnpackInt8": 0, "XnnpackFp32": 1, "OpenCvFp32": 2}
+    order = {"XnnpackInt8": 0, "DnnlInt8": 1, "XnnpackFp32": 2, "OpenCvFp32": 3}
     rows.sort(key=lambda r: (order.get(r["key"][0], 9), r["threads"]))
     torch_macs = None
     if args.torch_json and os.path.exists(args.torch_json):

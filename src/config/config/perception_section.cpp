@@ -29,7 +29,7 @@ const Range kWhiteBalanceGridRange = Range::closed(1.0, 8.0);  // rows x cols <=
 const Range kSampleStrideRange_px = Range::closed(1.0, 64.0);
 const Range kMaxGainRange = Range::closed(1.0, 16.0);
 
-constexpr std::string_view kBackendNames = "int8, fp32, opencv";
+constexpr std::string_view kBackendNames = "int8, fp32, opencv, int8-dnnl, auto";
 
 // The working frame must still be an image: at least as many pixels as the smallest camera.
 constexpr int kMinWorkingSide_px = 16;

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "inference/backend.hpp"
+#include "inference/dnnl_int8.hpp"
 #include "inference/model_checksum.hpp"
 #include "inference/onnx_graph.hpp"
 #include "inference/opencv_backend.hpp"
@@ -22,6 +23,10 @@ const char* toString(Backend backend) {
       return "fp32";
     case Backend::OpenCvFp32:
       return "opencv";
+    case Backend::DnnlInt8:
+      return "int8-dnnl";
+    case Backend::Auto:
+      return "auto";
   }
   return "?";
 }
@@ -33,7 +38,15 @@ std::optional<Backend> backendFromString(const std::string& name) {
     return Backend::XnnpackFp32;
   if (name == "opencv")
     return Backend::OpenCvFp32;
+  if (name == "int8-dnnl")
+    return Backend::DnnlInt8;
+  if (name == "auto")
+    return Backend::Auto;
   return std::nullopt;
+}
+
+Backend resolveAutoBackend() {
+  return dnnlInt8Available() && cpuHasVnni() ? Backend::DnnlInt8 : Backend::XnnpackInt8;
 }
 
 const char* toString(RunStatus status) {
@@ -70,7 +83,9 @@ class Engine::Impl {
       *why = path + ": threads must be >= 1 (got " + std::to_string(options.threads) + ")";
       return false;
     }
-    switch (options.backend) {
+    const Backend kind = options.backend == Backend::Auto ? resolveAutoBackend() : options.backend;
+    switch (kind) {
+      case Backend::Auto:
       case Backend::XnnpackInt8:
         backend_ = createXnnpackInt8Backend(graph_, options.threads, why);
         break;
@@ -80,10 +95,13 @@ class Engine::Impl {
       case Backend::OpenCvFp32:
         backend_ = createOpenCvBackend(bytes, graph_, options.threads, why);
         break;
+      case Backend::DnnlInt8:
+        backend_ = createDnnlInt8Backend(graph_, options.threads, why);
+        break;
     }
     if (!backend_)
       return false;
-    backendKind_ = options.backend;
+    backendKind_ = kind;
     normalization_ = options.normalization.value_or(graph_.normalization);
     inputShape_ = graph_.tensors[static_cast<std::size_t>(graph_.inputTensor)].shape;
     buildInputTable(options.imageOrder);

@@ -3,10 +3,14 @@
 // Contract:
 //  - load() reads an ONNX file in QDQ form (QuantizeLinear/DequantizeLinear around every
 //    activation, per-channel int8 weights; docs/inference.md lists the accepted patterns and
-//    the exact operator coverage) and builds one of three backends on the same file:
+//    the exact operator coverage) and builds one of these backends on the same file:
 //      XnnpackInt8  int8 activations, per-channel int8 weights (XNNPACK QS8/QC8 kernels);
 //      XnnpackFp32  the same graph in float (weights dequantized, Q/DQ pairs dropped);
 //      OpenCvFp32   OpenCV DNN on the same graph with Q/DQ folded away (the reference).
+//      DnnlInt8     the int8 graph with its convolutions on oneDNN (VNNI kernels), the other
+//                   nodes on XNNPACK (dnnl_int8.hpp); only in builds with oneDNN (x86);
+//      Auto         DnnlInt8 when the build has oneDNN and the CPU has VNNI, else XnnpackInt8:
+//                   resolved in load(), backend() then names the one that runs.
 //    Every problem (unsupported operator, shape mismatch, missing scale, truncated or corrupt
 //    file, wrong input layout) fails load() with a message naming the file and the node.
 //  - The model has one image input [1, 3, H, W] and one or more outputs. run() takes an 8-bit
@@ -19,8 +23,9 @@
 //    dequantized for the int8 backend; the raw int8 tensor and its scale/zero point are
 //    also available there.
 //  - Everything (tensors, scratch, operator workspaces, thread pool) is allocated in load();
-//    for the XNNPACK backends run() performs no heap allocation. Not thread-safe: one engine
-//    per thread; its own work is spread over `threads` pthreadpool workers.
+//    for the XNNPACK backends run() performs no heap allocation (DnnlInt8 does: oneDNN
+//    allocates inside every primitive call, see dnnl_int8.hpp). Not thread-safe: one
+//    engine per thread; its own work is spread over `threads` pthreadpool workers.
 #pragma once
 
 #include <array>
@@ -33,9 +38,12 @@
 
 namespace vp::inference {
 
-enum class Backend { XnnpackInt8, XnnpackFp32, OpenCvFp32 };
+enum class Backend { XnnpackInt8, XnnpackFp32, OpenCvFp32, DnnlInt8, Auto };
 const char* toString(Backend backend);
-std::optional<Backend> backendFromString(const std::string& name);  // "int8", "fp32", "opencv"
+// "int8", "fp32", "opencv", "int8-dnnl", "auto"
+std::optional<Backend> backendFromString(const std::string& name);
+// What Auto means on this machine and build: DnnlInt8 or XnnpackInt8 (see DnnlInt8 above).
+Backend resolveAutoBackend();
 
 enum class ChannelOrder { Bgr, Rgb };
 
@@ -75,7 +83,7 @@ struct OutputTensor {
   std::string name;
   TensorShape shape;                       // logical NCHW shape, as in the ONNX graph
   const float* data = nullptr;             // NHWC, shape.elements() values, valid until next run
-  const std::int8_t* quantized = nullptr;  // NHWC int8 (XnnpackInt8 only, else nullptr)
+  const std::int8_t* quantized = nullptr;  // NHWC int8 (XnnpackInt8, DnnlInt8; else nullptr)
   float scale = 1.0F;                      // quantized -> float: (q - zeroPoint) * scale
   int zeroPoint = 0;
 };

@@ -47,6 +47,8 @@ ThreadPool makeThreadPool(int threads) {
 bool Step::run(pthreadpool_t pool) const {
   if (op)
     return xnn_run_operator(op.get(), pool) == xnn_status_success;
+  if (external != nullptr)
+    return external->run();
   if (lutInput != nullptr) {
     for (std::size_t i = 0; i < count; ++i) {
       lutOutput[i] = lut[static_cast<std::size_t>(static_cast<int>(lutInput[i]) + 128)];

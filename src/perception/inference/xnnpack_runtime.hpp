@@ -3,8 +3,9 @@
 // Contract: initializeXnnpack() calls xnn_initialize(nullptr) once per process (thread-safe,
 // the default allocator) and reports its status on every call. XnnOperator and ThreadPool
 // own an operator / a pthreadpool (nullptr pool = run on the calling thread). Step is one
-// unit of run(): an XNNPACK operator or a small loop of our own (a 256-entry int8 table or an
-// element-wise float function) over preallocated buffers; running a step never allocates.
+// unit of run(): an XNNPACK operator, a small loop of our own (a 256-entry int8 table or an
+// element-wise float function) or an ExternalStep of another library (oneDNN), over
+// preallocated buffers; running a step never allocates.
 // xnnStatusText() turns a status into words for load errors.
 #pragma once
 
@@ -36,8 +37,17 @@ ThreadPool makeThreadPool(int threads);  // nullptr for threads <= 1
 
 enum class FloatFunction { Tanh };
 
+// A unit of run() owned by something else than XNNPACK (the oneDNN convolutions of the
+// DnnlInt8 backend); run() must not allocate and reports failure as false.
+class ExternalStep {
+ public:
+  virtual ~ExternalStep() = default;
+  virtual bool run() = 0;
+};
+
 struct Step {
-  XnnOperator op;  // when set, the step is xnn_run_operator(op)
+  XnnOperator op;                    // when set, the step is xnn_run_operator(op)
+  ExternalStep* external = nullptr;  // else when set, the step is external->run() (not owned)
   // Otherwise an int8 table lookup (lut) or a float function over `count` elements.
   const std::int8_t* lutInput = nullptr;
   std::int8_t* lutOutput = nullptr;
