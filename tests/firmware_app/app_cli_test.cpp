@@ -60,11 +60,11 @@ const std::string kSequence = std::string(VP_FIXTURE_DIR) + "/sequence_min";
 TEST(AppCli, HelpListsEveryOptionAndExitsZero) {
   const Result help = runApp("--help");
   EXPECT_EQ(help.exitCode, 0);
-  for (const char* option : {"--config", "--sequence", "--camera", "--camera-bus", "--fast",
-                             "--every-frame", "--loop", "--max-frames", "--trajectory-csv",
-                             "--detections-csv", "--traffic-dir", "--annotated-video", "--record",
-                             "--no-dds", "--threads", "--backend", "--quiet", "--help",
-                             "Exit status"}) {
+  for (const char* option :
+       {"--config", "--sequence", "--camera", "--camera-bus", "--fast", "--every-frame", "--loop",
+        "--max-frames", "--trajectory-csv", "--detections-csv", "--traffic-dir",
+        "--annotated-video", "--record", "--no-dds", "--threads", "--backend", "--quiet", "--help",
+        "Exit status"}) {
     EXPECT_NE(help.output.find(option), std::string::npos) << option;
   }
 }
