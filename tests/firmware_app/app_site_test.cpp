@@ -27,62 +27,64 @@ namespace {
 
 // The truth's observations and, in every frame with a lifted vehicle, a copy of the first lifted
 // one moved onto the roof.
-class RoofInjector final : public FramePerception {
+class RoofInjector final : public test::TruthPlusOnePerception {
  public:
   RoofInjector(std::unique_ptr<test::TruthPerception> truth, const Eigen::Vector2d& roof_m)
-      : truth_(std::move(truth)), roof_m_(roof_m) {}
+      : TruthPlusOnePerception(std::move(truth), "ground truth + a roof"), roof_m_(roof_m) {}
 
-  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
-                                     const telemetry::PoseEstimate& pose) override {
-    const perception::PipelineStatus status = truth_->process(bgrFrame, timestamp_ns, pose);
-    summary_ = truth_->liftSummary();
-    const std::span<const perception::VehicleObservation> truth = truth_->observations();
-    std::size_t n = 0;
-    const perception::VehicleObservation* firstLifted = nullptr;
-    for (const perception::VehicleObservation& o : truth) {
-      if (n < observations_.size()) {
-        observations_[n++] = o;
-      }
-      if (o.liftStatus == perception::LiftStatus::Ok) {
-        ++truthLifted_;
-        firstLifted = firstLifted ? firstLifted : &o;
-      }
+ protected:
+  bool extra(const cv::Mat& /*bgrFrame*/, const perception::VehicleObservation& firstLifted,
+             perception::VehicleObservation* roof) override {
+    *roof = firstLifted;
+    const Eigen::Vector3d shift(roof_m_.x() - roof->ground.centreEnu.x(),
+                                roof_m_.y() - roof->ground.centreEnu.y(), 0.0);
+    roof->ground.centreEnu += shift;
+    for (Eigen::Vector3d& corner : roof->ground.cornersEnu) {
+      corner += shift;
     }
-    if (firstLifted != nullptr && n < observations_.size()) {
-      perception::VehicleObservation& roof = observations_[n++];
-      roof = *firstLifted;
-      const Eigen::Vector3d shift(roof_m_.x() - roof.ground.centreEnu.x(),
-                                  roof_m_.y() - roof.ground.centreEnu.y(), 0.0);
-      roof.ground.centreEnu += shift;
-      for (Eigen::Vector3d& corner : roof.ground.cornersEnu) {
-        corner += shift;
-      }
-      ++injected_;
-    }
-    summary_.written = n;
-    return status;
+    return true;
   }
-  std::span<const perception::VehicleObservation> observations() const override {
-    return {observations_.data(), summary_.written};
-  }
-  const perception::FrameLiftSummary& liftSummary() const override { return summary_; }
-  const perception::FrameFootprint& footprint() const override { return truth_->footprint(); }
-  const perception::PipelineTimings& timings() const override { return truth_->timings(); }
-  const char* lastError() const override { return truth_->lastError(); }
-  const cv::Mat& correctedFrame() const override { return truth_->correctedFrame(); }
-  const lifting::Lifter& lifter() const override { return truth_->lifter(); }
-  const char* modelId() const override { return "ground truth + a roof"; }
-
-  std::uint64_t injected() const { return injected_; }
-  std::uint64_t truthLifted() const { return truthLifted_; }
 
  private:
-  std::unique_ptr<test::TruthPerception> truth_;
   Eigen::Vector2d roof_m_;
-  std::array<perception::VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
-  perception::FrameLiftSummary summary_{};
-  std::uint64_t injected_ = 0;
-  std::uint64_t truthLifted_ = 0;
+};
+}
+const perception::FrameLiftSummary& liftSummary() const override {
+  return summary_;
+}
+const perception::FrameFootprint& footprint() const override {
+  return truth_->footprint();
+}
+const perception::PipelineTimings& timings() const override {
+  return truth_->timings();
+}
+const char* lastError() const override {
+  return truth_->lastError();
+}
+const cv::Mat& correctedFrame() const override {
+  return truth_->correctedFrame();
+}
+const lifting::Lifter& lifter() const override {
+  return truth_->lifter();
+}
+const char* modelId() const override {
+  return "ground truth + a roof";
+}
+
+std::uint64_t injected() const {
+  return injected_;
+}
+std::uint64_t truthLifted() const {
+  return truthLifted_;
+}
+
+private:
+std::unique_ptr<test::TruthPerception> truth_;
+Eigen::Vector2d roof_m_;
+std::array<perception::VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
+perception::FrameLiftSummary summary_{};
+std::uint64_t injected_ = 0;
+std::uint64_t truthLifted_ = 0;
 };
 
 // The centre of the sequence's first building (an exclusion area of its site file).

@@ -70,79 +70,88 @@ std::vector<Eigen::Vector3d> roofPoints(const std::string& dir) {
 // The truth's observations and, in every frame with a camera pose, one vehicle on the first roof
 // point that shows in the image: its box (the first truth box's size and angle, centred on the
 // roof point's pixel) lifted on the DTM, where it lands beyond the building on a tilted view.
-class RoofVehicleInjector final : public FramePerception {
+class RoofVehicleInjector final : public test::TruthPlusOnePerception {
  public:
   RoofVehicleInjector(std::unique_ptr<test::TruthPerception> truth,
                       std::vector<Eigen::Vector3d> roofs)
-      : truth_(std::move(truth)), roofs_(std::move(roofs)) {}
+      : TruthPlusOnePerception(std::move(truth), "ground truth + a roof vehicle"),
+        roofs_(std::move(roofs)) {}
 
-  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
-                                     const telemetry::PoseEstimate& pose) override {
-    const perception::PipelineStatus status = truth_->process(bgrFrame, timestamp_ns, pose);
-    summary_ = truth_->liftSummary();
-    std::size_t n = 0;
-    const perception::VehicleObservation* firstLifted = nullptr;
-    for (const perception::VehicleObservation& o : truth_->observations()) {
-      if (n < observations_.size()) {
-        observations_[n++] = o;
-      }
-      if (o.liftStatus == perception::LiftStatus::Ok) {
-        ++truthLifted_;
-        firstLifted = firstLifted ? firstLifted : &o;
-      }
-    }
-    if (firstLifted != nullptr && n < observations_.size()) {
-      const lifting::Lifter& lifter = truth_->lifter();
-      const double width = bgrFrame.cols;
-      const double height = bgrFrame.rows;
-      for (const Eigen::Vector3d& roof : roofs_) {
-        const auto pixel = lifter.worldToPixel(summary_.cameraPose, roof);
-        if (!pixel || pixel->x() < 10.0 || pixel->y() < 10.0 || pixel->x() > width - 10.0 ||
-            pixel->y() > height - 10.0) {
-          continue;
-        }
-        perception::VehicleObservation vehicle = *firstLifted;
-        vehicle.detection.box.cx = pixel->x();
-        vehicle.detection.box.cy = pixel->y();
-        const auto ground = lifter.boxToGround(summary_.cameraPose, vehicle.detection.box, 0.0);
-        if (!ground) {
-          continue;
-        }
-        vehicle.ground = *ground;
-        if (liftedRoof_.isZero()) {
-          liftedRoof_ = ground->centreEnu.head<2>();
-        }
-        observations_[n++] = vehicle;
-        ++injected_;
-        break;
-      }
-    }
-    summary_.written = n;
-    return status;
-  }
-  std::span<const perception::VehicleObservation> observations() const override {
-    return {observations_.data(), summary_.written};
-  }
-  const perception::FrameLiftSummary& liftSummary() const override { return summary_; }
-  const perception::FrameFootprint& footprint() const override { return truth_->footprint(); }
-  const perception::PipelineTimings& timings() const override { return truth_->timings(); }
-  const char* lastError() const override { return truth_->lastError(); }
-  const cv::Mat& correctedFrame() const override { return truth_->correctedFrame(); }
-  const lifting::Lifter& lifter() const override { return truth_->lifter(); }
-  const char* modelId() const override { return "ground truth + a roof vehicle"; }
-
-  std::uint64_t injected() const { return injected_; }
-  std::uint64_t truthLifted() const { return truthLifted_; }
   Eigen::Vector2d liftedRoof() const { return liftedRoof_; }
 
+ protected:
+  bool extra(const cv::Mat& bgrFrame, const perception::VehicleObservation& firstLifted,
+             perception::VehicleObservation* vehicle) override {
+    const lifting::Lifter& lift = lifter();
+    const double width = bgrFrame.cols;
+    const double height = bgrFrame.rows;
+    for (const Eigen::Vector3d& roof : roofs_) {
+      const auto pixel = lift.worldToPixel(summary().cameraPose, roof);
+      if (!pixel || pixel->x() < 10.0 || pixel->y() < 10.0 || pixel->x() > width - 10.0 ||
+          pixel->y() > height - 10.0) {
+        continue;
+      }
+      *vehicle = firstLifted;
+      vehicle->detection.box.cx = pixel->x();
+      vehicle->detection.box.cy = pixel->y();
+      const auto ground = lift.boxToGround(summary().cameraPose, vehicle->detection.box, 0.0);
+      if (!ground) {
+        continue;
+      }
+      vehicle->ground = *ground;
+      if (liftedRoof_.isZero()) {
+        liftedRoof_ = ground->centreEnu.head<2>();
+      }
+      return true;
+    }
+    return false;
+  }
+
  private:
-  std::unique_ptr<test::TruthPerception> truth_;
   std::vector<Eigen::Vector3d> roofs_;
-  std::array<perception::VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
-  perception::FrameLiftSummary summary_{};
-  std::uint64_t injected_ = 0;
-  std::uint64_t truthLifted_ = 0;
   Eigen::Vector2d liftedRoof_ = Eigen::Vector2d::Zero();
+};
+}
+const perception::FrameLiftSummary& liftSummary() const override {
+  return summary_;
+}
+const perception::FrameFootprint& footprint() const override {
+  return truth_->footprint();
+}
+const perception::PipelineTimings& timings() const override {
+  return truth_->timings();
+}
+const char* lastError() const override {
+  return truth_->lastError();
+}
+const cv::Mat& correctedFrame() const override {
+  return truth_->correctedFrame();
+}
+const lifting::Lifter& lifter() const override {
+  return truth_->lifter();
+}
+const char* modelId() const override {
+  return "ground truth + a roof vehicle";
+}
+
+std::uint64_t injected() const {
+  return injected_;
+}
+std::uint64_t truthLifted() const {
+  return truthLifted_;
+}
+Eigen::Vector2d liftedRoof() const {
+  return liftedRoof_;
+}
+
+private:
+std::unique_ptr<test::TruthPerception> truth_;
+std::vector<Eigen::Vector3d> roofs_;
+std::array<perception::VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
+perception::FrameLiftSummary summary_{};
+std::uint64_t injected_ = 0;
+std::uint64_t truthLifted_ = 0;
+Eigen::Vector2d liftedRoof_ = Eigen::Vector2d::Zero();
 };
 
 struct SurfaceRun {

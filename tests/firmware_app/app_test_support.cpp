@@ -262,4 +262,29 @@ bool waitUntilRunning(const std::string& stderrLog, std::chrono::seconds timeout
   return true;
 }
 
+perception::PipelineStatus TruthPlusOnePerception::process(const cv::Mat& bgrFrame,
+                                                           std::int64_t timestamp_ns,
+                                                           const telemetry::PoseEstimate& pose) {
+  const perception::PipelineStatus status = truth_->process(bgrFrame, timestamp_ns, pose);
+  summary_ = truth_->liftSummary();
+  std::size_t n = 0;
+  const perception::VehicleObservation* firstLifted = nullptr;
+  for (const perception::VehicleObservation& o : truth_->observations()) {
+    if (n < observations_.size()) {
+      observations_[n++] = o;
+    }
+    if (o.liftStatus == perception::LiftStatus::Ok) {
+      ++truthLifted_;
+      firstLifted = firstLifted ? firstLifted : &o;
+    }
+  }
+  if (firstLifted != nullptr && n < observations_.size() &&
+      extra(bgrFrame, *firstLifted, &observations_[n])) {
+    ++n;
+    ++injected_;
+  }
+  summary_.written = n;
+  return status;
+}
+
 }  // namespace vp::test

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <sys/types.h>
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -159,6 +160,43 @@ class ForwardingPerception : public app::FramePerception {
 
  private:
   std::unique_ptr<app::FramePerception> inner_;
+};
+
+// The truth's observations and, in a frame with a lifted truth vehicle, at most one more that
+// extra() makes from the first lifted one (the site's and the surface model's roof tests).
+class TruthPlusOnePerception : public app::FramePerception {
+ public:
+  TruthPlusOnePerception(std::unique_ptr<TruthPerception> truth, const char* modelId)
+      : truth_(std::move(truth)), modelId_(modelId) {}
+  perception::PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
+                                     const telemetry::PoseEstimate& pose) override;
+  std::span<const perception::VehicleObservation> observations() const override {
+    return {observations_.data(), summary_.written};
+  }
+  const perception::FrameLiftSummary& liftSummary() const override { return summary_; }
+  const perception::FrameFootprint& footprint() const override { return truth_->footprint(); }
+  const perception::PipelineTimings& timings() const override { return truth_->timings(); }
+  const char* lastError() const override { return truth_->lastError(); }
+  const cv::Mat& correctedFrame() const override { return truth_->correctedFrame(); }
+  const lifting::Lifter& lifter() const override { return truth_->lifter(); }
+  const char* modelId() const override { return modelId_; }
+
+  std::uint64_t injected() const { return injected_; }
+  std::uint64_t truthLifted() const { return truthLifted_; }
+
+ protected:
+  // The extra vehicle of this frame from the first lifted truth vehicle; false: none.
+  virtual bool extra(const cv::Mat& bgrFrame, const perception::VehicleObservation& firstLifted,
+                     perception::VehicleObservation* vehicle) = 0;
+  const perception::FrameLiftSummary& summary() const { return summary_; }
+
+ private:
+  std::unique_ptr<TruthPerception> truth_;
+  const char* modelId_;
+  std::array<perception::VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
+  perception::FrameLiftSummary summary_{};
+  std::uint64_t injected_ = 0;
+  std::uint64_t truthLifted_ = 0;
 };
 
 // The whole file as text ("" when it cannot be read).

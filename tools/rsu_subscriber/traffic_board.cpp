@@ -110,8 +110,12 @@ void TrafficBoard::fillOverlay(BevOverlay& overlay) const {
   head << "traffic: " << seen_.size() << " periods, " << events_ << " events";
   overlay.lines.push_back(head.str());
   for (const auto& [gate, total] : totals_) {
-    overlay.gateLabel[gate] =
-        "F" + std::to_string(total.first) + " B" + std::to_string(total.second);
+    // Appended piece by piece: GCC 12's -Wrestrict misreads "literal" + std::string&& at -O3.
+    std::string label = "F";
+    label += std::to_string(total.first);
+    label += " B";
+    label += std::to_string(total.second);
+    overlay.gateLabel[gate] = label;
     overlay.lines.push_back("gate " + gate + ": forward " + std::to_string(total.first) +
                             ", backward " + std::to_string(total.second));
   }
