@@ -48,44 +48,6 @@ class RoofInjector final : public test::TruthPlusOnePerception {
  private:
   Eigen::Vector2d roof_m_;
 };
-}
-const perception::FrameLiftSummary& liftSummary() const override {
-  return summary_;
-}
-const perception::FrameFootprint& footprint() const override {
-  return truth_->footprint();
-}
-const perception::PipelineTimings& timings() const override {
-  return truth_->timings();
-}
-const char* lastError() const override {
-  return truth_->lastError();
-}
-const cv::Mat& correctedFrame() const override {
-  return truth_->correctedFrame();
-}
-const lifting::Lifter& lifter() const override {
-  return truth_->lifter();
-}
-const char* modelId() const override {
-  return "ground truth + a roof";
-}
-
-std::uint64_t injected() const {
-  return injected_;
-}
-std::uint64_t truthLifted() const {
-  return truthLifted_;
-}
-
-private:
-std::unique_ptr<test::TruthPerception> truth_;
-Eigen::Vector2d roof_m_;
-std::array<perception::VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
-perception::FrameLiftSummary summary_{};
-std::uint64_t injected_ = 0;
-std::uint64_t truthLifted_ = 0;
-};
 
 // The centre of the sequence's first building (an exclusion area of its site file).
 Eigen::Vector2d firstRoof(const std::string& dir) {

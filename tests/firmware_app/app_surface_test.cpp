@@ -111,48 +111,6 @@ class RoofVehicleInjector final : public test::TruthPlusOnePerception {
   std::vector<Eigen::Vector3d> roofs_;
   Eigen::Vector2d liftedRoof_ = Eigen::Vector2d::Zero();
 };
-}
-const perception::FrameLiftSummary& liftSummary() const override {
-  return summary_;
-}
-const perception::FrameFootprint& footprint() const override {
-  return truth_->footprint();
-}
-const perception::PipelineTimings& timings() const override {
-  return truth_->timings();
-}
-const char* lastError() const override {
-  return truth_->lastError();
-}
-const cv::Mat& correctedFrame() const override {
-  return truth_->correctedFrame();
-}
-const lifting::Lifter& lifter() const override {
-  return truth_->lifter();
-}
-const char* modelId() const override {
-  return "ground truth + a roof vehicle";
-}
-
-std::uint64_t injected() const {
-  return injected_;
-}
-std::uint64_t truthLifted() const {
-  return truthLifted_;
-}
-Eigen::Vector2d liftedRoof() const {
-  return liftedRoof_;
-}
-
-private:
-std::unique_ptr<test::TruthPerception> truth_;
-std::vector<Eigen::Vector3d> roofs_;
-std::array<perception::VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
-perception::FrameLiftSummary summary_{};
-std::uint64_t injected_ = 0;
-std::uint64_t truthLifted_ = 0;
-Eigen::Vector2d liftedRoof_ = Eigen::Vector2d::Zero();
-};
 
 struct SurfaceRun {
   LoopCounters counters{};
