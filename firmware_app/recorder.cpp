@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <tuple>
 #include <utility>
 
 #include "loop_log.hpp"
@@ -23,6 +24,8 @@ constexpr std::uint64_t kRowReserve = 128;
 constexpr auto kWriterPoll = std::chrono::milliseconds(50);
 // The site file's name in the recording (as vp_simulate names it).
 constexpr const char* kSiteFile = "site.geojson";
+// The surface model's name in the recording (as vp_simulate names it).
+constexpr const char* kDsmFile = "dsm.tif";
 
 }  // namespace
 
@@ -64,8 +67,10 @@ bool Recorder::open(const RecorderSetup& setup, std::string* why) {
   writer_.imageExtension = ".jpg";
   writer_.jpegQuality = options_.jpegQuality;
   writer_.flushRows = true;
+  const std::string& dsmPath = setup.rig.terrain.dsmPath;
   std::string rigYaml = config::formatRigYaml(
-      setup.rig, "dtm.tif", "the rig vp_firmware_app ran with while recording this sequence");
+      setup.rig, "dtm.tif", "the rig vp_firmware_app ran with while recording this sequence",
+      dsmPath.empty() ? "" : kDsmFile);
   if (!setup.sitePath.empty()) {
     // The replay reads the site where rig.yaml names it (docs/site_map.md).
     rigYaml += std::string("site:\n  file: ") + kSiteFile + "\n";
@@ -73,16 +78,24 @@ bool Recorder::open(const RecorderSetup& setup, std::string* why) {
   if (!writer_.open(directory_, info, rigYaml, setup.rig.terrain.dtmPath, &problem)) {
     return fail(problem);
   }
-  if (!setup.sitePath.empty()) {
+  // The site map and the surface model travel with the recording: a replay screens the
+  // detections with the same site and lifts onto the same surface.
+  siteBytes_ = 0;
+  for (const auto& [from, name, what] : {std::tuple<const std::string&, const char*, const char*>{
+                                             setup.sitePath, kSiteFile, "site file"},
+                                         {dsmPath, kDsmFile, "surface model (terrain.dsm_path)"}}) {
+    if (from.empty()) {
+      continue;
+    }
     std::error_code error;
-    const fs::path copy = fs::path(directory_) / kSiteFile;
-    fs::copy_file(setup.sitePath, copy, fs::copy_options::overwrite_existing, error);
+    const fs::path copy = fs::path(directory_) / name;
+    fs::copy_file(from, copy, fs::copy_options::overwrite_existing, error);
     if (!error) {
-      siteBytes_ = static_cast<std::uint64_t>(fs::file_size(copy, error));
+      siteBytes_ += static_cast<std::uint64_t>(fs::file_size(copy, error));
     }
     if (error) {
-      return fail("cannot copy the site file " + setup.sitePath + " into the recording as " +
-                  kSiteFile + ": " + error.message());
+      return fail(std::string("cannot copy the ") + what + " " + from + " into the recording as " +
+                  name + ": " + error.message());
     }
   }
   bytes_.store(writer_.bytesOnDisk() + siteBytes_, std::memory_order_relaxed);

@@ -69,7 +69,8 @@ struct RecorderSetup {
   std::int64_t writeDelay_ns = 0;  // tests: the writer waits this long per frame (a slow disk)
   // The site file the loop runs with (site.file, absolute; empty: none): copied into the
   // sequence as site.geojson and named by its rig.yaml (site.file), so that a replay of the
-  // recording uses the same site.
+  // recording uses the same site. The surface model (rig.terrain.dsmPath) likewise, as dsm.tif
+  // named by terrain.dsm_path.
   std::string sitePath;
 };
 
@@ -107,7 +108,7 @@ class Recorder final : public PoseSampleTap {
   config::RecordConfig options_{};
   std::string directory_;
   std::int64_t writeDelay_ns_ = 0;
-  std::uint64_t siteBytes_ = 0;      // the site file's copy (not the writer's: counted here)
+  std::uint64_t siteBytes_ = 0;      // the site file's and DSM's copies (not the writer's)
   sequence::SequenceWriter writer_;  // writer thread only, after open()
   sequence::EncodedFrame encoded_;
   std::string why_;      // writer thread's scratch message

@@ -194,6 +194,8 @@ tracking:
   confirm_min_score: 0.55
   partial_inside_share: 0.8
   partial_along_noise_factor: 5
+  long_vehicle_length_m: 7.5
+  max_overlap: 0.4
 source:
   kind: v4l2
   sequence_dir: seq/run1
@@ -871,6 +873,9 @@ const MalformedCase kMalformedCases[] = {
      "must be in [0, 1], got 1.2"},
     {"partial_along_noise_factor: 5", "partial_along_noise_factor: 0.5",
      "tracking.partial_along_noise_factor", "must be in [1, 1000], got 0.5"},
+    {"long_vehicle_length_m: 7.5", "long_vehicle_length_m: -2", "tracking.long_vehicle_length_m",
+     "must be in [0, 100], got -2"},
+    {"max_overlap: 0.4", "max_overlap: 1.2", "tracking.max_overlap", "must be in [0, 1], got 1.2"},
     // source
     {"source:\n  kind", "source: camera\nx:\n  kind", "source", "expected a map, got 'camera'"},
     {"kind: v4l2", "kind: file", "source.kind",
@@ -1663,6 +1668,8 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(t.confirmMinScore, 0.55);
   EXPECT_DOUBLE_EQ(t.partialInsideShare, 0.8);
   EXPECT_DOUBLE_EQ(t.partialAlongNoiseFactor, 5.0);
+  EXPECT_DOUBLE_EQ(t.longVehicleLength_m, 7.5);
+  EXPECT_DOUBLE_EQ(t.maxOverlap, 0.4);
   const SourceConfig& src = config.source;
   EXPECT_EQ(src.kind, FrameSourceKind::V4l2);
   EXPECT_EQ(src.sequenceDir, "/data/site/seq/run1");

@@ -142,6 +142,8 @@ TEST(DefaultYaml, TrackingIsTheTrackersDefaults) {
   EXPECT_EQ(file.scoreMemory, code.scoreMemory);
   EXPECT_EQ(file.partialInsideShare, code.partialInsideShare);
   EXPECT_EQ(file.partialAlongNoiseFactor, code.partialAlongNoiseFactor);
+  EXPECT_EQ(file.longVehicleLength_m, code.longVehicleLength_m);
+  EXPECT_EQ(file.maxOverlap, code.maxOverlap);
   EXPECT_EQ(file.frameEdgeShapeWeight, code.frameEdgeShapeWeight);
   EXPECT_EQ(file.asmModel, code.asmModel);
 

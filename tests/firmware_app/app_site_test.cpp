@@ -164,6 +164,10 @@ TEST(AppSite, ARecordingCarriesTheSiteAndItsReplayUsesIt) {
   const std::string copy = recording + "/site.geojson";
   EXPECT_EQ(fileText(copy), fileText(dir + "/site.geojson"));
   EXPECT_EQ(config::loadRigConfig(recording + "/rig.yaml").sitePath, copy);
+  // The sequence's surface model likewise (dsm.tif, named by terrain.dsm_path).
+  ASSERT_FALSE(config::loadRigConfig(dir + "/rig.yaml").terrain.dsmPath.empty());
+  EXPECT_EQ(fileText(recording + "/dsm.tif"), fileText(dir + "/dsm.tif"));
+  EXPECT_EQ(config::loadRigConfig(recording + "/rig.yaml").terrain.dsmPath, recording + "/dsm.tif");
 
   // The replay of the recording (no site.file in its configuration): the same roof detections
   // off the site (firstRoof() reads the recording's site), the same truth vehicles on it.

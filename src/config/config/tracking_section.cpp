@@ -21,6 +21,7 @@ const Range kGateDistanceRange_m = Range{0.0, 100.0, true};
 const Range kMeasurementPositionRange_m = Range{0.0, 10.0, true};   // (0, 10] m
 const Range kMeasurementHeadingRange_deg = Range{0.0, 90.0, true};  // (0, 90] deg
 const Range kNoiseFactorRange = Range::closed(1.0, 1000.0);
+const Range kLongVehicleLengthRange_m = Range::closed(0.0, 100.0);
 
 }  // namespace
 
@@ -70,6 +71,9 @@ tracking::TrackerConfig readTracking(MapReader section) {
       section.number("partial_inside_share", kProbabilityRange, d.partialInsideShare);
   t.partialAlongNoiseFactor =
       section.number("partial_along_noise_factor", kNoiseFactorRange, d.partialAlongNoiseFactor);
+  t.longVehicleLength_m =
+      section.number("long_vehicle_length_m", kLongVehicleLengthRange_m, d.longVehicleLength_m);
+  t.maxOverlap = section.number("max_overlap", kProbabilityRange, d.maxOverlap);
   section.warnUnknownKeys();
   return t;
 }

@@ -51,7 +51,7 @@ void appendAngles(std::string& y, const char* indent, const geodesy::EulerAngles
 }  // namespace
 
 std::string formatRigYaml(const RigConfig& rig, const std::string& dtmPath,
-                          const std::string& header) {
+                          const std::string& header, const std::string& dsmPath) {
   std::string y;
   if (!header.empty()) {
     y += "# " + header + "\n";
@@ -89,6 +89,9 @@ std::string formatRigYaml(const RigConfig& rig, const std::string& dtmPath,
   appendAngles(y, "    ", rig.mount.gimbal.angles);
   y += "terrain:\n";
   y += "  dtm_path: " + dtmPath + "\n";
+  if (!dsmPath.empty()) {
+    y += "  dsm_path: " + dsmPath + "\n";
+  }
   y += "  crs: " + (rig.terrain.crs ? terrain::toString(*rig.terrain.crs) : std::string("auto")) +
        "\n";
   y += "  max_samples: " + std::to_string(rig.terrain.load.maxSamples) + "\n";

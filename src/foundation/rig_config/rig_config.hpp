@@ -69,10 +69,12 @@ RigConfig parseRigConfig(const std::string& yamlText, const std::string& sourceN
                          const std::string& baseDir);
 
 // origin:, camera:, mount: and terrain: as YAML text (a comment line `header` first when not
-// empty); terrain.dtm_path is written as `dtmPath` (a recorder names its copy, dtm.tif), the
-// other fields from rig. parseRigConfig() of the text gives back rig's values exactly.
+// empty); terrain.dtm_path is written as `dtmPath` (a recorder names its copy, dtm.tif) and
+// terrain.dsm_path as `dsmPath` when that is not empty (rig.terrain.dsmPath is not written:
+// a recorder names its copy, dsm.tif), the other fields from rig. parseRigConfig() of the text
+// gives back rig's values exactly.
 std::string formatRigYaml(const RigConfig& rig, const std::string& dtmPath,
-                          const std::string& header = "");
+                          const std::string& header = "", const std::string& dsmPath = "");
 
 // The `camera:` section alone of a file (a calibration kept apart from a site's rig), with the
 // same checks and messages; the file's other top-level keys are ignored. Throws ConfigError.

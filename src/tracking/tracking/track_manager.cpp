@@ -76,10 +76,13 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
   if (!(config.maxCoast_s >= 0.0) || !(config.noise.steeringDecay_s >= 0.0) ||
       !(config.partialAlongNoiseFactor >= 1.0) ||
       !(config.partialInsideShare >= 0.0 && config.partialInsideShare <= 1.0) ||
-      !(config.frameEdgeShapeWeight > 0.0 && config.frameEdgeShapeWeight <= 1.0)) {
+      !(config.frameEdgeShapeWeight > 0.0 && config.frameEdgeShapeWeight <= 1.0) ||
+      !(config.longVehicleLength_m >= 0.0) ||
+      !(config.maxOverlap >= 0.0 && config.maxOverlap <= 1.0)) {
     return fail(
         "tracking: maxCoast_s and steeringDecay_s must be >= 0, partialAlongNoiseFactor >= 1, "
-        "partialInsideShare in [0, 1], frameEdgeShapeWeight in (0, 1]");
+        "partialInsideShare in [0, 1], frameEdgeShapeWeight in (0, 1], longVehicleLength_m >= 0, "
+        "maxOverlap in [0, 1]");
   }
   if (!(config.confirmMinScore >= 0.0 && config.confirmMinScore <= 1.0)) {
     return fail("tracking: confirmMinScore must be in [0, 1]");
@@ -98,8 +101,10 @@ bool TrackManager::init(const TrackerConfig& config, std::string* why) {
   const auto nd = static_cast<std::size_t>(config.maxDetections);
   slots_.assign(nt, Slot{});
   detections_.assign(nd, WorldDetection{});
-  views_.assign(nt, TrackView{});
-  viewSlot_.assign(nt, -1);
+  // Twice: the step's births are appended to the live tracks' views, and a slot freed in the
+  // step (a deleted track) may take a birth while its old view is still listed.
+  views_.assign(2 * nt, TrackView{});
+  viewSlot_.assign(2 * nt, -1);
   trackToDet_.assign(nt, -1);
   detToTrack_.assign(nd, -1);
   published_.assign(nt, TrackState{});
@@ -163,7 +168,8 @@ void TrackManager::birth(Slot& slot, const WorldDetection& d, std::int64_t times
   // The type decides whether the ASM applies; set it before the geometry.
   out.type = mostLikelyType(slot.typeLog);
   slot.motion.initialise(d.centreEnu, d.headingEnu_rad, kWheelbasePerLength * d.length_m,
-                         kRearAxlePerLength * d.length_m, config_.noise, alongAxisFactor(d));
+                         kRearAxlePerLength * d.length_m, config_.noise,
+                         alongAxisFactor(d, d.length_m));
   updateGeometry(slot);
 }
 
@@ -194,7 +200,8 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   // A vehicle cut off by the image border is seen in part: its box centre lags behind the
   // vehicle's (entering) or runs ahead (leaving). A partial detection says little about where
   // along its axis the vehicle is (partialAlongNoiseFactor).
-  slot.motion.update(d.centreEnu, heading, d.headingKnown, config_.noise, alongAxisFactor(d));
+  slot.motion.update(d.centreEnu, heading, d.headingKnown, config_.noise,
+                     alongAxisFactor(d, out.length_m));
 
   // Direction of travel decides the heading of a moving car; a run of disagreeing
   // detections decides it for a standing one (its first detection may have been flipped).
@@ -276,6 +283,78 @@ void TrackManager::fuse(Slot& slot, const WorldDetection& d, std::int64_t timest
   }
 }
 
+bool TrackManager::overlapping(const geometry::RotatedBox& a, const geometry::RotatedBox& b) const {
+  // Boxes of one vehicle lie along one axis; vehicles crossing each other's path do not (and
+  // the simulator's may drive through each other).
+  if (geometry::axisAngleDifference(a.angle, b.angle) > config_.association.maxAxisAngle_rad) {
+    return false;
+  }
+  const double reach = 0.5 * (a.length + b.length);
+  if ((a.cx - b.cx) * (a.cx - b.cx) + (a.cy - b.cy) * (a.cy - b.cy) > reach * reach) {
+    return false;
+  }
+  // Of the smaller footprint: a bus's part lies inside the bus's box with a small IoU.
+  const double smaller = std::min(geometry::area(a), geometry::area(b));
+  return geometry::intersectionArea(a, b) > config_.maxOverlap * smaller;
+}
+
+int TrackManager::overlappingView(const WorldDetection& d, int nViews) const {
+  if (config_.maxOverlap >= 1.0) {
+    return -1;
+  }
+  const geometry::RotatedBox box{d.centreEnu.x(), d.centreEnu.y(), d.length_m, d.width_m,
+                                 d.headingEnu_rad};
+  int found = -1;
+  for (int v = 0; v < nViews; ++v) {
+    const TrackView& view = views_[static_cast<std::size_t>(v)];
+    const Slot& slot = slots_[static_cast<std::size_t>(viewSlot_[static_cast<std::size_t>(v)])];
+    if (!slot.live ||
+        !overlapping(box, geometry::RotatedBox{view.centre.x(), view.centre.y(), view.length_m,
+                                               view.width_m, view.heading_rad})) {
+      continue;
+    }
+    if (!slot.out.updated) {
+      return v;
+    }
+    found = v;
+  }
+  return found;
+}
+
+int TrackManager::deleteYoungerDuplicates() {
+  if (config_.maxOverlap >= 1.0) {
+    return 0;
+  }
+  auto box = [](const Slot& s) {
+    const Eigen::Vector2d c = s.motion.centre();
+    return geometry::RotatedBox{c.x(), c.y(), s.out.length_m, s.out.width_m, s.motion.heading()};
+  };
+  // A lost track's prediction may drift onto another vehicle: lost tracks take no part.
+  auto candidate = [](const Slot& s) { return s.live && s.out.status != TrackStatus::Lost; };
+  int deleted = 0;
+  for (std::size_t i = 0; i < slots_.size(); ++i) {
+    if (!candidate(slots_[i])) {
+      continue;
+    }
+    for (std::size_t j = i + 1; j < slots_.size() && slots_[i].live; ++j) {
+      // Both fed by a detection this step: two boxes the detector kept apart; a duplicate
+      // track takes the detections its twin does not (one vehicle, one box per frame).
+      if (!candidate(slots_[j]) || (slots_[i].out.updated && slots_[j].out.updated) ||
+          !overlapping(box(slots_[i]), box(slots_[j]))) {
+        continue;
+      }
+      Slot& younger = slots_[i].out.birth_ns > slots_[j].out.birth_ns ||
+                              (slots_[i].out.birth_ns == slots_[j].out.birth_ns &&
+                               slots_[i].out.id > slots_[j].out.id)
+                          ? slots_[i]
+                          : slots_[j];
+      younger.live = false;
+      ++deleted;
+    }
+  }
+  return deleted;
+}
+
 void TrackManager::publish(Slot& slot, std::int64_t timestamp_ns) {
   TrackState& out = slot.out;
   const MotionModel& m = slot.motion;
@@ -352,9 +431,13 @@ Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestamp_ns,
     view.heading_rad = slot.motion.heading();
     view.length_m = slot.out.length_m;
     view.width_m = slot.out.width_m;
-    view.centreInnovationCov = slot.motion.centreCovariance() +
-                               Eigen::Matrix2d::Identity() * config_.noise.measurementPosition_m *
-                                   config_.noise.measurementPosition_m;
+    // R as in the update: a long vehicle's detection is less sure along its axis.
+    const double along = longVehicleFactor(slot.out.length_m);
+    const Eigen::Vector2d axis(std::cos(view.heading_rad), std::sin(view.heading_rad));
+    view.centreInnovationCov =
+        slot.motion.centreCovariance() +
+        config_.noise.measurementPosition_m * config_.noise.measurementPosition_m *
+            (Eigen::Matrix2d::Identity() + (along * along - 1.0) * axis * axis.transpose());
     view.secondPass = slot.out.status != TrackStatus::Tentative;
     viewSlot_[static_cast<std::size_t>(nViews)] = static_cast<int>(i);
     ++nViews;
@@ -404,12 +487,27 @@ Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestamp_ns,
     }
   }
 
+  report.mergedTracks = deleteYoungerDuplicates();
+  report.deletions += report.mergedTracks;
+
   // Births from unmatched confident detections, into free slots.
   std::size_t freeSearch = 0;
   for (int d = 0; d < nDet; ++d) {
     const WorldDetection& det = detections_[static_cast<std::size_t>(d)];
     if (detToTrack_[static_cast<std::size_t>(d)] >= 0 ||
         det.score < config_.association.highScore) {
+      continue;
+    }
+    const int overlapped = overlappingView(det, nViews);
+    if (overlapped >= 0) {
+      Slot& slot =
+          slots_[static_cast<std::size_t>(viewSlot_[static_cast<std::size_t>(overlapped)])];
+      if (slot.out.updated) {
+        ++report.suppressedBirths;
+      } else {
+        fuse(slot, det, timestamp_ns, report);
+        ++report.overlapMatches;
+      }
       continue;
     }
     while (freeSearch < slots_.size() && slots_[freeSearch].live) {
@@ -421,6 +519,13 @@ Expected<StepReport, TrackError> TrackManager::step(std::int64_t timestamp_ns,
     }
     birth(slots_[freeSearch], det, timestamp_ns);
     ++report.births;
+    // A second box of the same vehicle later in this list must see the newborn track.
+    TrackView& view = views_[static_cast<std::size_t>(nViews)];
+    view.centre = det.centreEnu;
+    view.heading_rad = det.headingEnu_rad;
+    view.length_m = det.length_m;
+    view.width_m = det.width_m;
+    viewSlot_[static_cast<std::size_t>(nViews++)] = static_cast<int>(freeSearch);
   }
 
   publishedCount_ = 0;

@@ -40,6 +40,7 @@
 // car), else from the length.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
@@ -49,6 +50,7 @@
 #include <Eigen/Core>
 
 #include "core/expected.hpp"
+#include "geometry/rotated_box.hpp"
 #include "shape/vehicle_model.hpp"
 #include "tracking/association.hpp"
 #include "tracking/motion_model.hpp"
@@ -111,6 +113,25 @@ struct TrackerConfig {
   // frameEdgeShapeWeight in the size and shape means (its length may be short).
   double partialInsideShare = 0.97;
   double partialAlongNoiseFactor = 10.0;
+  // A long vehicle's box jitters along its axis by more than a car's: the first stage places a
+  // bus's or truck's ends less surely, frame to frame (metres, where a car's move by decimetres).
+  // A vehicle longer than longVehicleLength_m (the track's fused length; the detection's at
+  // birth) has its position sigma along the axis scaled by length / longVehicleLength_m, in the
+  // association gate as in updates; without it a standing bus's jumping box failed the gate
+  // and started a second track. 0 = off.
+  double longVehicleLength_m = 6.0;
+  // Two vehicles cannot stand in one place. Footprints along one axis (within the association's
+  // maxAxisAngle_rad) overlapping by more than this share of the smaller of the two belong to
+  // one vehicle. An unmatched confident detection that overlaps the predicted footprint of a
+  // track left without a detection in this step is fused into it (StepReport::overlapMatches:
+  // the first stage's box of a bus stands still for frames, then jumps by metres, past the
+  // gates); one that overlaps only tracks fed in this step starts no track
+  // (StepReport::suppressedBirths: a second box of a vehicle already followed, a part of a
+  // bus). Of two tracks, neither lost and not both fed by a detection in this step, that
+  // overlap after the step's updates the younger is deleted (StepReport::mergedTracks: twins
+  // of one vehicle take every other detection). Cars queued bumper to bumper overlap by 0.
+  // 1 = off.
+  double maxOverlap = 0.3;
   double frameEdgeShapeWeight = 0.05;
   const shape::ActiveShapeModel* asmModel = nullptr;  // borrowed; wheelbase from gamma
 };
@@ -158,6 +179,9 @@ struct StepReport {
   int rejectedDetections = 0;  // non-finite, bad size or score
   int droppedDetections = 0;   // beyond maxDetections
   int droppedBirths = 0;       // no free track slot
+  int suppressedBirths = 0;    // overlapping a live track (TrackerConfig::maxOverlap)
+  int mergedTracks = 0;        // deleted as a younger duplicate (TrackerConfig::maxOverlap)
+  int overlapMatches = 0;      // gated out, fused into the overlapping unmatched track
   int births = 0;
   int deletions = 0;
   int reacquisitions = 0;
@@ -207,9 +231,22 @@ class TrackManager {
   bool partial(const WorldDetection& detection) const {
     return detection.insideShare < config_.partialInsideShare;
   }
-  double alongAxisFactor(const WorldDetection& detection) const {
-    return partial(detection) ? config_.partialAlongNoiseFactor : 1.0;
+  // Position sigma factor along the vehicle's axis (>= 1) for a detection of a vehicle of
+  // that length: partial detections and long vehicles (see TrackerConfig).
+  double alongAxisFactor(const WorldDetection& detection, double length_m) const {
+    return std::max(partial(detection) ? config_.partialAlongNoiseFactor : 1.0,
+                    longVehicleFactor(length_m));
   }
+  double longVehicleFactor(double length_m) const {
+    return config_.longVehicleLength_m > 0.0 && length_m > config_.longVehicleLength_m
+               ? length_m / config_.longVehicleLength_m
+               : 1.0;
+  }
+  // The view of a live track the detection overlaps, preferring one not updated in this step;
+  // -1 when none.
+  int overlappingView(const WorldDetection& detection, int nViews) const;
+  bool overlapping(const geometry::RotatedBox& a, const geometry::RotatedBox& b) const;
+  int deleteYoungerDuplicates();
   void publish(Slot& slot, std::int64_t timestamp_ns);
 
   TrackerConfig config_{};
