@@ -73,6 +73,7 @@ void expectValidPlan(const std::vector<MemoryBlock>& blocks, const MemoryPlan& p
                             << blocks[b].lastStep << ")";
     }
   }
+  EXPECT_GE(plan.arena_bytes, liveBytesLowerBound(blocks, options));
   EXPECT_LE(plan.arena_bytes, [&] {
     std::size_t sum = 0;
     for (const auto& b : blocks)
@@ -310,6 +311,35 @@ void expectPlanChangesNothing(Backend backend, const std::vector<std::string>& p
         EXPECT_TRUE(a[o] == b[o]) << name << " " << toString(backend) << " output part " << o
                                   << " differs with the memory plan (frame seed " << seed << ")";
     }
+  }
+}
+
+// The planner on the shipped models' real lifetimes: a valid plan, and how far the greedy
+// arena is above the bound no plan can beat.
+TEST(MemoryPlanEngine, ShippedModelsPlanNearTheLiveBytesBound) {
+  for (const std::string& path : {kDetectorModel, kCropModel}) {
+    std::string bytes;
+    std::string why;
+    ASSERT_TRUE(readFileBytes(path, &bytes, &why)) << why;
+    QdqGraph graph;
+    ASSERT_TRUE(parseQdqModel(bytes, path, &graph, &why)) << why;
+    const auto blocks = tensorLifetimes(graph, 1);
+    MemoryPlanOptions options;
+    options.alignment_bytes = 64;
+    options.slack_bytes = 16;
+    const auto plan = planMemory(blocks, options);
+    expectValidPlan(blocks, plan, options);
+    const std::size_t bound = liveBytesLowerBound(blocks, options);
+    std::printf(
+        "  %-18s %zu tensors: arena %zu bytes, live-bytes bound %zu (+%.1f %%), "
+        "separate %zu\n",
+        fs::path(path).filename().c_str(), blocks.size(), plan.arena_bytes, bound,
+        100.0 * (static_cast<double>(plan.arena_bytes) / static_cast<double>(bound) - 1.0),
+        plan.separate_bytes);
+    EXPECT_LE(plan.arena_bytes, bound + bound / 4) << "greedy best fit far from the bound";
+    Engine engine;
+    ASSERT_TRUE(loadEngine(&engine, path, Backend::XnnpackInt8, true));
+    EXPECT_GE(engine.activationMemory().allocated_bytes, bound);
   }
 }
 

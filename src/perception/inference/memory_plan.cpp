@@ -75,6 +75,19 @@ MemoryPlan planMemory(const std::vector<MemoryBlock>& blocks, const MemoryPlanOp
   return plan;
 }
 
+std::size_t liveBytesLowerBound(const std::vector<MemoryBlock>& blocks,
+                                const MemoryPlanOptions& options) {
+  int last = 0;
+  for (const auto& b : blocks)
+    last = std::max(last, b.lastStep);
+  std::vector<std::size_t> live(static_cast<std::size_t>(last) + 1, 0);
+  for (const auto& b : blocks) {
+    for (int s = std::max(b.firstStep, 0); s <= b.lastStep; ++s)
+      live[static_cast<std::size_t>(s)] += reservedBytes(b, options);
+  }
+  return live.empty() ? 0 : *std::max_element(live.begin(), live.end());
+}
+
 std::vector<MemoryBlock> tensorLifetimes(const QdqGraph& graph, std::size_t elementBytes) {
   const int end = std::max(static_cast<int>(graph.nodes.size()) - 1, 0);
   constexpr int kUnset = -1;

@@ -47,6 +47,10 @@ std::size_t reservedBytes(const MemoryBlock& block, const MemoryPlanOptions& opt
 
 MemoryPlan planMemory(const std::vector<MemoryBlock>& blocks, const MemoryPlanOptions& options);
 
+// No arena can be smaller: the largest sum of reserved bytes alive at one step.
+std::size_t liveBytesLowerBound(const std::vector<MemoryBlock>& blocks,
+                                const MemoryPlanOptions& options);
+
 // One block per graph tensor (index = tensor id), elementBytes per tensor element.
 std::vector<MemoryBlock> tensorLifetimes(const QdqGraph& graph, std::size_t elementBytes);
 
