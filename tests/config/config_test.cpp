@@ -127,6 +127,7 @@ perception:
   backend: fp32
   threads: 2
   crop_threads: 3
+  plan_memory: false
   undistort: false
   white_balance: true
   white_balance_regions: [2, 5]
@@ -744,6 +745,8 @@ const MalformedCase kMalformedCases[] = {
     {"  threads: 2", "  threads: 0", "perception.threads", "must be in [1, 16], got 0"},
     {"crop_threads: 3", "crop_threads: 17", "perception.crop_threads",
      "must be in [1, 16], got 17"},
+    {"plan_memory: false", "plan_memory: no", "perception.plan_memory",
+     "expected true or false, got 'no'"},
     {"undistort: false", "undistort: maybe", "perception.undistort",
      "expected true or false, got 'maybe'"},
     {"white_balance: true", "white_balance: 1", "perception.white_balance",
@@ -1082,6 +1085,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "perception.backend",
                                                "perception.threads",
                                                "perception.crop_threads",
+                                               "perception.plan_memory",
                                                "perception.undistort",
                                                "perception.white_balance",
                                                "perception.white_balance_regions",
@@ -1601,6 +1605,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(det.engine.threads, 2);
   EXPECT_EQ(pre.threads, 2);
   EXPECT_EQ(det.cropEngineThreads, 3);
+  EXPECT_FALSE(det.engine.planMemory);
   EXPECT_FALSE(pre.undistort);
   EXPECT_TRUE(pre.whiteBalance);
   EXPECT_EQ(pre.whiteBalanceOptions.regionRows, 2);

@@ -56,6 +56,7 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(config.asmPath, model(kDefaultAsm));
   EXPECT_EQ(det.engine.backend, detCode.engine.backend);
   EXPECT_EQ(det.engine.threads, detCode.engine.threads);
+  EXPECT_EQ(det.engine.planMemory, detCode.engine.planMemory);
   EXPECT_EQ(det.engine.imageOrder, detCode.engine.imageOrder);
   EXPECT_EQ(det.engine.normalization.has_value(), detCode.engine.normalization.has_value());
   EXPECT_EQ(det.cropEngineThreads, detCode.cropEngineThreads);

@@ -623,6 +623,35 @@ TEST(InferenceEngine, NoHeapAllocationPerRun) {
   }
 }
 
+// The activation memory plan on every fixture and edited variant (nearest Resize with its
+// scratch buffer, Tanh, tables, MaxPool, ...): the same outputs as one buffer per tensor, also
+// on the second of two different images (the arena then holds the first one's values).
+// The shipped models: memory_plan_test.cpp.
+TEST(InferenceEngine, MemoryPlanChangesNoOutput) {
+  for (const auto& path : allModels()) {
+    for (const Backend b : {Backend::XnnpackInt8, Backend::XnnpackFp32}) {
+      auto planned = loadEngine(path, b);
+      auto separate = std::make_unique<Engine>();
+      EngineOptions options;
+      options.backend = b;
+      options.planMemory = false;
+      std::string why;
+      ASSERT_TRUE(separate->load(path.string(), options, &why)) << why;
+      ASSERT_TRUE(planned->loaded());
+      EXPECT_TRUE(planned->activationMemory().planned);
+      EXPECT_LT(planned->activationMemory().allocated_bytes,
+                separate->activationMemory().allocated_bytes)
+          << path.filename();
+      const auto s = planned->inputShape();
+      for (const std::uint32_t seed : {21U, 22U}) {
+        const Image img = randomImage(s.w, s.h, seed);
+        EXPECT_EQ(runOutputs(*planned, img), runOutputs(*separate, img))
+            << path.filename() << " " << vp::inference::toString(b) << " image " << seed;
+      }
+    }
+  }
+}
+
 TEST(InferenceEngine, MultiThreadedMatchesSingleThreaded) {
   for (const auto& name : fixtureModels()) {
     const fs::path path = kModelDir / (name + ".onnx");

@@ -94,6 +94,8 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
   pre.threads = det.engine.threads;
   det.cropEngineThreads =
       section.integer("crop_threads", kThreadsRange, d.detection.cropEngineThreads);
+  // Both networks (the crop engine copies the detector's options).
+  det.engine.planMemory = section.boolean("plan_memory", d.detection.engine.planMemory);
   pre.undistort = section.boolean("undistort", d.preprocess.undistort);
   pre.whiteBalance = section.boolean("white_balance", d.preprocess.whiteBalance);
   preprocess::WhiteBalanceOptions& wb = pre.whiteBalanceOptions;

@@ -24,6 +24,7 @@ class InferenceBackend {
   virtual bool run() = 0;
   virtual const std::vector<OutputTensor>& outputs() const = 0;
   virtual const std::vector<LayerInfo>& layers() const = 0;
+  virtual ActivationMemory activationMemory() const { return {}; }
 };
 
 }  // namespace vp::inference

@@ -54,7 +54,7 @@ bool cpuHasVnni() {
 #ifndef VP_HAVE_DNNL
 
 std::unique_ptr<InferenceBackend> createDnnlInt8Backend(const QdqGraph& graph, int /*threads*/,
-                                                        std::string* why) {
+                                                        bool /*planMemory*/, std::string* why) {
   *why = graph.file +
          ": backend int8-dnnl: this build has no oneDNN (libdnnl-dev was not found at "
          "configure time); use int8 or auto";
@@ -124,7 +124,7 @@ class DnnlInt8Backend final : public XnnpackInt8Backend {
  protected:
   bool addConv(const GraphNode& node, std::string* why) override {
     try {
-      return addDnnlConv(node);
+      return addDnnlConv(node, why);
     } catch (const dnnl::error& e) {
       return fail(node, std::string("oneDNN: ") + e.what(), why);
     }
@@ -140,7 +140,7 @@ class DnnlInt8Backend final : public XnnpackInt8Backend {
     return m;
   }
 
-  bool addDnnlConv(const GraphNode& node) {
+  bool addDnnlConv(const GraphNode& node, std::string* why) {
     const auto& in = tensor(node.inputs[0]);
     const auto& out = tensor(node.output);
     const int groups = node.group;
@@ -216,11 +216,17 @@ class DnnlInt8Backend final : public XnnpackInt8Backend {
     }
     std::copy(bias.begin(), bias.end(), static_cast<std::int32_t*>(biasMem.get_data_handle()));
 
+    // Source and destination are the graph's own tensor buffers (ranges of the planned arena
+    // when memory is planned): oneDNN must work on them, not on copies.
+    memory srcMem(srcMd, engine_, inBuf(node));
+    memory dstMem(dstMd, engine_, outBuf(node));
+    if (srcMem.get_data_handle() != inBuf(node) || dstMem.get_data_handle() != outBuf(node))
+      return fail(node, "oneDNN did not keep the tensor buffers it was given", why);
     std::vector<std::pair<int, memory> > args;
-    args.emplace_back(DNNL_ARG_SRC, memory(srcMd, engine_, inBuf(node)));
+    args.emplace_back(DNNL_ARG_SRC, srcMem);
     args.emplace_back(DNNL_ARG_WEIGHTS, weightMem);
     args.emplace_back(DNNL_ARG_BIAS, biasMem);
-    args.emplace_back(DNNL_ARG_DST, memory(dstMd, engine_, outBuf(node)));
+    args.emplace_back(DNNL_ARG_DST, dstMem);
     if (srcZeroPoint) {
       args.emplace_back(DNNL_ARG_ATTR_ZERO_POINTS | DNNL_ARG_SRC,
                         zeroPointMemory(in.quant.zeroPoint));
@@ -258,7 +264,7 @@ class DnnlInt8Backend final : public XnnpackInt8Backend {
 }  // namespace
 
 std::unique_ptr<InferenceBackend> createDnnlInt8Backend(const QdqGraph& graph, int threads,
-                                                        std::string* why) {
+                                                        bool planMemory, std::string* why) {
   std::unique_ptr<DnnlInt8Backend> backend;
   try {
     backend = std::make_unique<DnnlInt8Backend>(threads);
@@ -267,7 +273,7 @@ std::unique_ptr<InferenceBackend> createDnnlInt8Backend(const QdqGraph& graph, i
     return nullptr;
   }
   backend->file_ = graph.file;
-  if (!backend->build(graph, threads, why) || !backend->finish(why))
+  if (!backend->build(graph, threads, planMemory, why) || !backend->finish(why))
     return nullptr;
   return backend;
 }

@@ -34,7 +34,9 @@ namespace vp::inference {
 bool dnnlInt8Available();
 bool cpuHasVnni();
 
+// planMemory as for createXnnpackInt8Backend(): the convolutions' oneDNN memories are created
+// on the same (planned or separate) tensor buffers.
 std::unique_ptr<InferenceBackend> createDnnlInt8Backend(const QdqGraph& graph, int threads,
-                                                        std::string* why);
+                                                        bool planMemory, std::string* why);
 
 }  // namespace vp::inference

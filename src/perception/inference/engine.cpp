@@ -87,16 +87,16 @@ class Engine::Impl {
     switch (kind) {
       case Backend::Auto:
       case Backend::XnnpackInt8:
-        backend_ = createXnnpackInt8Backend(graph_, options.threads, why);
+        backend_ = createXnnpackInt8Backend(graph_, options.threads, options.planMemory, why);
         break;
       case Backend::XnnpackFp32:
-        backend_ = createXnnpackFp32Backend(graph_, options.threads, why);
+        backend_ = createXnnpackFp32Backend(graph_, options.threads, options.planMemory, why);
         break;
       case Backend::OpenCvFp32:
         backend_ = createOpenCvBackend(bytes, graph_, options.threads, why);
         break;
       case Backend::DnnlInt8:
-        backend_ = createDnnlInt8Backend(graph_, options.threads, why);
+        backend_ = createDnnlInt8Backend(graph_, options.threads, options.planMemory, why);
         break;
     }
     if (!backend_)
@@ -252,6 +252,10 @@ const std::vector<LayerInfo>& Engine::layers() const {
 
 std::uint64_t Engine::totalMacs() const {
   return impl_ ? impl_->totalMacs_ : 0;
+}
+
+ActivationMemory Engine::activationMemory() const {
+  return loaded() ? impl_->backend_->activationMemory() : ActivationMemory{};
 }
 
 RunStatus Engine::run(const ImageView& image) {

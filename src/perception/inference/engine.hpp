@@ -59,6 +59,9 @@ struct EngineOptions {
   int threads = 1;                                  // pthreadpool workers (1 = calling thread)
   ChannelOrder imageOrder = ChannelOrder::Bgr;      // layout of the images given to run()
   std::optional<InputNormalization> normalization;  // overrides the model's metadata
+  // XNNPACK and oneDNN backends: activation tensors share one arena by liveness (false: one
+  // buffer per tensor, for debugging and for the test that compares both; same outputs).
+  bool planMemory = true;
 };
 
 struct ImageView {
@@ -86,6 +89,15 @@ struct OutputTensor {
   const std::int8_t* quantized = nullptr;  // NHWC int8 (XnnpackInt8, DnnlInt8; else nullptr)
   float scale = 1.0F;                      // quantized -> float: (q - zeroPoint) * scale
   int zeroPoint = 0;
+};
+
+// What a loaded engine holds for its activation tensors and scratch buffers (XNNPACK and
+// oneDNN backends; zeros for OpenCV, which manages its own). Operator workspaces, packed
+// weights and the float copies of int8 outputs are not counted.
+struct ActivationMemory {
+  bool planned = false;             // EngineOptions::planMemory was in effect
+  std::size_t allocated_bytes = 0;  // the arena, or the sum of the separate buffers
+  std::size_t separate_bytes = 0;   // one buffer per tensor, as without the plan
 };
 
 enum class RunStatus { Ok, NotLoaded, WrongImageSize, BackendFailure };
@@ -124,6 +136,7 @@ class Engine {
   Backend backend() const;
   const std::vector<LayerInfo>& layers() const;
   std::uint64_t totalMacs() const;
+  ActivationMemory activationMemory() const;
 
   // Real-time path: no heap allocation (XNNPACK backends), no exceptions.
   RunStatus run(const ImageView& image);

@@ -19,9 +19,11 @@
 
 namespace vp::inference {
 
+// planMemory: activation tensors share one arena by liveness (memory_plan.hpp), else one
+// buffer each.
 std::unique_ptr<InferenceBackend> createXnnpackInt8Backend(const QdqGraph& graph, int threads,
-                                                           std::string* why);
+                                                           bool planMemory, std::string* why);
 std::unique_ptr<InferenceBackend> createXnnpackFp32Backend(const QdqGraph& graph, int threads,
-                                                           std::string* why);
+                                                           bool planMemory, std::string* why);
 
 }  // namespace vp::inference

@@ -107,8 +107,8 @@ class XnnpackFp32Backend final : public XnnpackGraphBackend<float> {
 }  // namespace
 
 std::unique_ptr<InferenceBackend> createXnnpackFp32Backend(const QdqGraph& graph, int threads,
-                                                           std::string* why) {
-  return makeBackend<XnnpackFp32Backend>(graph, threads, why);
+                                                           bool planMemory, std::string* why) {
+  return makeBackend<XnnpackFp32Backend>(graph, threads, planMemory, why);
 }
 
 }  // namespace vp::inference

@@ -1,9 +1,10 @@
 // inference/xnnpack_graph: the graph walk both XNNPACK backends share.
 //
-// Contract: XnnpackGraphBackend<T> (T = std::int8_t or float) gives every graph tensor one
-// zero-initialised NHWC buffer of T and walks the nodes in order. Kinds whose int8 and float
-// operators differ only in the element type (Concat and nearest Resize as strided copies into
-// slices, bilinear Resize, MaxPool) are built here; for the others (Conv, ConvTranspose,
+// Contract: XnnpackGraphBackend<T> (T = std::int8_t or float) gives every graph tensor a
+// zero-initialised NHWC range of T (by default in one arena shared by liveness, see
+// memory_plan.hpp; `planned` false: one buffer each) and walks the nodes in order. Kinds whose int8
+// and float operators differ only in the element type (Concat and nearest Resize as strided copies
+// into slices, bilinear Resize, MaxPool) are built here; for the others (Conv, ConvTranspose,
 // Add/Mul, GlobalAveragePool, Sigmoid/Tanh/Clamp) a per-kind hook of the derived backend
 // picks the XNNPACK functions, their quantization or float parameters and the weight
 // conversion, and registers the result through addOperator() / addStep(). The graph is read
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "inference/backend.hpp"
+#include "inference/memory_plan.hpp"
 #include "inference/onnx_graph.hpp"
 #include "inference/xnnpack_runtime.hpp"
 
@@ -43,18 +45,18 @@ class XnnpackGraphBackend : public InferenceBackend {
   static constexpr bool kInt8 = std::is_same_v<T, std::int8_t>;
 
  public:
-  bool build(const QdqGraph& graph, int threads, std::string* why) {
+  bool build(const QdqGraph& graph, int threads, bool planned, std::string* why) {
     if (!initializeXnnpack(why)) {
       *why = graph.file + ": " + *why;
       return false;
     }
     graph_ = &graph;
     pool_ = makeThreadPool(threads);
-    buffers_.reserve(graph.tensors.size());
-    for (const auto& t : graph.tensors)
-      buffers_.push_back(makeTensorBuffer<T>(t.shape.elements()));
+    allocateActivations(graph, planned);
     inputTensor_ = graph.inputTensor;
-    for (const auto& node : graph.nodes) {
+    for (std::size_t s = 0; s < graph.nodes.size(); ++s) {
+      const auto& node = graph.nodes[s];
+      step_ = s;
       kernel_.clear();
       if (!addNode(node, why))
         return false;
@@ -106,6 +108,7 @@ class XnnpackGraphBackend : public InferenceBackend {
 
   const std::vector<OutputTensor>& outputs() const override { return outputs_; }
   const std::vector<LayerInfo>& layers() const override { return layers_; }
+  ActivationMemory activationMemory() const override { return memory_; }
 
  protected:
   // Per-kind hooks: create the node's operators on data(node.inputs) -> data(node.output).
@@ -119,7 +122,7 @@ class XnnpackGraphBackend : public InferenceBackend {
   virtual T outMax(const GraphNode& node) const = 0;
 
   const GraphTensor& tensor(int id) const { return graph_->tensors[toSize(id)]; }
-  T* data(int id) { return buffers_[toSize(id)].data(); }
+  T* data(int id) { return tensorData_[toSize(id)]; }
   T* inBuf(const GraphNode& node) { return data(node.inputs[0]); }
   T* outBuf(const GraphNode& node) { return data(node.output); }
   pthreadpool_t pool() const { return pool_.get(); }
@@ -325,8 +328,7 @@ class XnnpackGraphBackend : public InferenceBackend {
     const auto kh = toSize(node.scaleH);
     const auto kw = toSize(node.scaleW);
     const auto rowValues = toSize(out.shape.w) * c;
-    scratch_.push_back(makeTensorBuffer<T>(toSize(in.shape.h) * rowValues));
-    T* wide = scratch_.back().data();
+    T* wide = scratchData_[step_];
     for (std::size_t dx = 0; dx < kw; ++dx) {
       if (!addCopy(node, c, c, kw * c, pixels(in.shape), inBuf(node), wide + dx * c, why))
         return false;
@@ -341,10 +343,72 @@ class XnnpackGraphBackend : public InferenceBackend {
     return true;
   }
 
+  // The scratch row buffer of a nearest Resize: the input's rows widened to the output width.
+  static std::size_t resizeScratchElements(const QdqGraph& graph, const GraphNode& node) {
+    const auto& in = graph.tensors[toSize(node.inputs[0])].shape;
+    const auto& out = graph.tensors[toSize(node.output)].shape;
+    return toSize(in.h) * toSize(out.w) * toSize(in.c);
+  }
+
+  // Points every tensor (and every nearest Resize's scratch) at its memory, zero-initialised:
+  // with the plan, ranges of one arena shared by liveness (memory_plan.hpp); without it, one
+  // buffer each. Both reserve XNN_EXTRA_BYTES of readable slack behind every buffer.
+  void allocateActivations(const QdqGraph& graph, bool planned) {
+    std::vector<MemoryBlock> blocks = tensorLifetimes(graph, sizeof(T));
+    const std::size_t tensorCount = blocks.size();
+    std::vector<std::size_t> scratchBlock(graph.nodes.size(), 0);
+    for (std::size_t s = 0; s < graph.nodes.size(); ++s) {
+      const auto& node = graph.nodes[s];
+      if (node.kind != OpKind::ResizeNearest)
+        continue;
+      scratchBlock[s] = blocks.size();
+      const int step = static_cast<int>(s);
+      blocks.push_back(MemoryBlock{resizeScratchElements(graph, node) * sizeof(T), step, step});
+    }
+    MemoryPlanOptions options;
+    options.alignment_bytes = kArenaAlignment_bytes;
+    options.slack_bytes = XNN_EXTRA_BYTES;
+    const MemoryPlan plan = planMemory(blocks, options);
+    memory_.planned = planned;
+    memory_.separate_bytes = plan.separate_bytes;
+    std::vector<T*> blockData(blocks.size(), nullptr);
+    if (planned) {
+      // The vector's zeroed bytes, the start rounded up to the alignment.
+      arena_.assign(plan.arena_bytes + kArenaAlignment_bytes, std::byte{0});
+      const auto address = reinterpret_cast<std::uintptr_t>(arena_.data());
+      const std::size_t skip =
+          (kArenaAlignment_bytes - address % kArenaAlignment_bytes) % kArenaAlignment_bytes;
+      std::byte* base = arena_.data() + skip;
+      for (std::size_t b = 0; b < blocks.size(); ++b)
+        blockData[b] = reinterpret_cast<T*>(base + plan.offsets[b]);
+      memory_.allocated_bytes = plan.arena_bytes;
+    } else {
+      separate_.reserve(blocks.size());
+      for (std::size_t b = 0; b < blocks.size(); ++b) {
+        separate_.push_back(makeTensorBuffer<T>(blocks[b].bytes / sizeof(T)));
+        blockData[b] = separate_.back().data();
+      }
+      memory_.allocated_bytes = plan.separate_bytes;
+    }
+    tensorData_.assign(blockData.begin(),
+                       blockData.begin() + static_cast<std::ptrdiff_t>(tensorCount));
+    scratchData_.assign(graph.nodes.size(), nullptr);
+    for (std::size_t s = 0; s < graph.nodes.size(); ++s) {
+      if (graph.nodes[s].kind == OpKind::ResizeNearest)
+        scratchData_[s] = blockData[scratchBlock[s]];
+    }
+  }
+
+  static constexpr std::size_t kArenaAlignment_bytes = 64;  // a cache line, >= any SIMD load
+
   const QdqGraph* graph_ = nullptr;  // only during build()
+  std::size_t step_ = 0;             // the node being built's index, only during build()
   ThreadPool pool_;
-  std::vector<std::vector<T>> buffers_;  // one per graph tensor
-  std::vector<std::vector<T>> scratch_;
+  std::vector<std::byte> arena_;          // with the plan: every tensor and scratch buffer
+  std::vector<std::vector<T>> separate_;  // without it: one buffer each
+  std::vector<T*> tensorData_;            // per graph tensor
+  std::vector<T*> scratchData_;           // per node: a nearest Resize's scratch, else nullptr
+  ActivationMemory memory_;
   std::vector<Step> steps_;
   std::vector<std::vector<float>> dequantized_;  // int8 only: the float view of each output
   std::vector<OutputTensor> outputs_;
@@ -355,10 +419,10 @@ class XnnpackGraphBackend : public InferenceBackend {
 
 // What the create functions of xnnpack_backend.hpp do: a backend only when it built completely.
 template <class Backend>
-std::unique_ptr<InferenceBackend> makeBackend(const QdqGraph& graph, int threads,
+std::unique_ptr<InferenceBackend> makeBackend(const QdqGraph& graph, int threads, bool planned,
                                               std::string* why) {
   auto backend = std::make_unique<Backend>();
-  if (!backend->build(graph, threads, why))
+  if (!backend->build(graph, threads, planned, why))
     return nullptr;
   return backend;
 }

@@ -8,8 +8,8 @@
 namespace vp::inference {
 
 std::unique_ptr<InferenceBackend> createXnnpackInt8Backend(const QdqGraph& graph, int threads,
-                                                           std::string* why) {
-  return makeBackend<XnnpackInt8Backend>(graph, threads, why);
+                                                           bool planMemory, std::string* why) {
+  return makeBackend<XnnpackInt8Backend>(graph, threads, planMemory, why);
 }
 
 }  // namespace vp::inference
