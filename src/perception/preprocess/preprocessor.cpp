@@ -290,15 +290,26 @@ PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
   output_.timings.undistort_ms =
       std::chrono::duration<double, std::milli>(undistorted - start).count();
 
+  // White balance: the gains are estimated on the (undistorted) frame; they are applied
+  // inside the resize sweep below, which reads every source row once and writes both the
+  // balanced full-resolution row (output().frame, for the crops and the annotated video) and
+  // the working image - except after undistortion, where the resize would read and write the
+  // one owned buffer: there the gains go on in place first.
+  const std::array<float, 3>* gains = nullptr;
+  cv::Mat* gained = nullptr;
   if (options_.whiteBalance) {
     output_.whiteBalance = balancer_.estimate(*current);
     balancer_.setGains(output_.whiteBalance);
-    const cv::Mat& source = *current;
-    auto body = [&](int begin, int end, int /*slot*/) {
-      balancer_.applyRows(source, corrected_, begin, end);
-    };
-    parallel_.run(frameSize_.height, body);
-    current = &corrected_;
+    gains_ = output_.whiteBalance.gain;
+    if (remapActive_) {
+      auto body = [&](int begin, int end, int /*slot*/) {
+        balancer_.applyRows(corrected_, corrected_, begin, end);
+      };
+      parallel_.run(frameSize_.height, body);
+    } else {
+      gains = &gains_;
+      gained = &corrected_;
+    }
   } else {
     output_.whiteBalance = WhiteBalanceGains{};
   }
@@ -309,11 +320,15 @@ PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
   const cv::Mat& source = *current;
   Rung& rung = rungs_[rung_];
   auto resizeBody = [&](int begin, int end, int slot) {
-    rung.resizer.applyRows(source, rung.content, begin, end, slot);
+    rung.resizer.applyRows(source, rung.content, begin, end, slot, gains, gained);
   };
   parallel_.run(rung.content.rows, resizeBody);
   output_.timings.resize_ms = millisecondsSince(balanced);
   output_.timings.total_ms = millisecondsSince(start);
+  if (gained != nullptr) {
+    output_.frame = corrected_;  // header copy: no allocation
+    return PreprocessStatus::Ok;
+  }
   output_.frame = source;  // header copy: no allocation
   return PreprocessStatus::Ok;
 }

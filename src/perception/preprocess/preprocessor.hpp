@@ -11,6 +11,9 @@
 //     caller's frame is never written);
 //  3. area downscale by the working scale (AreaResizer, = cv::resize INTER_AREA) into the
 //     working image, whose padding right/bottom (to at least the network input) holds padValue;
+//     steps 2 (its gains) and 3 are one sweep over the frame's rows, split over the threads:
+//     each source row is read once, balanced on the way in and, with white balance on, also
+//     written to the owned full-resolution frame; no other full-size image is made;
 //     the scale is workingScale, or - with workingGsd_m > 0 - the rung of a ladder of scales
 //     built at init() (working_scale.hpp) that adaptToGsd() picks from the frame's ground
 //     sample distance, so that a working pixel covers about workingGsd_m metres at any height;
@@ -97,8 +100,9 @@ struct TileView {
 
 struct PreprocessTimings {
   double undistort_ms = 0.0;
-  double whiteBalance_ms = 0.0;  // estimate + apply
-  double resize_ms = 0.0;
+  // The gains' estimate (and, after undistortion only, their application in place).
+  double whiteBalance_ms = 0.0;
+  double resize_ms = 0.0;  // the resize sweep (with the gains applied on the way in)
   double total_ms = 0.0;
 };
 
@@ -177,6 +181,7 @@ class Preprocessor {
   RowParallel parallel_{};
   cv::Mat corrected_;  // owned full-resolution frame (undistortion / white balance output)
   cv::Mat working_;    // working image incl. padding, sized for the largest rung
+  std::array<float, 3> gains_{1.0F, 1.0F, 1.0F};  // this frame's white-balance gains
   std::vector<Rung> rungs_;
   std::array<double, kMaxScaleRungs> scales_{};
   std::size_t rung_ = 0;
