@@ -10,6 +10,9 @@
 //   yuyv/default, nv12/default: the camera's layouts into the default configuration, the way the
 //                      app is fed: the capture side's full-frame YUV -> BGR conversion
 //                      (platform/v4l2, timed as convert_ms) then process().
+//   yuyv/direct, nv12/direct: the same buffers through the direct camera path
+//                      (process(YuvFrame): rows converted inside the resize sweep, no
+//                      full-size BGR frame).
 // The frame is a synthetic grey scene with car-sized rectangles (tests/support).
 //
 // Run (medians over repetitions):
@@ -34,7 +37,7 @@ using vp::preprocess::PreprocessStatus;
 constexpr int kFrameWidth_px = 2592;
 constexpr int kFrameHeight_px = 2048;
 
-enum class Input { Bgr, Yuyv, Nv12 };
+enum class Input { Bgr, Yuyv, Nv12, YuyvDirect, Nv12Direct };
 
 vp::camera::CameraModel benchCamera() {
   vp::camera::Intrinsics k;
@@ -100,9 +103,25 @@ void preprocessFrame(benchmark::State& state, Input input, PreprocessOptions opt
   cv::Mat converted(kFrameHeight_px, kFrameWidth_px, CV_8UC3);
   const auto w = static_cast<std::size_t>(kFrameWidth_px);
   const auto h = static_cast<std::size_t>(kFrameHeight_px);
+  vp::preprocess::YuvFrame direct;
+  direct.width_px = kFrameWidth_px;
+  direct.height_px = kFrameHeight_px;
+  if (input == Input::YuyvDirect) {
+    direct.data = yuv.yuyv.data();
+    direct.strideBytes = w * 2;
+  } else if (input == Input::Nv12Direct) {
+    direct.layout = vp::preprocess::YuvFrame::Layout::Nv12;
+    direct.data = yuv.nv12.data();
+    direct.strideBytes = w;
+    direct.uv = yuv.nv12.data() + w * h;
+    direct.uvStrideBytes = w;
+  }
+  const bool isDirect = input == Input::YuyvDirect || input == Input::Nv12Direct;
   auto convert = [&]() {
     switch (input) {
       case Input::Bgr:
+      case Input::YuyvDirect:
+      case Input::Nv12Direct:
         return true;
       case Input::Yuyv:
         return vp::platform::v4l2::yuyvToBgr(yuv.yuyv.data(), w * 2, kFrameWidth_px,
@@ -114,8 +133,9 @@ void preprocessFrame(benchmark::State& state, Input input, PreprocessOptions opt
     return false;
   };
   const cv::Mat& frame = input == Input::Bgr ? source : converted;
+  auto run = [&]() { return isDirect ? pre.process(direct) : pre.process(frame); };
   // Warm-up frame (first touch of every buffer).
-  if (!convert() || pre.process(frame) != PreprocessStatus::Ok) {
+  if (!convert() || run() != PreprocessStatus::Ok) {
     state.SkipWithError("warm-up frame failed");
     return;
   }
@@ -128,7 +148,7 @@ void preprocessFrame(benchmark::State& state, Input input, PreprocessOptions opt
     const bool ok = convert();
     convertSum +=
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    if (!ok || pre.process(frame) != PreprocessStatus::Ok) {
+    if (!ok || run() != PreprocessStatus::Ok) {
       state.SkipWithError("frame failed");
       break;
     }
@@ -165,6 +185,8 @@ int main(int argc, char** argv) {
       {"bgr/undistort_awb", Input::Bgr, true, true, vp::preprocess::kDefaultWorkingScale},
       {"yuyv/default", Input::Yuyv, false, false, vp::preprocess::kDefaultWorkingScale},
       {"nv12/default", Input::Nv12, false, false, vp::preprocess::kDefaultWorkingScale},
+      {"yuyv/direct", Input::YuyvDirect, false, false, vp::preprocess::kDefaultWorkingScale},
+      {"nv12/direct", Input::Nv12Direct, false, false, vp::preprocess::kDefaultWorkingScale},
   };
   for (const Case& c : cases) {
     for (const int threads : {1, 2}) {

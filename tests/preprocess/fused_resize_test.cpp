@@ -3,6 +3,7 @@
 // instruction-set variant of the kernels (scalar - what ARM builds run -, SSE2, AVX2 where the
 // CPU has it) must give the same bytes, on random and simulated frames, odd sizes, integer and
 // fractional factors, saturating gains, and any split of the rows over threads.
+#include <algorithm>
 #include <array>
 #include <string>
 #include <vector>
@@ -10,10 +11,13 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "alloc_counter.hpp"
+
 #include "preprocess/area_kernels.hpp"
 #include "preprocess/area_resizer.hpp"
 #include "preprocess/preprocessor.hpp"
 #include "preprocess/white_balance.hpp"
+#include "preprocess/yuv_rows.hpp"
 #include "synthetic_frame.hpp"
 
 namespace vp::preprocess {
@@ -199,6 +203,186 @@ TEST(FusedPreprocessor, WhiteBalancedFrameAndTilesEqualTheReference) {
       EXPECT_EQ(maxDifference(tileMat(inTile), small(inTile)), 0.0);
     }
   }
+}
+
+camera::CameraModel pinhole(int width, int height) {
+  camera::Intrinsics k;
+  k.width_px = width;
+  k.height_px = height;
+  k.fx_px = 2300.0;
+  k.fy_px = 2300.0;
+  k.cx_px = 0.5 * width - 0.5;
+  k.cy_px = 0.5 * height - 0.5;
+  camera::CameraModel camera;
+  EXPECT_TRUE(camera.init(k, camera::Distortion{}));
+  return camera;
+}
+
+// A camera buffer: YUYV (2 bytes a pixel) or NV12 (Y plane, then UV rows), rows padded to
+// `stride` bytes. Luma from a simulated scene (plus noise), chroma random: every U, V value.
+struct CameraBuffer {
+  std::vector<std::uint8_t> bytes;
+  YuvFrame frame;
+};
+
+CameraBuffer cameraBuffer(YuvFrame::Layout layout, int width, int height, std::size_t stride,
+                          std::uint64_t seed) {
+  const cv::Mat scene = test::syntheticCarFrame(width, height, seed, 30);
+  cv::RNG rng(seed);
+  const bool nv12 = layout == YuvFrame::Layout::Nv12;
+  CameraBuffer out;
+  const auto rows = static_cast<std::size_t>(nv12 ? height + height / 2 : height);
+  out.bytes.assign(stride * rows, 0xEE);  // padding bytes must not matter
+  for (int y = 0; y < height; ++y) {
+    std::uint8_t* row = out.bytes.data() + static_cast<std::size_t>(y) * stride;
+    for (int x = 0; x < width; ++x) {
+      const auto luma = static_cast<std::uint8_t>(
+          std::clamp(scene.at<cv::Vec3b>(y, x)[1] + rng.uniform(-8, 9), 0, 255));
+      if (nv12) {
+        row[x] = luma;
+      } else {
+        row[2 * x] = luma;
+        row[2 * x + 1] = static_cast<std::uint8_t>(rng.uniform(0, 256));
+      }
+    }
+  }
+  out.frame.layout = layout;
+  out.frame.data = out.bytes.data();
+  out.frame.strideBytes = stride;
+  out.frame.width_px = width;
+  out.frame.height_px = height;
+  if (nv12) {
+    std::uint8_t* uv = out.bytes.data() + stride * static_cast<std::size_t>(height);
+    for (int y = 0; y < height / 2; ++y) {
+      for (int x = 0; x < width; ++x) {
+        uv[static_cast<std::size_t>(y) * stride + static_cast<std::size_t>(x)] =
+            static_cast<std::uint8_t>(rng.uniform(0, 256));
+      }
+    }
+    out.frame.uv = uv;
+    out.frame.uvStrideBytes = stride;
+  }
+  return out;
+}
+
+// What the app does today: the capture converts the whole frame (the same rows), then BGR.
+cv::Mat convertedFrame(const YuvFrame& f) {
+  cv::Mat bgr(f.height_px, f.width_px, CV_8UC3);
+  for (int y = 0; y < f.height_px; ++y) {
+    const std::uint8_t* row = f.data + static_cast<std::size_t>(y) * f.strideBytes;
+    if (f.layout == YuvFrame::Layout::Nv12) {
+      nv12RowToBgr(row, f.uv + static_cast<std::size_t>(y / 2) * f.uvStrideBytes, f.width_px,
+                   bgr.ptr<std::uint8_t>(y));
+    } else {
+      yuyvRowToBgr(row, f.width_px, bgr.ptr<std::uint8_t>(y));
+    }
+  }
+  return bgr;
+}
+
+TEST(YuvRows, MatchOpenCvsConversionWithinOneLevel) {
+  for (const auto layout : {YuvFrame::Layout::Yuyv, YuvFrame::Layout::Nv12}) {
+    const bool nv12 = layout == YuvFrame::Layout::Nv12;
+    const CameraBuffer buffer = cameraBuffer(layout, 320, 240, nv12 ? 320 : 640, 3);
+    const cv::Mat ours = convertedFrame(buffer.frame);
+    cv::Mat theirs;
+    if (nv12) {
+      const cv::Mat planes(360, 320, CV_8UC1, const_cast<std::uint8_t*>(buffer.bytes.data()));
+      cv::cvtColor(planes, theirs, cv::COLOR_YUV2BGR_NV12);
+    } else {
+      const cv::Mat packed(240, 320, CV_8UC2, const_cast<std::uint8_t*>(buffer.bytes.data()));
+      cv::cvtColor(packed, theirs, cv::COLOR_YUV2BGR_YUYV);
+    }
+    EXPECT_LE(maxDifference(ours, theirs), 1.0) << (nv12 ? "NV12" : "YUYV");
+  }
+}
+
+// The direct camera path: tiles equal to converting the whole frame and then preprocessing
+// it, for both layouts, padded strides, the default and a fractional scale, 1 and 2 threads,
+// every instruction set; no full-size frame and no allocation per frame.
+TEST_F(EveryIsa, CameraLayoutsGoStraightToTheWorkingImage) {
+  const camera::CameraModel camera = pinhole(2592, 2048);
+  const CameraBuffer yuyv = cameraBuffer(YuvFrame::Layout::Yuyv, 2592, 2048, 2592 * 2 + 64, 41);
+  const CameraBuffer nv12 = cameraBuffer(YuvFrame::Layout::Nv12, 2592, 2048, 2592 + 32, 42);
+  for (const Isa isa : available()) {
+    ASSERT_EQ(kernels::limitIsa(isa), isa);
+    for (const CameraBuffer* buffer : {&yuyv, &nv12}) {
+      const cv::Mat converted = convertedFrame(buffer->frame);
+      for (const double scale : {kDefaultWorkingScale, kDefaultWorkingScale * kScaleStep}) {
+        for (const int threads : {1, 2}) {
+          SCOPED_TRACE(std::string(name(isa)) + ", " + (buffer == &nv12 ? "NV12" : "YUYV") +
+                       ", scale " + std::to_string(scale) + ", threads " + std::to_string(threads));
+          PreprocessOptions options;
+          options.workingScale = scale;
+          options.threads = threads;
+          Preprocessor direct;
+          Preprocessor viaBgr;
+          ASSERT_TRUE(direct.init(options, camera, {2592, 2048}));
+          ASSERT_TRUE(viaBgr.init(options, camera, {2592, 2048}));
+          ASSERT_EQ(direct.process(buffer->frame), PreprocessStatus::Ok) << direct.lastError();
+          ASSERT_EQ(viaBgr.process(converted), PreprocessStatus::Ok);
+          EXPECT_TRUE(direct.output().frame.empty());
+          ASSERT_EQ(direct.output().tiles.size(), viaBgr.output().tiles.size());
+          for (std::size_t t = 0; t < direct.output().tiles.size(); ++t) {
+            const TileView& a = direct.output().tiles[t];
+            const TileView& b = viaBgr.output().tiles[t];
+            const cv::Mat tileA(a.rect.height_px, a.rect.width_px, CV_8UC3,
+                                const_cast<std::uint8_t*>(a.data), a.strideBytes);
+            const cv::Mat tileB(b.rect.height_px, b.rect.width_px, CV_8UC3,
+                                const_cast<std::uint8_t*>(b.data), b.strideBytes);
+            EXPECT_EQ(maxDifference(tileA, tileB), 0.0) << "tile " << t;
+          }
+          if (isa == available().back() && scale == kDefaultWorkingScale) {
+            test::AllocationCounter counter;
+            ASSERT_EQ(direct.process(buffer->frame), PreprocessStatus::Ok);
+            counter.stop();
+            EXPECT_EQ(counter.count(), 0U);
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(FusedPreprocessor, CameraFramesItCannotTakeAreStatusesNamingWhy) {
+  const camera::CameraModel camera = pinhole(2592, 2048);
+  CameraBuffer buffer = cameraBuffer(YuvFrame::Layout::Nv12, 2592, 2048, 2592, 5);
+  Preprocessor pre;
+  EXPECT_EQ(pre.process(buffer.frame), PreprocessStatus::NotInitialised);
+  ASSERT_TRUE(pre.init(PreprocessOptions{}, camera, {2592, 2048}));
+  YuvFrame frame = buffer.frame;
+  frame.data = nullptr;
+  EXPECT_EQ(pre.process(frame), PreprocessStatus::EmptyFrame);
+  frame = buffer.frame;
+  frame.width_px = 1296;
+  EXPECT_EQ(pre.process(frame), PreprocessStatus::WrongFrameSize);
+  EXPECT_NE(std::string(pre.lastError()).find("NV12 frame is 1296x2048, expected 2592x2048"),
+            std::string::npos)
+      << pre.lastError();
+  frame = buffer.frame;
+  frame.uv = nullptr;
+  EXPECT_EQ(pre.process(frame), PreprocessStatus::WrongFrameType);
+  EXPECT_NE(std::string(pre.lastError()).find("no UV plane"), std::string::npos) << pre.lastError();
+  frame = buffer.frame;
+  frame.strideBytes = 2000;
+  EXPECT_EQ(pre.process(frame), PreprocessStatus::WrongFrameType);
+  ASSERT_EQ(pre.process(buffer.frame), PreprocessStatus::Ok);
+  EXPECT_STREQ(pre.lastError(), "");
+
+  PreprocessOptions balanced;
+  balanced.whiteBalance = true;
+  ASSERT_TRUE(pre.init(balanced, camera, {2592, 2048}));
+  EXPECT_EQ(pre.process(buffer.frame), PreprocessStatus::WrongFrameType);
+  EXPECT_NE(std::string(pre.lastError()).find("white balance need a BGR frame"), std::string::npos)
+      << pre.lastError();
+
+  const camera::CameraModel odd = pinhole(2591, 2048);
+  ASSERT_TRUE(pre.init(PreprocessOptions{}, odd, {2591, 2048}));
+  CameraBuffer oddBuffer = cameraBuffer(YuvFrame::Layout::Yuyv, 2590, 2048, 2591 * 2, 6);
+  oddBuffer.frame.width_px = 2591;
+  EXPECT_EQ(pre.process(oddBuffer.frame), PreprocessStatus::WrongFrameType);
+  EXPECT_NE(std::string(pre.lastError()).find("width must be even"), std::string::npos)
+      << pre.lastError();
 }
 
 }  // namespace

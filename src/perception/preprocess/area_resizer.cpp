@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "preprocess/area_kernels.hpp"
+#include "preprocess/yuv_rows.hpp"
 
 namespace vp::preprocess {
 
@@ -142,7 +143,7 @@ bool AreaResizer::init(cv::Size srcSize, cv::Size dstSize, int scratchSlots, std
   rowValues_ = static_cast<std::size_t>(srcSize.width) * kChannels;
   outValues_ = static_cast<std::size_t>(dstSize.width) * kChannels;
   const auto slots = static_cast<std::size_t>(scratchSlots);
-  strideBytes_ = rowValues_ + kPad;
+  strideBytes_ = 2 * (rowValues_ + kPad);  // a gained row and a converted row
   scratchBytes_.assign(strideBytes_ * slots, 0);
   if (integer) {
     // 32-bit sums when 16 bits do not hold them.
@@ -171,6 +172,7 @@ AreaResizer::Scratch AreaResizer::scratch(int slot) const {
   const auto s = static_cast<std::size_t>(slot);
   Scratch out{};
   out.gainedRow = scratchBytes_.data() + strideBytes_ * s;
+  out.bgrRow = out.gainedRow + rowValues_ + kPad;
   out.sum16 = scratch16_.empty() ? nullptr : scratch16_.data() + stride16_ * s;
   float* f = scratchF_.empty() ? nullptr : scratchF_.data() + strideF_ * s;
   out.rowF = f;
@@ -187,25 +189,52 @@ std::pair<int, int> AreaResizer::sourceRowsOwned(int rowBegin, int rowEnd) const
   return {first, ownedEnd_[static_cast<std::size_t>(rowEnd) - 1]};
 }
 
-// The source row as the mean sees it: the frame's own row, or its gained copy (written to
-// `gained` when this call owns the row, else to the slot's scratch row).
-const std::uint8_t* AreaResizer::sourceRow(const cv::Mat& src, int row,
+// The source row in BGR8: the image's own row, or the camera row converted into scratch.
+const std::uint8_t* AreaResizer::rawRow(const ResizeSource& src, int row,
+                                        std::uint8_t* scratchRow) const {
+  const std::uint8_t* in = src.data + static_cast<std::size_t>(row) * src.strideBytes;
+  switch (src.layout) {
+    case ResizeSource::Layout::Bgr:
+      return in;
+    case ResizeSource::Layout::Yuyv:
+      yuyvRowToBgr(in, srcSize_.width, scratchRow);
+      return scratchRow;
+    case ResizeSource::Layout::Nv12:
+      nv12RowToBgr(in, src.uv + static_cast<std::size_t>(row / 2) * src.uvStrideBytes,
+                   srcSize_.width, scratchRow);
+      return scratchRow;
+  }
+  return in;
+}
+
+// The source row as the mean sees it: rawRow, or its gained copy (in `gained` when this
+// output row owns the row - written when it started -, else in the slot's scratch).
+const std::uint8_t* AreaResizer::sourceRow(const ResizeSource& src, int row,
                                            const std::array<float, 3>* gains, cv::Mat* gained,
                                            int ownedBegin, int ownedEnd,
-                                           std::uint8_t* scratchRow) const {
-  const std::uint8_t* in = src.ptr<std::uint8_t>(row);
+                                           const Scratch& scratch) const {
+  if (gains != nullptr && gained != nullptr && row >= ownedBegin && row < ownedEnd) {
+    return gained->ptr<std::uint8_t>(row);
+  }
+  const std::uint8_t* in = rawRow(src, row, scratch.bgrRow);
   if (gains == nullptr) {
     return in;
   }
-  if (gained != nullptr && row >= ownedBegin && row < ownedEnd) {
-    return gained->ptr<std::uint8_t>(row);  // written when the output row started
-  }
-  kernels::applyGains(in, scratchRow, rowValues_, *gains);
-  return scratchRow;
+  kernels::applyGains(in, scratch.gainedRow, rowValues_, *gains);
+  return scratch.gainedRow;
 }
 
-void AreaResizer::applyRows(const cv::Mat& src, cv::Mat& dst, int rowBegin, int rowEnd, int slot,
-                            const std::array<float, 3>* gains, cv::Mat* gained) const {
+void AreaResizer::writeOwnedRows(const ResizeSource& src, int ownedBegin, int ownedEnd,
+                                 const std::array<float, 3>& gains, cv::Mat& gained,
+                                 const Scratch& scratch) const {
+  for (int r = ownedBegin; r < ownedEnd; ++r) {
+    kernels::applyGains(rawRow(src, r, scratch.bgrRow), gained.ptr<std::uint8_t>(r), rowValues_,
+                        gains);
+  }
+}
+
+void AreaResizer::applyRows(const ResizeSource& src, cv::Mat& dst, int rowBegin, int rowEnd,
+                            int slot, const std::array<float, 3>* gains, cv::Mat* gained) const {
   if (gains == nullptr) {
     gained = nullptr;
   }
@@ -216,7 +245,7 @@ void AreaResizer::applyRows(const cv::Mat& src, cv::Mat& dst, int rowBegin, int 
   }
 }
 
-void AreaResizer::applyRowsInteger(const cv::Mat& src, cv::Mat& dst, int rowBegin, int rowEnd,
+void AreaResizer::applyRowsInteger(const ResizeSource& src, cv::Mat& dst, int rowBegin, int rowEnd,
                                    int slot, const std::array<float, 3>* gains,
                                    cv::Mat* gained) const {
   const int fx = factorX_;
@@ -228,22 +257,20 @@ void AreaResizer::applyRowsInteger(const cv::Mat& src, cv::Mat& dst, int rowBegi
   for (int dy = rowBegin; dy < rowEnd; ++dy) {
     const auto [ownedBegin, ownedEnd] = sourceRowsOwned(dy, dy + 1);
     if (gained != nullptr) {
-      for (int r = ownedBegin; r < ownedEnd; ++r) {
-        kernels::applyGains(src.ptr<std::uint8_t>(r), gained->ptr<std::uint8_t>(r), rowValues_,
-                            *gains);
-      }
+      writeOwnedRows(src, ownedBegin, ownedEnd, *gains, *gained, s);
     }
     std::uint8_t* out = dst.ptr<std::uint8_t>(dy);
     if (integerFast_) {
-      // Rows in groups (gained ones go through the slot's one scratch row: one at a time).
+      // Rows in groups, but one at a time when each goes through the slot's scratch row.
       constexpr int kGroup = 8;
       std::array<const std::uint8_t*, kGroup> rows{};
-      const int group = gains != nullptr && gained == nullptr ? 1 : kGroup;
+      const bool throughScratch = src.layout != ResizeSource::Layout::Bgr || gains != nullptr;
+      const int group = throughScratch && gained == nullptr ? 1 : kGroup;
       for (int r0 = 0; r0 < fy; r0 += group) {
         const int count = std::min(group, fy - r0);
         for (int r = 0; r < count; ++r) {
           rows[static_cast<std::size_t>(r)] =
-              sourceRow(src, dy * fy + r0 + r, gains, gained, ownedBegin, ownedEnd, s.gainedRow);
+              sourceRow(src, dy * fy + r0 + r, gains, gained, ownedBegin, ownedEnd, s);
         }
         kernels::accumulateColumns16(rows.data(), count, s.sum16, rowValues_, r0 == 0);
       }
@@ -255,7 +282,7 @@ void AreaResizer::applyRowsInteger(const cv::Mat& src, cv::Mat& dst, int rowBegi
       std::fill(sum32, sum32 + rowValues_, 0U);
       for (int r = 0; r < fy; ++r) {
         const std::uint8_t* row =
-            sourceRow(src, dy * fy + r, gains, gained, ownedBegin, ownedEnd, s.gainedRow);
+            sourceRow(src, dy * fy + r, gains, gained, ownedBegin, ownedEnd, s);
         for (std::size_t i = 0; i < rowValues_; ++i) {
           sum32[i] += row[i];
         }
@@ -265,7 +292,7 @@ void AreaResizer::applyRowsInteger(const cv::Mat& src, cv::Mat& dst, int rowBegi
   }
 }
 
-void AreaResizer::applyRowsGeneral(const cv::Mat& src, cv::Mat& dst, int rowBegin, int rowEnd,
+void AreaResizer::applyRowsGeneral(const ResizeSource& src, cv::Mat& dst, int rowBegin, int rowEnd,
                                    int slot, const std::array<float, 3>* gains,
                                    cv::Mat* gained) const {
   const Scratch s = scratch(slot);
@@ -273,18 +300,14 @@ void AreaResizer::applyRowsGeneral(const cv::Mat& src, cv::Mat& dst, int rowBegi
   for (int dy = rowBegin; dy < rowEnd; ++dy) {
     const auto [ownedBegin, ownedEnd] = sourceRowsOwned(dy, dy + 1);
     if (gained != nullptr) {
-      for (int r = ownedBegin; r < ownedEnd; ++r) {
-        kernels::applyGains(src.ptr<std::uint8_t>(r), gained->ptr<std::uint8_t>(r), rowValues_,
-                            *gains);
-      }
+      writeOwnedRows(src, ownedBegin, ownedEnd, *gains, *gained, s);
     }
     const int begin = yTermStart_[static_cast<std::size_t>(dy)];
     const int end = yTermStart_[static_cast<std::size_t>(dy) + 1];
     for (int k = begin; k < end; ++k) {
       const int row = yRows_[static_cast<std::size_t>(k)];
       if (row != cachedRow) {
-        const std::uint8_t* in =
-            sourceRow(src, row, gains, gained, ownedBegin, ownedEnd, s.gainedRow);
+        const std::uint8_t* in = sourceRow(src, row, gains, gained, ownedBegin, ownedEnd, s);
         kernels::toFloat(in, s.rowF, rowValues_);
         kernels::horizontalTaps(s.rowF, s.horizontal, dstSize_.width, xFirst_.data(),
                                 xWeights_.data(), xTaps_);

@@ -27,6 +27,20 @@
 
 namespace vp::preprocess {
 
+// What the resize reads: a BGR8 image, or a camera frame in YUYV or NV12 whose rows are
+// converted to BGR8 (yuv_rows.hpp) one at a time inside the sweep. Views: nothing is owned.
+struct ResizeSource {
+  enum class Layout { Bgr, Yuyv, Nv12 };
+  Layout layout = Layout::Bgr;
+  const std::uint8_t* data = nullptr;  // BGR or YUYV rows, or NV12's Y plane
+  std::size_t strideBytes = 0;         // bytes between rows
+  const std::uint8_t* uv = nullptr;    // NV12: the interleaved UV plane (one row per two rows)
+  std::size_t uvStrideBytes = 0;
+  static ResizeSource bgr(const cv::Mat& image) {
+    return {Layout::Bgr, image.data, image.step[0], nullptr, 0};
+  }
+};
+
 class AreaResizer {
  public:
   AreaResizer() = default;
@@ -41,13 +55,18 @@ class AreaResizer {
 
   // The caller guarantees sizes and types (CV_8UC3) and slot < scratchSlots.
   void applyRows(const cv::Mat& src, cv::Mat& dst, int rowBegin, int rowEnd, int slot) const {
-    applyRows(src, dst, rowBegin, rowEnd, slot, nullptr, nullptr);
+    applyRows(ResizeSource::bgr(src), dst, rowBegin, rowEnd, slot, nullptr, nullptr);
   }
   // With gains (B, G, R; nullptr: none) every source value v enters as saturate(round(v *
   // gain)); with `gained` (a CV_8UC3 image of the source size, nullptr: none) the gained source
   // rows owned by [rowBegin, rowEnd) are written there (sourceRowsOwned: calls covering every
   // output row write every source row once).
   void applyRows(const cv::Mat& src, cv::Mat& dst, int rowBegin, int rowEnd, int slot,
+                 const std::array<float, 3>* gains, cv::Mat* gained) const {
+    applyRows(ResizeSource::bgr(src), dst, rowBegin, rowEnd, slot, gains, gained);
+  }
+  // From any source layout (of srcSize; YUV needs an even width, NV12 an even height).
+  void applyRows(const ResizeSource& src, cv::Mat& dst, int rowBegin, int rowEnd, int slot,
                  const std::array<float, 3>* gains, cv::Mat* gained) const;
   // The source rows [first, second) an output-row range owns (for `gained`).
   std::pair<int, int> sourceRowsOwned(int rowBegin, int rowEnd) const;
@@ -59,18 +78,23 @@ class AreaResizer {
   // One slot's scratch rows (float and 16-bit, padded for vector loads past the end).
   struct Scratch {
     std::uint8_t* gainedRow;  // one gained source row (when gains are on and not written out)
+    std::uint8_t* bgrRow;     // one converted source row (YUV layouts)
     std::uint16_t* sum16;     // integer path: the block's column sums
     float* rowF;              // general path: one source row in float
     float* horizontal;        // general path: that row's horizontal sums (cached by row)
     float* sum;               // general path: the output row being accumulated
   };
   Scratch scratch(int slot) const;
-  const std::uint8_t* sourceRow(const cv::Mat& src, int row, const std::array<float, 3>* gains,
+  const std::uint8_t* rawRow(const ResizeSource& src, int row, std::uint8_t* scratchRow) const;
+  const std::uint8_t* sourceRow(const ResizeSource& src, int row, const std::array<float, 3>* gains,
                                 cv::Mat* gained, int ownedBegin, int ownedEnd,
-                                std::uint8_t* scratchRow) const;
-  void applyRowsInteger(const cv::Mat& src, cv::Mat& dst, int rowBegin, int rowEnd, int slot,
+                                const Scratch& scratch) const;
+  void writeOwnedRows(const ResizeSource& src, int ownedBegin, int ownedEnd,
+                      const std::array<float, 3>& gains, cv::Mat& gained,
+                      const Scratch& scratch) const;
+  void applyRowsInteger(const ResizeSource& src, cv::Mat& dst, int rowBegin, int rowEnd, int slot,
                         const std::array<float, 3>* gains, cv::Mat* gained) const;
-  void applyRowsGeneral(const cv::Mat& src, cv::Mat& dst, int rowBegin, int rowEnd, int slot,
+  void applyRowsGeneral(const ResizeSource& src, cv::Mat& dst, int rowBegin, int rowEnd, int slot,
                         const std::array<float, 3>* gains, cv::Mat* gained) const;
 
   cv::Size srcSize_{};
