@@ -297,6 +297,27 @@ TEST(YuvRows, MatchOpenCvsConversionWithinOneLevel) {
   }
 }
 
+TEST_F(EveryIsa, YuvRowsAreTheSameOnEveryInstructionSet) {
+  // Odd tails (width not a multiple of 8) and every byte value.
+  for (const auto layout : {YuvFrame::Layout::Yuyv, YuvFrame::Layout::Nv12}) {
+    const bool nv12 = layout == YuvFrame::Layout::Nv12;
+    for (const int width : {2592, 322, 6}) {
+      CameraBuffer buffer = cameraBuffer(layout, width, 64, nv12 ? width : 2 * width, 4);
+      cv::RNG rng(9);
+      for (std::uint8_t& byte : buffer.bytes) {
+        byte = static_cast<std::uint8_t>(rng.uniform(0, 256));
+      }
+      kernels::limitIsa(Isa::Scalar);
+      const cv::Mat scalar = convertedFrame(buffer.frame);
+      for (const Isa isa : available()) {
+        ASSERT_EQ(kernels::limitIsa(isa), isa);
+        EXPECT_EQ(maxDifference(convertedFrame(buffer.frame), scalar), 0.0)
+            << name(isa) << (nv12 ? " NV12 " : " YUYV ") << width;
+      }
+    }
+  }
+}
+
 // The direct camera path: tiles equal to converting the whole frame and then preprocessing
 // it, for both layouts, padded strides, the default and a fractional scale, 1 and 2 threads,
 // every instruction set; no full-size frame and no allocation per frame.
