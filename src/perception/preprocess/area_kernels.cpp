@@ -160,20 +160,19 @@ VP_TARGET_AVX2 std::size_t toFloatAvx2(const std::uint8_t* in, float* out, std::
 }
 
 VP_TARGET_AVX2 void horizontalTapsAvx2(const float* row, float* out, int width, const int* first,
-                                       const float* weights, int taps) {
-  // Two output pixels per vector (4 lanes each: B, G, R and a lane overwritten later).
+                                       const float* weights, const float* pairWeights, int taps) {
+  // Two output pixels per vector (4 lanes each: B, G, R and a lane overwritten later); their
+  // weights come broadcast, eight floats per tap.
   int d = 0;
   for (; d + 2 <= width; d += 2) {
     const float* p0 = row + static_cast<std::ptrdiff_t>(first[d]) * 3;
     const float* p1 = row + static_cast<std::ptrdiff_t>(first[d + 1]) * 3;
-    const float* w0 = weights + static_cast<std::ptrdiff_t>(d) * taps;
-    const float* w1 = w0 + taps;
+    const float* pw = pairWeights + static_cast<std::ptrdiff_t>(d / 2) * taps * 8;
     __m256 acc = _mm256_setzero_ps();
     for (int t = 0; t < taps; ++t) {
       const __m256 v = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(p0 + 3 * t)),
                                             _mm_loadu_ps(p1 + 3 * t), 1);
-      const __m256 w =
-          _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_set1_ps(w0[t])), _mm_set1_ps(w1[t]), 1);
+      const __m256 w = _mm256_loadu_ps(pw + 8 * t);
       acc = _mm256_add_ps(acc, _mm256_mul_ps(v, w));
     }
     float* o = out + static_cast<std::ptrdiff_t>(d) * 3;
@@ -442,10 +441,10 @@ void toFloat(const std::uint8_t* in, float* out, std::size_t n) {
 }
 
 void horizontalTaps(const float* row, float* out, int width, const int* first, const float* weights,
-                    int taps) {
+                    const float* pairWeights, int taps) {
 #if defined(VP_AREA_AVX2)
   if (useAvx2()) {
-    horizontalTapsAvx2(row, out, width, first, weights, taps);
+    horizontalTapsAvx2(row, out, width, first, weights, pairWeights, taps);
     return;
   }
 #endif

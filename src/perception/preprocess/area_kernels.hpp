@@ -56,8 +56,10 @@ void toFloat(const std::uint8_t* in, float* out, std::size_t n);
 
 // out[3 d + c] = sum over t < taps, in order, of row[3 (first[d] + t) + c] * weights[d taps + t]
 // (starting from 0), for d < width. row holds 3 taps + 4 zeros of slack past its values.
+// pairWeights: the same weights for pixels 2p, 2p + 1 as 8 floats per tap (4 x w(2p, t), 4 x
+// w(2p + 1, t)), taps of pair p from 8 p taps on (AreaResizer builds them).
 void horizontalTaps(const float* row, float* out, int width, const int* first, const float* weights,
-                    int taps);
+                    const float* pairWeights, int taps);
 
 // sum[i] = (first ? 0 : sum[i]) + weight * values[i] for i < n.
 void accumulateWeighted(const float* values, float* sum, std::size_t n, float weight, bool first);
