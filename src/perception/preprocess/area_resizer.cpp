@@ -106,14 +106,15 @@ bool AreaResizer::init(cv::Size srcSize, cv::Size dstSize, int scratchSlots, std
     const auto tap = static_cast<std::size_t>(term.src - xFirst_[d]);
     xWeights_[d * static_cast<std::size_t>(xTaps_) + tap] = term.weight;
   }
-  // The same, broadcast for two pixels a vector (area_kernels.hpp).
+  // After them, the same broadcast for two pixels a vector (area_kernels.hpp, pairWeights).
   const auto taps = static_cast<std::size_t>(xTaps_);
-  const auto pairs = static_cast<std::size_t>(dstSize.width) / 2;
-  xPairWeights_.assign(pairs * taps * 8, 0.0F);
+  const std::size_t plain = static_cast<std::size_t>(dstSize.width) * taps;
+  const std::size_t pairs = static_cast<std::size_t>(dstSize.width) / 2;
+  xWeights_.resize(plain + pairs * taps * 8, 0.0F);
   for (std::size_t p = 0; p < pairs; ++p) {
     for (std::size_t t = 0; t < taps; ++t) {
       for (std::size_t lane = 0; lane < 8; ++lane) {
-        xPairWeights_[(p * taps + t) * 8 + lane] = xWeights_[(2 * p + lane / 4) * taps + t];
+        xWeights_[plain + (p * taps + t) * 8 + lane] = xWeights_[(2 * p + lane / 4) * taps + t];
       }
     }
   }
@@ -321,7 +322,10 @@ void AreaResizer::applyRowsGeneral(const ResizeSource& src, cv::Mat& dst, int ro
         const std::uint8_t* in = sourceRow(src, row, gains, gained, ownedBegin, ownedEnd, s);
         kernels::toFloat(in, s.rowF, rowValues_);
         kernels::horizontalTaps(s.rowF, s.horizontal, dstSize_.width, xFirst_.data(),
-                                xWeights_.data(), xPairWeights_.data(), xTaps_);
+                                xWeights_.data(),
+                                xWeights_.data() + static_cast<std::size_t>(dstSize_.width) *
+                                                       static_cast<std::size_t>(xTaps_),
+                                xTaps_);
         cachedRow = row;
       }
       kernels::accumulateWeighted(s.horizontal, s.sum, outValues_,

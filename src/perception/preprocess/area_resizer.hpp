@@ -111,10 +111,9 @@ class AreaResizer {
   int xTaps_ = 0;
   std::vector<int> xFirst_;
   std::vector<float> xWeights_;
-  std::vector<float> xPairWeights_;  // the same, broadcast per pixel pair (AVX2 loop)
-  std::vector<int> ownedEnd_;        // per output row: end of the source rows it owns (`gained`)
-  bool integerFast_ = false;         // integer factors whose block sums fit 16 bits
-  int log2FactorX_ = -1;             // factorX_ = 2^log2FactorX_ (-1: not a power of two)
+  std::vector<int> ownedEnd_;  // per output row: end of the source rows it owns (`gained`)
+  bool integerFast_ = false;   // integer factors whose block sums fit 16 bits
+  int log2FactorX_ = -1;       // factorX_ = 2^log2FactorX_ (-1: not a power of two)
   // Scratch, scratchSlots x per-slot stride (written by applyRows: mutable).
   mutable std::vector<std::uint8_t> scratchBytes_;
   mutable std::vector<std::uint16_t> scratch16_;
