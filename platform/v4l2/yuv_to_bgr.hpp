@@ -2,11 +2,10 @@
 //
 // Contract: pure, allocation-free, single-threaded; writes into a caller-owned CV_8UC3 image
 // of exactly the given size (never reallocates it) and returns false, writing nothing, when
-// the image or the dimensions do not fit (odd width, odd height for NV12). Colour: ITU-R
-// BT.601 limited range ("studio swing", Y 16..235), the convention of UVC/V4L2 cameras that
-// report no colorimetry and of OpenCV's COLOR_YUV2BGR_*, in 20-bit fixed point so that the
-// result matches cv::cvtColor (the tests compare them). Source strides are in bytes
-// (V4L2 bytesperline), so padded rows are handled.
+// the image or the dimensions do not fit (odd width, odd height for NV12). Colour: the row
+// conversion of src/perception/preprocess/yuv_rows.hpp (ITU-R BT.601 limited range, 20-bit
+// fixed point, = cv::cvtColor; the preprocessor's direct camera path uses the same rows).
+// Source strides are in bytes (V4L2 bytesperline), so padded rows are handled.
 #pragma once
 
 #include <cstddef>

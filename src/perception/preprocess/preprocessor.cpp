@@ -290,15 +290,26 @@ PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
   output_.timings.undistort_ms =
       std::chrono::duration<double, std::milli>(undistorted - start).count();
 
+  // White balance: the gains are estimated on the (undistorted) frame; they are applied
+  // inside the resize sweep below, which reads every source row once and writes both the
+  // balanced full-resolution row (output().frame, for the crops and the annotated video) and
+  // the working image - except after undistortion, where the resize would read and write the
+  // one owned buffer: there the gains go on in place first.
+  const std::array<float, 3>* gains = nullptr;
+  cv::Mat* gained = nullptr;
   if (options_.whiteBalance) {
     output_.whiteBalance = balancer_.estimate(*current);
     balancer_.setGains(output_.whiteBalance);
-    const cv::Mat& source = *current;
-    auto body = [&](int begin, int end, int /*slot*/) {
-      balancer_.applyRows(source, corrected_, begin, end);
-    };
-    parallel_.run(frameSize_.height, body);
-    current = &corrected_;
+    gains_ = output_.whiteBalance.gain;
+    if (remapActive_) {
+      auto body = [&](int begin, int end, int /*slot*/) {
+        balancer_.applyRows(corrected_, corrected_, begin, end);
+      };
+      parallel_.run(frameSize_.height, body);
+    } else {
+      gains = &gains_;
+      gained = &corrected_;
+    }
   } else {
     output_.whiteBalance = WhiteBalanceGains{};
   }
@@ -307,14 +318,74 @@ PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
       std::chrono::duration<double, std::milli>(balanced - undistorted).count();
 
   const cv::Mat& source = *current;
-  Rung& rung = rungs_[rung_];
-  auto resizeBody = [&](int begin, int end, int slot) {
-    rung.resizer.applyRows(source, rung.content, begin, end, slot);
-  };
-  parallel_.run(rung.content.rows, resizeBody);
+  resize(ResizeSource::bgr(source), gains, gained);
   output_.timings.resize_ms = millisecondsSince(balanced);
   output_.timings.total_ms = millisecondsSince(start);
+  if (gained != nullptr) {
+    output_.frame = corrected_;  // header copy: no allocation
+    return PreprocessStatus::Ok;
+  }
   output_.frame = source;  // header copy: no allocation
+  return PreprocessStatus::Ok;
+}
+
+void Preprocessor::resize(const ResizeSource& source, const std::array<float, 3>* gains,
+                          cv::Mat* gained) {
+  Rung& rung = rungs_[rung_];
+  auto body = [&](int begin, int end, int slot) {
+    rung.resizer.applyRows(source, rung.content, begin, end, slot, gains, gained);
+  };
+  parallel_.run(rung.content.rows, body);
+}
+
+PreprocessStatus Preprocessor::process(const YuvFrame& frame) {
+  char* message = lastError_.data();
+  const std::size_t size = lastError_.size();
+  const bool nv12 = frame.layout == YuvFrame::Layout::Nv12;
+  const char* layout = nv12 ? "NV12" : "YUYV";
+  if (!initialised_) {
+    std::snprintf(message, size, "preprocess: init() has not succeeded");
+    return PreprocessStatus::NotInitialised;
+  }
+  if (frame.data == nullptr || frame.width_px <= 0 || frame.height_px <= 0) {
+    std::snprintf(message, size, "preprocess: empty %s frame (expected %dx%d)", layout,
+                  frameSize_.width, frameSize_.height);
+    return PreprocessStatus::EmptyFrame;
+  }
+  if (frame.width_px != frameSize_.width || frame.height_px != frameSize_.height) {
+    std::snprintf(message, size, "preprocess: %s frame is %dx%d, expected %dx%d", layout,
+                  frame.width_px, frame.height_px, frameSize_.width, frameSize_.height);
+    return PreprocessStatus::WrongFrameSize;
+  }
+  const auto width = static_cast<std::size_t>(frame.width_px);
+  const char* problem = nullptr;
+  if (remapActive_ || options_.whiteBalance) {
+    problem = "undistortion and white balance need a BGR frame";
+  } else if (frame.width_px % 2 != 0 || (nv12 && frame.height_px % 2 != 0)) {
+    problem = nv12 ? "width and height must be even" : "width must be even";
+  } else if (frame.strideBytes < (nv12 ? width : 2 * width)) {
+    problem = "rows are shorter than the width";
+  } else if (nv12 && (frame.uv == nullptr || frame.uvStrideBytes < width)) {
+    problem = "no UV plane, or its rows are shorter than the width";
+  }
+  if (problem != nullptr) {
+    std::snprintf(message, size, "preprocess: %s frame refused: %s", layout, problem);
+    return PreprocessStatus::WrongFrameType;
+  }
+  lastError_[0] = '\0';
+  const Clock::time_point start = Clock::now();
+  ResizeSource source;
+  source.layout = nv12 ? ResizeSource::Layout::Nv12 : ResizeSource::Layout::Yuyv;
+  source.data = frame.data;
+  source.strideBytes = frame.strideBytes;
+  source.uv = frame.uv;
+  source.uvStrideBytes = frame.uvStrideBytes;
+  resize(source, nullptr, nullptr);
+  output_.whiteBalance = WhiteBalanceGains{};
+  output_.timings = PreprocessTimings{};
+  output_.timings.resize_ms = millisecondsSince(start);
+  output_.timings.total_ms = output_.timings.resize_ms;
+  output_.frame = cv::Mat();  // no full-resolution BGR frame on this path
   return PreprocessStatus::Ok;
 }
 

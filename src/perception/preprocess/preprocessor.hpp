@@ -11,11 +11,16 @@
 //     caller's frame is never written);
 //  3. area downscale by the working scale (AreaResizer, = cv::resize INTER_AREA) into the
 //     working image, whose padding right/bottom (to at least the network input) holds padValue;
+//     steps 2 (its gains) and 3 are one sweep over the frame's rows, split over the threads:
+//     each source row is read once, balanced on the way in and, with white balance on, also
+//     written to the owned full-resolution frame; no other full-size image is made;
 //     the scale is workingScale, or - with workingGsd_m > 0 - the rung of a ladder of scales
 //     built at init() (working_scale.hpp) that adaptToGsd() picks from the frame's ground
 //     sample distance, so that a working pixel covers about workingGsd_m metres at any height;
 //  4. tiles of the network input size over the working image (tiling.hpp): one tile when the
 //     scaled frame fits, else overlapping tiles, each a view with its offset.
+// The camera's YUYV / NV12 buffers can go straight to step 3 (process(const YuvFrame&): the
+// rows are converted inside the resize sweep, without a full-size BGR frame).
 // process() returns a status and never throws: an empty frame, a type other than CV_8UC3, a
 // size other than the one given to init(), or the preprocessor's own output passed back in
 // are refused with lastError() naming what was wrong. After init() it performs no heap
@@ -97,8 +102,9 @@ struct TileView {
 
 struct PreprocessTimings {
   double undistort_ms = 0.0;
-  double whiteBalance_ms = 0.0;  // estimate + apply
-  double resize_ms = 0.0;
+  // The gains' estimate (and, after undistortion only, their application in place).
+  double whiteBalance_ms = 0.0;
+  double resize_ms = 0.0;  // the resize sweep (with the gains applied on the way in)
   double total_ms = 0.0;
 };
 
@@ -108,6 +114,19 @@ struct PreprocessedFrame {
   std::span<const TileView> tiles;
   WhiteBalanceGains whiteBalance{};  // gains of this frame (found = false when AWB is off)
   PreprocessTimings timings{};
+};
+
+// A camera frame in one of the V4L2 layouts, for the direct camera path (a view: the caller's
+// buffers; yuv_rows.hpp gives the colour conversion).
+struct YuvFrame {
+  enum class Layout { Yuyv, Nv12 };
+  Layout layout = Layout::Yuyv;
+  const std::uint8_t* data = nullptr;  // YUYV pixels (2 bytes each), or NV12's Y plane
+  std::size_t strideBytes = 0;         // bytes between rows (V4L2 bytesperline)
+  const std::uint8_t* uv = nullptr;    // NV12: the interleaved U V plane, half the rows
+  std::size_t uvStrideBytes = 0;
+  int width_px = 0;
+  int height_px = 0;
 };
 
 enum class PreprocessStatus {
@@ -135,6 +154,14 @@ class Preprocessor {
 
   // Real-time path: no allocation, no exceptions.
   PreprocessStatus process(const cv::Mat& bgrFrame);
+  // The direct camera path: the working image straight from the camera's YUYV or NV12 buffer,
+  // each row converted to BGR (as the capture's full-frame conversion does, byte for byte)
+  // inside the resize sweep, so no full-size BGR frame is made. The tiles equal those of
+  // process() on the converted frame; output().frame is empty (nothing downstream may read
+  // full-resolution BGR: no crops, no annotated video). Only without undistortion and white
+  // balance (both need the full BGR frame): otherwise WrongFrameType, as for an odd width, a
+  // missing UV plane or rows shorter than the width; WrongFrameSize for another size.
+  PreprocessStatus process(const YuvFrame& frame);
 
   const PreprocessedFrame& output() const { return output_; }
   // The camera of output().frame: pinhole when undistortion runs, else the input camera.
@@ -172,11 +199,13 @@ class Preprocessor {
     std::size_t tileCount = 0;
   };
   bool buildRung(Rung& rung, double scale, std::string* why);
+  void resize(const ResizeSource& source, const std::array<float, 3>* gains, cv::Mat* gained);
   void selectRung(std::size_t index);
 
   RowParallel parallel_{};
   cv::Mat corrected_;  // owned full-resolution frame (undistortion / white balance output)
   cv::Mat working_;    // working image incl. padding, sized for the largest rung
+  std::array<float, 3> gains_{1.0F, 1.0F, 1.0F};  // this frame's white-balance gains
   std::vector<Rung> rungs_;
   std::array<double, kMaxScaleRungs> scales_{};
   std::size_t rung_ = 0;

@@ -65,6 +65,15 @@ bool WhiteBalancer::init(const WhiteBalanceOptions& options, cv::Size frameSize,
   samplesY_ = (frameSize.height + options.sampleStride_px - 1) / options.sampleStride_px;
   const std::size_t samples =
       static_cast<std::size_t>(samplesX_) * static_cast<std::size_t>(samplesY_);
+  regionCol_.resize(static_cast<std::size_t>(samplesX_));
+  for (int sx = 0; sx < samplesX_; ++sx) {
+    regionCol_[static_cast<std::size_t>(sx)] = sx * options.regionCols / samplesX_;
+  }
+  regionRowStart_.resize(static_cast<std::size_t>(samplesY_));
+  for (int sy = 0; sy < samplesY_; ++sy) {
+    regionRowStart_[static_cast<std::size_t>(sy)] =
+        (sy * options.regionRows / samplesY_) * options.regionCols;
+  }
   luma_.assign(samples, 0.0F);
   cb_.assign(samples, 0.0F);
   cr_.assign(samples, 0.0F);
@@ -82,9 +91,9 @@ WhiteBalanceGains WhiteBalancer::estimate(const cv::Mat& bgrFrame) {
   std::array<double, kMaxWhiteBalanceRegions> sumCr{};
   std::array<int, kMaxWhiteBalanceRegions> count{};
   const int stride = options_.sampleStride_px;
+  // Region of a sample: tables built at init() (two integer divisions per sample otherwise).
   auto regionOf = [&](int sx, int sy) {
-    return (sy * options_.regionRows / samplesY_) * options_.regionCols +
-           sx * options_.regionCols / samplesX_;
+    return regionRowStart_[static_cast<std::size_t>(sy)] + regionCol_[static_cast<std::size_t>(sx)];
   };
 
   // 1. YCbCr of the samples, per-region chroma means, the largest luminance.

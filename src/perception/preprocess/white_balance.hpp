@@ -80,6 +80,8 @@ class WhiteBalancer {
   std::vector<float> luma_;
   std::vector<float> cb_;
   std::vector<float> cr_;
+  std::vector<int> regionCol_;       // per sample column: its region's column
+  std::vector<int> regionRowStart_;  // per sample row: its region row x regionCols
   std::array<std::array<std::uint8_t, 256>, 3> table_{};
 };
 
