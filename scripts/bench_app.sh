@@ -84,6 +84,10 @@ for backend in ${BACKENDS:-int8}; do
       # The pipeline needs a second core: on one core it only adds the hand-off.
       if [ "$pipeline" = off ]; then
         run "every_frame_1_core_$backend.$r" 0 1 --fast --every-frame --backend "$backend"
+        # The serial loop on 2 cores with a 1-thread detector: the pipelined runs' detector
+        # threads (--threads 2 pipelined = 1 detector thread + the processing thread).
+        run "every_frame_2_cores_1_thread_${backend}_pipeline_off.$r" 0-1 1 --fast --every-frame \
+          --backend "$backend" --pipeline off
       fi
       run "every_frame_2_cores_${backend}_pipeline_$pipeline.$r" 0-1 2 --fast --every-frame \
         --backend "$backend" --pipeline "$pipeline"
@@ -95,6 +99,7 @@ for backend in ${BACKENDS:-int8}; do
     for pipeline in ${PIPELINES:-off}; do
       if [ "$pipeline" = off ]; then
         summary "every_frame_1_core_$backend"
+        summary "every_frame_2_cores_1_thread_${backend}_pipeline_off"
       fi
       summary "every_frame_2_cores_${backend}_pipeline_$pipeline"
       summary "fast_source_2_cores_${backend}_pipeline_$pipeline"
