@@ -1,5 +1,7 @@
 #include "app.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -85,6 +87,10 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   tracker.maxDetections = detection::kMaxDetectionsPerFrame;
   tracker.asmModel = &asm_;
   if (!step_.init(wiring, std::move(perception_), std::move(poseInput_), tracker, why)) {
+    return false;
+  }
+  if (config_.app.pipeline == config::PipelineMode::On &&
+      !step_.perceptionStage().prepareHandOff(kHandOffSlots, why)) {
     return false;
   }
   if (dds_ && !dds_->open(config_.dds, why)) {
@@ -203,7 +209,9 @@ bool App::initSource(std::string* why) {
     return false;
   }
   const int depth = config_.app.queueDepth;
-  const int poolSize = config_.app.framePoolSize > 0 ? config_.app.framePoolSize : depth + 2;
+  // Waiting + processing + capturing frames, and with the pipeline the one between its threads.
+  const int inFlight = config_.app.pipeline == config::PipelineMode::On ? 3 : 2;
+  const int poolSize = config_.app.framePoolSize > 0 ? config_.app.framePoolSize : depth + inFlight;
   return capture_.open(std::move(source), *clock_, poolSize, depth, why);
 }
 
@@ -248,7 +256,16 @@ bool App::initWorld(std::string* why) {
     return true;
   }
   auto pipeline = std::make_unique<PipelinePerception>();
-  if (!pipeline->init(config_.perception, camera_, config_.mount.mount, terrain_, frame_, asm_,
+  perception::PipelineOptions options = config_.perception;
+  if (config_.app.pipeline == config::PipelineMode::On) {
+    // Pipelined, the processing thread (crops, lifting, tracker, outputs) keeps one of the
+    // perception.threads cores busy: the detector thread's pools (detector engine, preprocessing
+    // rows) get the others, at least its own thread (docs/firmware_app.md).
+    const int threads = std::max(1, options.detection.engine.threads - 1);
+    options.detection.engine.threads = threads;
+    options.preprocess.threads = threads;
+  }
+  if (!pipeline->init(options, camera_, config_.mount.mount, terrain_, frame_, asm_,
                       config_.georef.gcpFile.empty() ? nullptr : &groundView_, &problem)) {
     if (why) {
       *why = "perception: " + problem;
@@ -256,6 +273,9 @@ bool App::initWorld(std::string* why) {
     return false;
   }
   perception_ = std::move(pipeline);
+  if (seams_.wrapPerception) {
+    perception_ = seams_.wrapPerception(std::move(perception_));
+  }
   return true;
 }
 
@@ -474,13 +494,33 @@ bool App::run(std::string* why) {
   const std::int64_t start_ns = clock_->now_ns();
   reports_.start(start_ns);
   const FramePool& pool = capture_.pool();
-  logLine("running: %s %s, pose from %s, DDS %s, queue depth %d, %zu frames of %dx%d",
+  const bool pipelined = config_.app.pipeline == config::PipelineMode::On;
+  logLine("running: %s %s, pose from %s, DDS %s, queue depth %d, pipeline %s, %zu frames of %dx%d",
           replay_ != nullptr ? "replay of" : (video_ != nullptr ? "video" : "camera"),
           sourceName().c_str(), step_.poseInput()->name(), dds_ ? "on" : "off",
-          config_.app.queueDepth, pool.capacity(), pool.width_px(), pool.height_px());
+          config_.app.queueDepth, config::toString(config_.app.pipeline), pool.capacity(),
+          pool.width_px(), pool.height_px());
   notifier_.ready();
   capture_.start({run_.maxFrames, run_.everyFrame, config_.app.captureCpus, recorder_.get()});
+  if (pipelined) {
+    runPipelined();
+  } else {
+    runSerial();
+  }
 
+  stoppedByRequest_ = capture_.stopRequested();
+  loopEnded_ = true;
+  notifier_.stopping();
+  capture_.stop();  // the capture thread ends, every waiting frame back in the pool (dropped)
+  step_.finish();   // every DDS instance disposed, the files closed
+  if (recorder_) {
+    recorder_->finish();  // the queued frames written, sequence.yaml last
+  }
+  runWall_s_ = static_cast<double>(clock_->now_ns() - start_ns) / 1e9;
+  return true;
+}
+
+void App::runSerial() {
   // The loop: take the freshest frame, do its step, report; sleep until the next one.
   for (;;) {
     const std::uint32_t seen = capture_.wakeCount();
@@ -506,17 +546,6 @@ bool App::run(std::string* why) {
     capture_.waitFor(seen, kIdleTick_ns);
     idleTick();
   }
-
-  stoppedByRequest_ = capture_.stopRequested();
-  loopEnded_ = true;
-  notifier_.stopping();
-  capture_.stop();  // the capture thread ends, every waiting frame back in the pool (dropped)
-  step_.finish();   // every DDS instance disposed, the files closed
-  if (recorder_) {
-    recorder_->finish();  // the queued frames written, sequence.yaml last
-  }
-  runWall_s_ = static_cast<double>(clock_->now_ns() - start_ns) / 1e9;
-  return true;
 }
 
 void App::idleTick() {
@@ -536,6 +565,113 @@ void App::idleTick() {
 void App::processFrame(FrameIndex index) {
   const FrameOutcome outcome = step_.process(capture_.frame(index), capture_.capture_ns(index));
   capture_.release(index);
+  reportFrame(outcome);
+}
+
+void App::startDetectorRealtime() {
+  // The detector thread is a processing thread: the same CPUs and priority. They were applied to
+  // the processing thread at the start of run(), so a failure here is unexpected: logged once.
+  std::string problem;
+  if (!config_.app.processingCpus.empty() &&
+      !platform::setCurrentThreadAffinity(config_.app.processingCpus, &problem)) {
+    logLine("detector thread: app.processing_cpus: %s", problem.c_str());
+  }
+  if (config_.app.realtimePriority > 0 &&
+      !platform::setCurrentThreadRealtime(config_.app.realtimePriority, &problem)) {
+    logLine("detector thread: app.realtime_priority: %s", problem.c_str());
+  }
+}
+
+void App::detectorLoop() {
+  startDetectorRealtime();
+  if (seams_.observer != nullptr) {
+    seams_.observer->onDetectorThreadStart();
+  }
+  std::size_t slot = 0;
+  for (;;) {
+    // A free slot before a frame is taken: at most one frame waits between the two threads, and
+    // until then the freshest frame stays in the channel (where a newer one replaces it).
+    {
+      std::unique_lock<std::mutex> lock(handOffMutex_);
+      handOffChanged_.wait(lock, [&] { return !slotFull_[slot]; });
+    }
+    if (capture_.stopRequested()) {
+      break;
+    }
+    const std::uint32_t seen = capture_.wakeCount();
+    std::optional<FrameIndex> index = capture_.take();
+    if (!index && capture_.done()) {
+      index = capture_.take();  // the last frame, published just before the end
+      if (!index) {
+        break;
+      }
+    }
+    if (index) {
+      HandOff& handOff = handOff_[slot];
+      handOff.index = *index;
+      handOff.capture_ns = capture_.capture_ns(*index);
+      step_.detect(capture_.frame(*index), slot, &handOff.front);
+      {
+        const std::lock_guard<std::mutex> lock(handOffMutex_);
+        slotFull_[slot] = true;
+      }
+      handOffChanged_.notify_all();
+      slot = (slot + 1) % kHandOffSlots;
+      if (capture_.stopRequested()) {
+        break;
+      }
+      continue;
+    }
+    if (capture_.stopRequested()) {
+      break;
+    }
+    capture_.waitFor(seen, kIdleTick_ns);
+  }
+  {
+    const std::lock_guard<std::mutex> lock(handOffMutex_);
+    detectorDone_ = true;
+  }
+  handOffChanged_.notify_all();
+}
+
+void App::runPipelined() {
+  detector_ = std::thread([this] { detectorLoop(); });
+  // The processing side: the frames in the order the detector thread took them; every frame it
+  // took is completed (a stop ends the taking, not the frames already taken).
+  std::size_t slot = 0;
+  for (;;) {
+    bool ready = false;
+    bool done = false;
+    {
+      std::unique_lock<std::mutex> lock(handOffMutex_);
+      handOffChanged_.wait_for(lock, std::chrono::nanoseconds(kIdleTick_ns),
+                               [&] { return slotFull_[slot] || detectorDone_; });
+      ready = slotFull_[slot];
+      done = detectorDone_;
+    }
+    if (ready) {
+      const HandOff& handOff = handOff_[slot];
+      const FrameOutcome outcome =
+          step_.complete(capture_.frame(handOff.index), handOff.capture_ns, slot, handOff.front);
+      capture_.release(handOff.index);
+      {
+        const std::lock_guard<std::mutex> lock(handOffMutex_);
+        slotFull_[slot] = false;
+      }
+      handOffChanged_.notify_all();
+      slot = (slot + 1) % kHandOffSlots;
+      reportFrame(outcome);
+      continue;
+    }
+    if (done) {
+      break;
+    }
+    idleTick();
+  }
+  detector_.join();
+}
+
+void App::reportFrame(const FrameOutcome& outcome) {
   if (!outcome.processed) {
     return;
   }
@@ -549,9 +685,11 @@ void App::processFrame(FrameIndex index) {
 LoopCounters App::counters() const {
   LoopCounters c = counters_;
   capture_.addCounters(c);
-  if (const PoseInput* pose = step_.poseInput()) {
-    c.telemetrySamples = pose->counters().received;
-    c.telemetryRejected = pose->counters().linkRejected + pose->counters().bufferRejected;
+  if (step_.poseInput() != nullptr) {
+    // The processing thread's copy (the detector thread polls the input when pipelined).
+    const PoseInputCounters& pose = step_.poseCounters();
+    c.telemetrySamples = pose.received;
+    c.telemetryRejected = pose.linkRejected + pose.bufferRejected;
   }
   if (recorder_) {
     const RecordCounters r = recorder_->counters();

@@ -13,7 +13,10 @@
 // FrameStep); everything else a unit gets is borrowed and outlives it.
 //
 // init() builds everything the loop needs, in fixed memory; run() starts the capture thread
-// and runs the processing loop on the calling thread until the source ends, max frames were
+// (and, with app.pipeline: on, the detector thread: FrameStep::detect() of each frame, handed to
+// the processing loop through two slots, one frame at most waiting between the two threads; a
+// frame taken is always completed, in the order taken) and runs the processing loop on the
+// calling thread until the source ends, max frames were
 // taken, or requestStop() / a stop signal (every wait of the loop, however long, ends within
 // platform::kStopPoll_ns of the request); it then stops the capture thread, returns every
 // queued frame to the pool (counted as dropped), disposes every published DDS instance and
@@ -37,9 +40,14 @@
 // subscribers and their latency is the app's capture -> publish time plus transport.
 #pragma once
 
+#include <array>
+#include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "camera/camera_model.hpp"
 #include "config/config.hpp"
@@ -70,6 +78,9 @@ struct RunSettings {
 // What tests may substitute; everything left empty is built from the configuration.
 struct AppSeams {
   std::unique_ptr<FramePerception> perception;
+  // Wraps the stage built from the configuration (when `perception` is empty): tests watch the
+  // shipped pipeline through it.
+  std::function<std::unique_ptr<FramePerception>(std::unique_ptr<FramePerception>)> wrapPerception;
   std::unique_ptr<PoseInput> poseInput;
   platform::v4l2::V4l2Device* v4l2Device = nullptr;  // default: the kernel
   platform::Clock* clock = nullptr;                  // default: CLOCK_MONOTONIC
@@ -116,7 +127,13 @@ class App final : public CounterSource {
   bool startRealtime(std::string* why);
   bool openRecorder(std::string* why);
   void processFrame(FrameIndex index);
+  void reportFrame(const FrameOutcome& outcome);
   void idleTick();
+  void runSerial();  // app.pipeline: off: the whole loop on the calling thread
+  // app.pipeline: on: the processing side of the loop, and the detector thread's.
+  void runPipelined();
+  void detectorLoop();
+  void startDetectorRealtime();
 
   config::AppConfig config_;
   RunSettings run_{};
@@ -155,6 +172,20 @@ class App final : public CounterSource {
   bool ran_ = false;
   std::uint64_t lastHeartbeat_ = 0;     // the capture thread's, at the last idle tick
   telemetry::PoseEstimate lastPose_{};  // of the last processed frame (the idle drone status)
+  // The hand-off between the detector thread and the processing thread (pipeline on): slot k
+  // is full from the detector's detect() until the processing side released its frame.
+  struct HandOff {
+    FrameIndex index = 0;
+    std::int64_t capture_ns = 0;
+    FrameFront front{};
+  };
+  static constexpr std::size_t kHandOffSlots = 2;
+  std::array<HandOff, kHandOffSlots> handOff_{};
+  std::array<bool, kHandOffSlots> slotFull_{};  // guarded by handOffMutex_
+  bool detectorDone_ = false;                   // guarded by handOffMutex_
+  std::mutex handOffMutex_;
+  std::condition_variable handOffChanged_;
+  std::thread detector_;
   bool loopEnded_ = false;
   bool stoppedByRequest_ = false;  // at the loop's end (stop() then stops the capture anyway)
 };

@@ -57,6 +57,9 @@ Usage: vp_firmware_app --config FILE [options]
   --threads N            perception threads, 1..16 (perception.threads)
   --backend NAME         inference backend of both networks: int8, fp32, opencv, int8-dnnl,
                          auto (perception.backend; docs/inference.md)
+  --pipeline off|on      off: one processing thread; on: the next frame's preprocess and
+                         detector overlap this frame's crops, tracker and outputs on a second
+                         processing thread, the same outputs (app.pipeline)
   --quiet                no periodic statistics line (the final summary is still printed)
   --help                 this text
 
@@ -105,7 +108,8 @@ ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* ou
     } else if (arg == "--config" || arg == "--sequence" || arg == "--camera" ||
                arg == "--camera-bus" || arg == "--trajectory-csv" || arg == "--detections-csv" ||
                arg == "--traffic-dir" || arg == "--annotated-video" || arg == "--record" ||
-               arg == "--max-frames" || arg == "--threads" || arg == "--backend") {
+               arg == "--max-frames" || arg == "--threads" || arg == "--backend" ||
+               arg == "--pipeline") {
       if (!value(&text)) {
         return fail(std::string(arg) + ": needs a value");
       }
@@ -131,6 +135,11 @@ ParseOutcome parseCommandLine(int argc, const char* const* argv, CommandLine* ou
         if (!parseInteger(text, &line.maxFrames) || line.maxFrames < 0) {
           return fail("--max-frames: expected an integer >= 0, got '" + text + "'");
         }
+      } else if (arg == "--pipeline") {
+        if (text != "off" && text != "on") {
+          return fail("--pipeline: expected off or on, got '" + text + "'");
+        }
+        line.pipeline = text == "on" ? config::PipelineMode::On : config::PipelineMode::Off;
       } else if (arg == "--backend") {
         line.backend = inference::backendFromString(text);
         if (!line.backend) {
@@ -191,6 +200,9 @@ void applyCommandLine(const CommandLine& line, config::AppConfig& config) {
     config.perception.detection.engine.threads = *line.threads;
     config.perception.preprocess.threads = *line.threads;
   }
+  if (line.pipeline) {
+    config.app.pipeline = *line.pipeline;
+  }
   if (line.backend) {
     // As perception.backend: the detector's engine; the crop network follows it.
     config.perception.detection.engine.backend = *line.backend;
@@ -233,6 +245,13 @@ std::string checkConsistency(const config::AppConfig& config) {
   if (!replay && !video && config.telemetry.source == config::TelemetrySourceKind::Recording) {
     return "telemetry.source: recording needs a replayed sequence or video; with a camera use "
            "mavlink_udp, mavlink_serial, dds or none";
+  }
+  // --pipeline on over a file's frame_pool_size sized for the serial loop.
+  const int pool = config.app.framePoolSize;
+  if (config.app.pipeline == config::PipelineMode::On && pool != 0 &&
+      pool < config.app.queueDepth + 3) {
+    return "app.frame_pool_size: must be 0 (automatic) or >= queue_depth + 3 (pipeline on) = " +
+           std::to_string(config.app.queueDepth + 3) + ", got " + std::to_string(pool);
   }
   return "";
 }

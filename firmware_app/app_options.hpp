@@ -44,6 +44,7 @@ struct CommandLine {
   std::optional<std::string> recordDir;
   std::optional<int> threads;
   std::optional<inference::Backend> backend;
+  std::optional<config::PipelineMode> pipeline;
 };
 
 enum class ParseOutcome { Run, Help, UsageError };

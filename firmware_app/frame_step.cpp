@@ -170,17 +170,51 @@ void FrameStep::reportTraffic() {
 }
 
 FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
+  FrameFront front;
+  detectPose(frame, &front);
+  return completeWith(frame, capture_ns, front, false, 0);
+}
+
+void FrameStep::detect(const Frame& frame, std::size_t slot, FrameFront* front) {
+  detectPose(frame, front);
+  if (!front->outOfOrder) {
+    // Its status comes back from finish() on the processing thread (counted and logged there).
+    perception_->detect(slot, frame.image, frame.timestamp_ns, front->pose);
+  }
+}
+
+FrameOutcome FrameStep::complete(const Frame& frame, std::int64_t capture_ns, std::size_t slot,
+                                 const FrameFront& front) {
+  return completeWith(frame, capture_ns, front, true, slot);
+}
+
+void FrameStep::detectPose(const Frame& frame, FrameFront* front) {
+  front->start_ns = wiring_.clock->now_ns();
+  const std::int64_t t = frame.timestamp_ns;
+  front->outOfOrder = haveDetectTimestamp_ && t <= detectTimestampNs_;
+  front->previousTimestamp_ns = detectTimestampNs_;
+  if (front->outOfOrder) {
+    return;
+  }
+  haveDetectTimestamp_ = true;
+  detectTimestampNs_ = t;
+  poseInput_->poll(t, poses_);
+  front->pose = poses_.poseAt(t);
+  front->poseCounters = poseInput_->counters();
+}
+
+FrameOutcome FrameStep::completeWith(const Frame& frame, std::int64_t capture_ns,
+                                     const FrameFront& front, bool pipelined, std::size_t slot) {
   platform::Clock& clock = *wiring_.clock;
   LoopCounters& counters = *wiring_.counters;
   LoopStats& stats = *wiring_.stats;
-  const std::int64_t start_ns = clock.now_ns();
   const std::int64_t t = frame.timestamp_ns;
-  stats.record(Stage::Queue, start_ns - capture_ns);
-  if (haveUtcOffset_ && t <= lastTimestampNs_) {
+  stats.record(Stage::Queue, front.start_ns - capture_ns);
+  if (front.outOfOrder) {
     ++counters.pipelineErrors;
     logLine("frame %lld skipped: timestamp %lld ns is not after the previous frame's %lld ns",
             static_cast<long long>(frame.frameId), static_cast<long long>(t),
-            static_cast<long long>(lastTimestampNs_));
+            static_cast<long long>(front.previousTimestamp_ns));
     return {};
   }
   // The frame's time on the UTC clock (see the contract). Camera stamps are CLOCK_MONOTONIC: one
@@ -193,9 +227,9 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
                                             : capture_ns + (realtimeNow_ns() - clock.now_ns()) - t;
   haveUtcOffset_ = true;
   lastTimestampNs_ = t;
+  poseCounters_ = front.poseCounters;
 
-  poseInput_->poll(t, poses_);
-  const telemetry::PoseEstimate pose = poses_.poseAt(t);
+  const telemetry::PoseEstimate& pose = front.pose;
   // A georeferenced fixed view needs no pose: its absence is neither counted nor logged.
   switch (wiring_.fixedView ? telemetry::PoseStatus::Ok : pose.status) {
     case telemetry::PoseStatus::Ok:
@@ -214,7 +248,8 @@ FrameOutcome FrameStep::process(const Frame& frame, std::int64_t capture_ns) {
     logPoseEpisode(pose.status, frame.frameId, pose);
   }
 
-  const perception::PipelineStatus status = perception_->process(frame.image, t, pose);
+  const perception::PipelineStatus status =
+      pipelined ? perception_->finish(slot) : perception_->process(frame.image, t, pose);
   const perception::PipelineTimings& timings = perception_->timings();
   if (status != perception::PipelineStatus::Ok) {
     ++counters.pipelineErrors;
@@ -324,9 +359,8 @@ void FrameStep::logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameI
         "%llu refused): detections are kept image-only",
         telemetry::toString(status), static_cast<long long>(frameId),
         pose.age_ns >= 0 ? static_cast<double>(pose.age_ns) / 1e9 : -1.0, poseInput_->name(),
-        static_cast<unsigned long long>(poseInput_->counters().received),
-        static_cast<unsigned long long>(poseInput_->counters().linkRejected +
-                                        poseInput_->counters().bufferRejected));
+        static_cast<unsigned long long>(poseCounters_.received),
+        static_cast<unsigned long long>(poseCounters_.linkRejected + poseCounters_.bufferRejected));
   }
   lastPoseStatus_ = status;
   poseEpisodeFrames_ = 1;

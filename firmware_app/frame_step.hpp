@@ -21,6 +21,15 @@
 // tracks after the tracker, and its events and completed periods go to the files and the
 // topics in the same frame (the files commit with the frame's other rows).
 //
+// Pipelined (app.pipeline: on): process() is split in two halves run on two threads, one frame
+// apart: detect() on the detector thread - the timestamp check, the pose (pose input, PoseBuffer),
+// FramePerception::detect() into a hand-off slot - and complete() on the processing thread - the
+// counts and log lines of the first half, FramePerception::finish(), the priors, the tracker, the
+// outputs, traffic. detect() owns the pose input, the PoseBuffer and the timestamp check;
+// complete() everything else; the FrameFront carries the first half's results across, so the
+// counters, the log and every output are those of process() (which is detect() then complete()).
+// The pose input's counters are read through poseCounters(), the processing thread's copy.
+//
 // Time: the first frame fixes the UTC offset of its source (camera: CLOCK_REALTIME -
 // CLOCK_MONOTONIC; replay: the wall clock at that frame minus its recorded time).
 #pragma once
@@ -57,6 +66,8 @@ class LoopObserver {
   virtual ~LoopObserver() = default;
   virtual void onPublished(const messages::VehicleState& /*state*/) {}
   virtual void onFrameDone(std::uint64_t /*framesProcessed*/) {}
+  // Once, on the detector thread as it starts (app.pipeline: on), before it takes a frame.
+  virtual void onDetectorThreadStart() {}
 };
 
 // What one frame leaves for the periodic reports.
@@ -66,6 +77,15 @@ struct FrameOutcome {
   telemetry::PoseEstimate pose{};                  // the pose at the frame time
   std::span<const messages::VehicleState> states;  // the published (confirmed, lost) tracks
   std::span<const Eigen::Vector2d> footprint;      // the ground the frame shows (perception's)
+};
+
+// What the first half of a frame leaves for the second (FrameStep::detect -> complete).
+struct FrameFront {
+  std::int64_t start_ns = 0;  // when the frame's work began (its queue wait ended)
+  bool outOfOrder = false;    // its timestamp is not after the previous frame's: skipped
+  std::int64_t previousTimestamp_ns = 0;
+  telemetry::PoseEstimate pose{};
+  PoseInputCounters poseCounters{};  // the pose input's, after this frame's poll
 };
 
 // What FrameStep borrows (all outlive it; dds and observer may be null).
@@ -107,9 +127,18 @@ class FrameStep {
   const traffic::TrafficAnalyzer& trafficAnalyzer() const { return traffic_; }
 
   FrameOutcome process(const Frame& frame, std::int64_t capture_ns);
+  // The pipelined halves of process() (see the contract): detect() on the detector thread with
+  // perception hand-off slot `slot` (FramePerception::prepareHandOff), complete() later on the
+  // processing thread with the same frame, slot and front; frames in the order taken.
+  void detect(const Frame& frame, std::size_t slot, FrameFront* front);
+  FrameOutcome complete(const Frame& frame, std::int64_t capture_ns, std::size_t slot,
+                        const FrameFront& front);
   void finish();
 
   const PoseInput* poseInput() const { return poseInput_.get(); }  // null before init()
+  // The pose input's counters as of the last completed frame (processing thread).
+  const PoseInputCounters& poseCounters() const { return poseCounters_; }
+  FramePerception& perceptionStage() { return *perception_; }
   const FramePerception& perception() const { return *perception_; }
 
  private:
@@ -119,6 +148,10 @@ class FrameStep {
   std::span<const perception::VehicleObservation> screenObservations();
   void logPoseEpisode(telemetry::PoseStatus status, std::int64_t frameId,
                       const telemetry::PoseEstimate& pose);
+  // detect()'s work without the perception stage (the serial step runs process() instead).
+  void detectPose(const Frame& frame, FrameFront* front);
+  FrameOutcome completeWith(const Frame& frame, std::int64_t capture_ns, const FrameFront& front,
+                            bool pipelined, std::size_t slot);
   std::span<const messages::VehicleState> publish(std::int64_t timestamp_ns, std::int64_t frameId);
   void logWorkingScale(std::int64_t frameId);
   void stepTraffic(std::int64_t timestamp_ns, std::size_t published);
@@ -146,6 +179,10 @@ class FrameStep {
   std::int64_t toUtcNs_ = 0;
   bool haveUtcOffset_ = false;
   std::int64_t lastTimestampNs_ = 0;
+  // detect()'s own: the last accepted timestamp
+  bool haveDetectTimestamp_ = false;
+  std::int64_t detectTimestampNs_ = 0;
+  PoseInputCounters poseCounters_{};
   telemetry::PoseStatus lastPoseStatus_ = telemetry::PoseStatus::Ok;
   std::uint64_t poseEpisodeFrames_ = 0;
   double lastWorkingScale_ = 0.0;

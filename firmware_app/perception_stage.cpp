@@ -6,6 +6,51 @@
 
 namespace vp::app {
 
+namespace {
+
+bool checkSlots(std::size_t slots, std::string* why) {
+  if (slots >= 1 && slots <= FramePerception::kMaxHandOffSlots) {
+    return true;
+  }
+  if (why) {
+    *why = "perception stage: " + std::to_string(slots) + " hand-off slots, at most " +
+           std::to_string(FramePerception::kMaxHandOffSlots);
+  }
+  return false;
+}
+
+}  // namespace
+
+bool FramePerception::prepareHandOff(std::size_t slots, std::string* why) {
+  return checkSlots(slots, why);
+}
+
+perception::PipelineStatus FramePerception::detect(std::size_t slot, const cv::Mat& bgrFrame,
+                                                   std::int64_t timestamp_ns,
+                                                   const telemetry::PoseEstimate& pose) {
+  PendingFrame& pending = pending_[slot];
+  pending.frame = bgrFrame;
+  pending.timestamp_ns = timestamp_ns;
+  pending.pose = pose;
+  return perception::PipelineStatus::Ok;
+}
+
+perception::PipelineStatus FramePerception::finish(std::size_t slot) {
+  const PendingFrame& pending = pending_[slot];
+  return process(pending.frame, pending.timestamp_ns, pending.pose);
+}
+
+bool PipelinePerception::prepareHandOff(std::size_t slots, std::string* why) {
+  if (!checkSlots(slots, why)) {
+    return false;
+  }
+  for (std::size_t i = 0; i < slots; ++i) {
+    handOff_[i] = std::make_unique<perception::DetectedFrame>();
+    pipeline_.prepare(*handOff_[i]);
+  }
+  return true;
+}
+
 bool PipelinePerception::init(const perception::PipelineOptions& options,
                               const camera::CameraModel& rawCamera,
                               const geodesy::CameraMount& mount,

@@ -40,6 +40,22 @@ class FramePerception {
   // it (perception.working_gsd_m); 0 where the stage has none (the tests' injecting stages).
   virtual double workingScale() const { return 0.0; }
   virtual double frameGsd_m() const { return 0.0; }
+
+  // The two halves (see the contract). Start-up: slots in [1, kMaxHandOffSlots]; false + *why.
+  static constexpr std::size_t kMaxHandOffSlots = 2;
+  virtual bool prepareHandOff(std::size_t slots, std::string* why);
+  virtual perception::PipelineStatus detect(std::size_t slot, const cv::Mat& bgrFrame,
+                                            std::int64_t timestamp_ns,
+                                            const telemetry::PoseEstimate& pose);
+  virtual perception::PipelineStatus finish(std::size_t slot);
+
+ private:
+  struct PendingFrame {
+    cv::Mat frame;  // borrowed until finish()
+    std::int64_t timestamp_ns = 0;
+    telemetry::PoseEstimate pose{};
+  };
+  std::array<PendingFrame, kMaxHandOffSlots> pending_{};
 };
 
 class PipelinePerception final : public FramePerception {
@@ -70,8 +86,19 @@ class PipelinePerception final : public FramePerception {
   double workingScale() const override { return pipeline_.workingScale(); }
   double frameGsd_m() const override { return pipeline_.frameGsd_m(); }
 
+  bool prepareHandOff(std::size_t slots, std::string* why) override;
+  perception::PipelineStatus detect(std::size_t slot, const cv::Mat& bgrFrame,
+                                    std::int64_t timestamp_ns,
+                                    const telemetry::PoseEstimate& pose) override {
+    return pipeline_.detect(bgrFrame, timestamp_ns, pose, *handOff_[slot]);
+  }
+  perception::PipelineStatus finish(std::size_t slot) override {
+    return pipeline_.finish(*handOff_[slot]);
+  }
+
  private:
   perception::FramePipeline pipeline_;
+  std::array<std::unique_ptr<perception::DetectedFrame>, kMaxHandOffSlots> handOff_{};
   std::string modelId_;
 };
 

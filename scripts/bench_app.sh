@@ -10,6 +10,10 @@
 # BACKENDS="int8 int8-dnnl" (default "int8") repeats the runs per inference backend
 # (--backend; int8-dnnl needs an x86 build with oneDNN, docs/inference.md), one after the
 # other, so their fps sit side by side.
+# PIPELINES="off on" (default "off") repeats every run per loop mode (--pipeline; app.pipeline,
+# docs/firmware_app.md "Pipelined mode": --threads N then means N cores in total, the detector
+# thread's pools get N - 1); RUNS=3 (default 1) repeats each run and prints the median of the
+# figures over the runs (fps, per-stage and end-to-end median/p99) after the single runs.
 # Without SEQUENCE_DIR, FRAMES frames are rendered with vp_simulate (seed 5) into /tmp.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -36,6 +40,24 @@ echo "bench_app: $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg); 
 # value KEY LOGFILE: the number after KEY= on the summary line
 value() { grep -o "$1=[0-9.]*" "$2" | tail -1 | cut -d= -f2; }
 
+# summary NAME: the medians over the runs NAME.1 .. NAME.RUNS (RUNS > 1)
+summary() {
+  local name=$1
+  printf '%-40s %6s fps median of %s runs |' "$name" "$(medianOf fps "$name")" "${RUNS}"
+  for stage in preprocess detector crops lift track e2e queue; do
+    printf ' %s %s/%s' "$stage" "$(medianOf ${stage}_median_ms "$name")" \
+      "$(medianOf ${stage}_p99_ms "$name")"
+  done
+  printf '\n'
+}
+
+# medianOf KEY NAME: the median over the runs NAME.1 .. NAME.RUNS of KEY's value
+medianOf() {
+  local key=$1 name=$2 r
+  for r in $(seq 1 "${RUNS:-1}"); do value "$key" "$out/$name.$r.log"; done |
+    sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'
+}
+
 run() {  # run NAME CPUS THREADS ARGS...
   local name=$1 cpus=$2 threads=$3
   shift 3
@@ -54,8 +76,33 @@ run() {  # run NAME CPUS THREADS ARGS...
 }
 
 echo "ms median/p99 per stage; e2e = capture -> published; queue = capture -> processing start"
+runs="${RUNS:-1}"
 for backend in ${BACKENDS:-int8}; do
-  run "every_frame_1_core_$backend" 0 1 --fast --every-frame --backend "$backend"
-  run "every_frame_2_cores_$backend" 0-1 2 --fast --every-frame --backend "$backend"
-  run "fast_source_2_cores_$backend" 0-1 2 --fast --backend "$backend"
+  # The modes in turn within each repetition (off on off on ...): a drifting load hits both.
+  for r in $(seq 1 "$runs"); do
+    for pipeline in ${PIPELINES:-off}; do
+      # The pipeline needs a second core: on one core it only adds the hand-off.
+      if [ "$pipeline" = off ]; then
+        run "every_frame_1_core_$backend.$r" 0 1 --fast --every-frame --backend "$backend"
+        # The serial loop on 2 cores with a 1-thread detector: the pipelined runs' detector
+        # threads (--threads 2 pipelined = 1 detector thread + the processing thread).
+        run "every_frame_2_cores_1_thread_${backend}_pipeline_off.$r" 0-1 1 --fast --every-frame \
+          --backend "$backend" --pipeline off
+      fi
+      run "every_frame_2_cores_${backend}_pipeline_$pipeline.$r" 0-1 2 --fast --every-frame \
+        --backend "$backend" --pipeline "$pipeline"
+      run "fast_source_2_cores_${backend}_pipeline_$pipeline.$r" 0-1 2 --fast \
+        --backend "$backend" --pipeline "$pipeline"
+    done
+  done
+  if [ "$runs" -gt 1 ]; then
+    for pipeline in ${PIPELINES:-off}; do
+      if [ "$pipeline" = off ]; then
+        summary "every_frame_1_core_$backend"
+        summary "every_frame_2_cores_1_thread_${backend}_pipeline_off"
+      fi
+      summary "every_frame_2_cores_${backend}_pipeline_$pipeline"
+      summary "fast_source_2_cores_${backend}_pipeline_$pipeline"
+    done
+  fi
 done

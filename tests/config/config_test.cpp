@@ -246,6 +246,7 @@ traffic:
   max_lane_samples: 300
 app:
   queue_depth: 2
+  pipeline: on
   frame_pool_size: 6
   lock_memory: true
   realtime_priority: 50
@@ -402,6 +403,7 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
   EXPECT_EQ(config.source.kind, FrameSourceKind::Replay);
   EXPECT_EQ(config.telemetry.source, TelemetrySourceKind::Recording);
   EXPECT_EQ(config.app.queueDepth, 1);
+  EXPECT_EQ(config.app.pipeline, PipelineMode::Off);
   EXPECT_TRUE(config.app.trajectoryCsv.empty());
 }
 
@@ -963,8 +965,11 @@ const MalformedCase kMalformedCases[] = {
     // app
     {"app:\n  queue_depth", "app: 1\nx:\n  queue_depth", "app", "expected a map, got '1'"},
     {"queue_depth: 2", "queue_depth: 9", "app.queue_depth", "must be in [1, 8], got 9"},
-    {"frame_pool_size: 6", "frame_pool_size: 3", "app.frame_pool_size",
-     "must be 0 (automatic) or >= queue_depth + 2 = 4, got 3"},
+    {"pipeline: on\n  frame_pool_size: 6", "pipeline: off\n  frame_pool_size: 3",
+     "app.frame_pool_size", "must be 0 (automatic) or >= queue_depth + 2 = 4, got 3"},
+    {"frame_pool_size: 6", "frame_pool_size: 4", "app.frame_pool_size",
+     "must be 0 (automatic) or >= queue_depth + 3 (pipeline on) = 5, got 4"},
+    {"pipeline: on", "pipeline: both", "app.pipeline", "unknown value 'both' (expected off, on)"},
     {"frame_pool_size: 6", "frame_pool_size: 65", "app.frame_pool_size",
      "must be in [0, 64], got 65"},
     {"lock_memory: true", "lock_memory: yes", "app.lock_memory",
@@ -1707,6 +1712,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_DOUBLE_EQ(link.replayLookahead_s, 0.3);
   const LoopConfig& app = config.app;
   EXPECT_EQ(app.queueDepth, 2);
+  EXPECT_EQ(app.pipeline, PipelineMode::On);
   EXPECT_EQ(app.framePoolSize, 6);
   EXPECT_TRUE(app.lockMemory);
   EXPECT_EQ(app.realtimePriority, 50);

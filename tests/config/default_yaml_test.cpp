@@ -218,6 +218,18 @@ TEST(DefaultYaml, TrafficIsTheAnalyzersDefaults) {
   EXPECT_EQ(file.maxLaneSamples, code.maxLaneSamples);
 }
 
+TEST(DefaultYaml, LoopIsTheLoopsDefaults) {
+  const LoopConfig code;
+  const LoopConfig file = shippedDefaults().app;
+  EXPECT_EQ(file.queueDepth, code.queueDepth);
+  EXPECT_EQ(file.pipeline, code.pipeline);
+  EXPECT_EQ(file.framePoolSize, code.framePoolSize);
+  EXPECT_EQ(file.lockMemory, code.lockMemory);
+  EXPECT_EQ(file.realtimePriority, code.realtimePriority);
+  EXPECT_EQ(file.statsPeriod_s, code.statsPeriod_s);
+  EXPECT_EQ(file.annotatedVideoFps, code.annotatedVideoFps);
+}
+
 // Every key of the file is one the loader reads (else it would keep a default the file only
 // pretends to set).
 TEST(DefaultYaml, RecordIsTheRecordersDefaults) {

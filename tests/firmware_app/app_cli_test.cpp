@@ -61,10 +61,11 @@ TEST(AppCli, HelpListsEveryOptionAndExitsZero) {
   const Result help = runApp("--help");
   EXPECT_EQ(help.exitCode, 0);
   for (const char* option :
-       {"--config", "--sequence", "--camera", "--camera-bus", "--fast", "--every-frame", "--loop",
-        "--max-frames", "--trajectory-csv", "--detections-csv", "--traffic-dir",
-        "--annotated-video", "--record", "--no-dds", "--threads", "--backend", "--quiet", "--help",
-        "Exit status"}) {
+       {"--config",         "--sequence",       "--camera",      "--camera-bus",
+        "--fast",           "--every-frame",    "--loop",        "--max-frames",
+        "--trajectory-csv", "--detections-csv", "--traffic-dir", "--annotated-video",
+        "--record",         "--no-dds",         "--threads",     "--backend",
+        "--pipeline",       "--quiet",          "--help",        "Exit status"}) {
     EXPECT_NE(help.output.find(option), std::string::npos) << option;
   }
 }
@@ -84,6 +85,10 @@ TEST(AppCli, UsageErrorsExitTwoNamingTheOption) {
   EXPECT_EQ(r.exitCode, 2);
   EXPECT_NE(r.output.find("--backend: expected int8, fp32, opencv, int8-dnnl or auto, got 'int4'"),
             std::string::npos)
+      << r.output;
+  r = runApp("--config " + kDefaultConfig + " --pipeline both");
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.output.find("--pipeline: expected off or on, got 'both'"), std::string::npos)
       << r.output;
   r = runApp("--config " + kDefaultConfig + " --sequence a --camera /dev/video0");
   EXPECT_EQ(r.exitCode, 2);

@@ -58,11 +58,14 @@ std::unique_ptr<test::TruthPerception> truth(const std::string& sequenceDir) {
   return perception;
 }
 
-TEST(AppLoop, ZeroAllocationsPerFrameOnTheProcessingThreadWithThePipeline) {
+// The shipped pipeline over every frame with the CSV outputs on: no heap allocation on the
+// processing thread over frames 6..kFrames, and, pipelined, none on the detector thread either.
+void expectZeroAllocationsWithThePipeline(config::PipelineMode mode) {
   const std::string dir = sequence();
   ASSERT_FALSE(dir.empty());
-  const std::string out = test::scratchDir("alloc_pipeline");
+  const std::string out = test::scratchDir(std::string("alloc_pipeline_") + config::toString(mode));
   config::AppConfig config = loopConfig(dir);
+  config.app.pipeline = mode;
   config.app.trajectoryCsv = out + "/tracks.csv";
   config.app.detectionsCsv = out + "/detections.csv";
   test::AllocationWindow window(5, kFrames);
@@ -81,15 +84,27 @@ TEST(AppLoop, ZeroAllocationsPerFrameOnTheProcessingThreadWithThePipeline) {
     EXPECT_EQ(c.noPose + c.stalePose + c.invalidPose, 0U);  // the recording covers every frame
     EXPECT_EQ(app.framesInPool(), app.poolCapacity());
     std::printf(
-        "real pipeline, %d x %d, %d frames: %llu detections (%llu lifted) by the "
+        "real pipeline (pipeline %s), %d x %d, %d frames: %llu detections (%llu lifted) by the "
         "shipped detector; %s\n",
-        kWidth_px, kHeight_px, kFrames, static_cast<unsigned long long>(c.detections),
-        static_cast<unsigned long long>(c.lifted), app.summaryLine().c_str());
+        config::toString(mode), kWidth_px, kHeight_px, kFrames,
+        static_cast<unsigned long long>(c.detections), static_cast<unsigned long long>(c.lifted),
+        app.summaryLine().c_str());
   }
   ASSERT_TRUE(window.counted());
-  std::printf("processing-thread allocations over frames 6..%d (DDS off, CSV outputs on): %zu\n",
-              kFrames, window.count());
+  // Pipelined, the window counts the detector thread too (it announced itself at its start).
+  EXPECT_EQ(window.sawDetectorThread(), mode == config::PipelineMode::On);
+  std::printf("processing-thread%s allocations over frames 6..%d (DDS off, CSV outputs on): %zu\n",
+              mode == config::PipelineMode::On ? " and detector-thread" : "", kFrames,
+              window.count());
   EXPECT_EQ(window.count(), 0U);
+}
+
+TEST(AppLoop, ZeroAllocationsPerFrameOnTheProcessingThreadWithThePipeline) {
+  expectZeroAllocationsWithThePipeline(config::PipelineMode::Off);
+}
+
+TEST(AppLoop, ZeroAllocationsPerFrameOnBothThreadsOfThePipelinedLoop) {
+  expectZeroAllocationsWithThePipeline(config::PipelineMode::On);
 }
 
 TEST(AppLoop, ZeroAllocationsWithInjectedVehiclesAndTracksAndTheFigureWithDds) {
@@ -186,18 +201,23 @@ TEST(AppFaults, CorruptAndTruncatedFramesAreCountedAndSkipped) {
   const std::string dir = test::copySequence(sequence(), "damaged_frames");
   damage(frameFile(dir, 3), false);
   damage(frameFile(dir, 9), true);
-  config::AppConfig config = loopConfig(dir);
-  App app;
-  AppSeams seams;
-  seams.perception = truth(dir);
-  std::string why;
-  ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
-  ASSERT_TRUE(app.run(&why)) << why;
-  const LoopCounters c = app.counters();
-  EXPECT_EQ(c.badFrames, 2U);
-  EXPECT_EQ(c.framesIn, static_cast<std::uint64_t>(kFrames));             // bad frames came in too
-  EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames - 2));  // the rest goes on
-  EXPECT_EQ(app.framesInPool(), app.poolCapacity());
+  // The same with the pipelined loop (app.pipeline: on).
+  for (const config::PipelineMode mode : {config::PipelineMode::Off, config::PipelineMode::On}) {
+    SCOPED_TRACE(config::toString(mode));
+    config::AppConfig config = loopConfig(dir);
+    config.app.pipeline = mode;
+    App app;
+    AppSeams seams;
+    seams.perception = truth(dir);
+    std::string why;
+    ASSERT_TRUE(app.init(config, test::everyFrame(), std::move(seams), &why)) << why;
+    ASSERT_TRUE(app.run(&why)) << why;
+    const LoopCounters c = app.counters();
+    EXPECT_EQ(c.badFrames, 2U);
+    EXPECT_EQ(c.framesIn, static_cast<std::uint64_t>(kFrames));  // bad frames came in too
+    EXPECT_EQ(c.framesProcessed, static_cast<std::uint64_t>(kFrames - 2));  // the rest goes on
+    EXPECT_EQ(app.framesInPool(), app.poolCapacity());
+  }
 }
 
 // Keeps the recorded telemetry but replaces the position of the samples in [from_ns, to_ns)

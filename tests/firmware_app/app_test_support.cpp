@@ -219,9 +219,13 @@ app::RunSettings everyFrame() {
   return run;
 }
 
+void AllocationWindow::onDetectorThreadStart() {
+  detectorThread_.store(static_cast<unsigned long>(pthread_self()));
+}
+
 void AllocationWindow::onFrameDone(std::uint64_t processed) {
   if (processed == from_) {
-    counter_.startOnThread(static_cast<unsigned long>(pthread_self()));
+    counter_.startOnThreads(static_cast<unsigned long>(pthread_self()), detectorThread_.load());
   } else if (processed == to_) {
     counter_.stop();
     counted_ = true;

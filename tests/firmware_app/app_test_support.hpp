@@ -7,6 +7,7 @@
 
 #include <sys/types.h>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -119,13 +120,15 @@ app::RunSettings everyFrame();
 
 // Counts the processing thread's heap allocations from the end of frame `from` to the end of
 // frame `to` (the warm-up before may allocate: first-touch caches, stdio), and the states
-// published meanwhile.
+// published meanwhile; with the pipelined loop the detector thread's too.
 class AllocationWindow final : public app::LoopObserver {
  public:
   AllocationWindow(std::uint64_t from, std::uint64_t to) : from_(from), to_(to) {}
   void onFrameDone(std::uint64_t processed) override;
   void onPublished(const messages::VehicleState& /*state*/) override { ++published_; }
+  void onDetectorThreadStart() override;
   std::size_t count() const { return counter_.count(); }
+  bool sawDetectorThread() const { return detectorThread_ != 0; }
   bool counted() const { return counted_; }
   std::uint64_t published() const { return published_; }
 
@@ -135,6 +138,7 @@ class AllocationWindow final : public app::LoopObserver {
   AllocationCounter counter_;
   bool counted_ = false;
   std::uint64_t published_ = 0;
+  std::atomic<unsigned long> detectorThread_{0};
 };
 
 // A perception stage that hands every call to another one: tests derive from it to watch or
@@ -157,6 +161,17 @@ class ForwardingPerception : public app::FramePerception {
   const cv::Mat& correctedFrame() const override { return inner_->correctedFrame(); }
   const lifting::Lifter& lifter() const override { return inner_->lifter(); }
   const char* modelId() const override { return inner_->modelId(); }
+  double workingScale() const override { return inner_->workingScale(); }
+  double frameGsd_m() const override { return inner_->frameGsd_m(); }
+  bool prepareHandOff(std::size_t slots, std::string* why) override {
+    return inner_->prepareHandOff(slots, why);
+  }
+  perception::PipelineStatus detect(std::size_t slot, const cv::Mat& bgrFrame,
+                                    std::int64_t timestamp_ns,
+                                    const telemetry::PoseEstimate& pose) override {
+    return inner_->detect(slot, bgrFrame, timestamp_ns, pose);
+  }
+  perception::PipelineStatus finish(std::size_t slot) override { return inner_->finish(slot); }
 
  private:
   std::unique_ptr<app::FramePerception> inner_;

@@ -1,14 +1,18 @@
 // perception/frame_pipeline (the app's per-frame chain) on a simulated frame with the shipped
 // models: a refused frame names the problem and the next frame goes on; without a pose every
 // detection is kept image-only with NoPose; with the recorded pose the same detections are
-// lifted (the lift summary and each observation agree); no heap allocation per frame.
+// lifted (the lift summary and each observation agree); no heap allocation per frame; the two
+// halves (detect, finish) with the next frame detected in between give process()'s results.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "app_test_support.hpp"
@@ -155,6 +159,83 @@ TEST_F(FramePipelineTest, WorkingScaleFollowsTheHeightAboveTheDtm) {
       << "scale " << pipeline.workingScale() << " for GSD " << pipeline.frameGsd_m();
   std::printf("working scale %.3f for a centre GSD of %.3f m (nadir estimate %.3f m)\n",
               pipeline.workingScale(), pipeline.frameGsd_m(), nadir_m);
+}
+
+// The pipelined loop's order: frame B's detect() runs before frame A's finish(). With
+// undistortion on, the preprocessor writes its own corrected frame, which B's preprocessing
+// overwrites: a prepared DetectedFrame keeps A's copy, so A's crops and observations are
+// process()'s. No heap allocation in either half.
+TEST_F(FramePipelineTest, HalvesWithTheNextFrameDetectedBetweenGiveProcessResults) {
+  const sequence::Rig& rig = reader.rig();
+  perception::PipelineOptions options = defaults.perception;
+  options.preprocess.workingScale = 1.0;
+  options.preprocess.workingGsd_m = 0.0;  // the one tile of the first test
+  options.preprocess.undistort = true;    // the rig's lens has distortion
+  FramePipeline serial;
+  FramePipeline halves;
+  ASSERT_TRUE(serial.init(options, camera, rig.mount, terrain, world, shapeModel, &why)) << why;
+  ASSERT_TRUE(halves.init(options, camera, rig.mount, terrain, world, shapeModel, &why)) << why;
+  telemetry::PoseBuffer poses;
+  ASSERT_TRUE(poses.init(telemetry::PoseBufferConfig{}, &why)) << why;
+  for (const sequence::TelemetryRecord& r : reader.telemetry()) {
+    telemetry::PoseSample sample;
+    sample.timestamp_ns = r.timestamp_ns;
+    sample.position = r.position;
+    sample.bodyToNed = r.bodyToNed;
+    sample.gimbal = r.gimbal;
+    poses.push(sample);
+  }
+  std::array<cv::Mat, 2> frames;
+  std::array<std::int64_t, 2> times{};
+  const std::array<std::size_t, 2> indices{0, reader.frames().size() - 1};
+  for (std::size_t k = 0; k < 2; ++k) {
+    frames[k].create(rig.intrinsics.height_px, rig.intrinsics.width_px, CV_8UC3);
+    ASSERT_TRUE(reader.loadFrame(indices[k], frames[k], &why)) << why;
+    times[k] = reader.frames()[indices[k]].timestamp_ns;
+  }
+  // Serial references.
+  std::array<std::vector<VehicleObservation>, 2> expected;
+  std::array<cv::Mat, 2> expectedCorrected;
+  for (std::size_t k = 0; k < 2; ++k) {
+    ASSERT_EQ(serial.process(frames[k], times[k], poses.poseAt(times[k])), PipelineStatus::Ok)
+        << serial.lastError();
+    expected[k].assign(serial.observations().begin(), serial.observations().end());
+    expectedCorrected[k] = serial.correctedFrame().clone();
+    // Undistortion on: the corrected frame is the preprocessor's own buffer, not the frame.
+    ASSERT_NE(serial.correctedFrame().data, frames[k].data);
+  }
+  ASSERT_GT(expected[0].size(), 0U);
+
+  auto first = std::make_unique<DetectedFrame>();
+  auto second = std::make_unique<DetectedFrame>();
+  halves.prepare(*first);
+  halves.prepare(*second);
+  // Warm-up through the halves, then counted.
+  for (int round = 0; round < 2; ++round) {
+    test::AllocationCounter counter;
+    ASSERT_EQ(halves.detect(frames[0], times[0], poses.poseAt(times[0]), *first),
+              PipelineStatus::Ok);
+    ASSERT_EQ(halves.detect(frames[1], times[1], poses.poseAt(times[1]), *second),
+              PipelineStatus::Ok);
+    ASSERT_EQ(halves.finish(*first), PipelineStatus::Ok) << halves.lastError();
+    counter.stop();
+    if (round == 1) {
+      EXPECT_EQ(counter.count(), 0U);
+    }
+    ASSERT_EQ(halves.observations().size(), expected[0].size());
+    for (std::size_t i = 0; i < expected[0].size(); ++i) {
+      const VehicleObservation& got = halves.observations()[i];
+      EXPECT_EQ(got.detection.box.cx, expected[0][i].detection.box.cx);
+      EXPECT_EQ(got.detection.box.cy, expected[0][i].detection.box.cy);
+      EXPECT_EQ(got.detection.box.length, expected[0][i].detection.box.length);
+      EXPECT_EQ(got.detection.vehicleProbability, expected[0][i].detection.vehicleProbability);
+      EXPECT_EQ(got.liftStatus, expected[0][i].liftStatus);
+      EXPECT_EQ(got.ground.centreEnu, expected[0][i].ground.centreEnu);
+    }
+    EXPECT_EQ(cv::norm(halves.correctedFrame(), expectedCorrected[0], cv::NORM_INF), 0.0);
+    ASSERT_EQ(halves.finish(*second), PipelineStatus::Ok) << halves.lastError();
+    EXPECT_EQ(halves.observations().size(), expected[1].size());
+  }
 }
 
 }  // namespace

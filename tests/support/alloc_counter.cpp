@@ -11,12 +11,14 @@ namespace {
 
 std::atomic<bool> gCounting{false};
 std::atomic<std::size_t> gCount{0};
-std::atomic<unsigned long> gThread{0};  // pthread_t of the only thread counted; 0 = all
+std::atomic<unsigned long> gThread{0};       // pthread_t of the only thread counted; 0 = all
+std::atomic<unsigned long> gOtherThread{0};  // a second thread counted with it; 0 = none
 
 inline void noteAllocation() {
   if (gCounting.load(std::memory_order_relaxed)) {
     const unsigned long only = gThread.load(std::memory_order_relaxed);
-    if (only == 0 || only == static_cast<unsigned long>(pthread_self()))
+    const unsigned long self = static_cast<unsigned long>(pthread_self());
+    if (only == 0 || only == self || gOtherThread.load(std::memory_order_relaxed) == self)
       gCount.fetch_add(1, std::memory_order_relaxed);
   }
 }
@@ -34,11 +36,16 @@ AllocationCounter::~AllocationCounter() {
 
 void AllocationCounter::start() {
   gThread.store(0);
+  gOtherThread.store(0);
   gCount.store(0);
   gCounting.store(true);
 }
 void AllocationCounter::startOnThread(unsigned long pthreadId) {
+  startOnThreads(pthreadId, 0);
+}
+void AllocationCounter::startOnThreads(unsigned long pthreadId, unsigned long otherPthreadId) {
   gThread.store(pthreadId);
+  gOtherThread.store(otherPthreadId);
   gCount.store(0);
   gCounting.store(true);
 }

@@ -25,6 +25,8 @@ class AllocationCounter {
   // Resets and counts only the allocations made by one thread (its pthread_t as an integer):
   // e.g. the processing thread of a loop whose capture thread is allowed to allocate.
   void startOnThread(unsigned long pthreadId);
+  // The same for two threads (e.g. the pipelined loop's detector and processing threads).
+  void startOnThreads(unsigned long pthreadId, unsigned long otherPthreadId);
   void stop();
   std::size_t count() const;  // allocations seen while counting
 

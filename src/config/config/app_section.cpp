@@ -24,6 +24,12 @@ const Range kRecordQueueRange = Range::closed(1.0, 64.0);  // FramePool::kMaxFra
 const Range kDiskRange_mib = Range::closed(0.0, 2147483647.0);
 
 constexpr std::string_view kRecordFullNames = "stop, ring";
+constexpr std::string_view kPipelineNames = "off, on";
+
+std::optional<PipelineMode> pipelineFromString(const std::string& text) {
+  return enumFromString(text, std::array{PipelineMode::Off, PipelineMode::On},
+                        [](PipelineMode mode) { return toString(mode); });
+}
 
 std::optional<RecordFullPolicy> recordFullFromString(const std::string& text) {
   return enumFromString(text, std::array{RecordFullPolicy::Stop, RecordFullPolicy::Ring},
@@ -51,10 +57,16 @@ LoopConfig readLoop(MapReader section, const std::string& baseDir) {
   const LoopConfig d;
   LoopConfig a;
   a.queueDepth = section.integer("queue_depth", kQueueDepthRange, d.queueDepth);
+  a.pipeline =
+      section.choice<PipelineMode>("pipeline", pipelineFromString, kPipelineNames, d.pipeline);
   a.framePoolSize = section.integer("frame_pool_size", kPoolSizeRange, d.framePoolSize);
-  if (a.framePoolSize != 0 && a.framePoolSize < a.queueDepth + 2) {
-    section.fail("frame_pool_size", "must be 0 (automatic) or >= queue_depth + 2 = " +
-                                        std::to_string(a.queueDepth + 2) + ", got " +
+  // The pipeline holds one frame more: the one between its two threads.
+  const bool pipelined = a.pipeline == PipelineMode::On;
+  const int minPool = a.queueDepth + (pipelined ? 3 : 2);
+  if (a.framePoolSize != 0 && a.framePoolSize < minPool) {
+    section.fail("frame_pool_size", std::string("must be 0 (automatic) or >= queue_depth + ") +
+                                        (pipelined ? "3 (pipeline on) = " : "2 = ") +
+                                        std::to_string(minPool) + ", got " +
                                         std::to_string(a.framePoolSize));
   }
   a.lockMemory = section.boolean("lock_memory", d.lockMemory);

@@ -86,6 +86,16 @@ const char* toString(FrameSourceKind kind) {
   return "unknown";
 }
 
+const char* toString(PipelineMode mode) {
+  switch (mode) {
+    case PipelineMode::Off:
+      return "off";
+    case PipelineMode::On:
+      return "on";
+  }
+  return "unknown";
+}
+
 const char* toString(RecordFullPolicy policy) {
   switch (policy) {
     case RecordFullPolicy::Stop:

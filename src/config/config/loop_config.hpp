@@ -88,9 +88,20 @@ struct RecordConfig {
   RecordFullPolicy onFull = RecordFullPolicy::Stop;
 };
 
+// How the processing of a frame is spread over threads (app.pipeline, docs/firmware_app.md).
+enum class PipelineMode : std::uint8_t {
+  Off,  // one processing thread: each frame's whole work, one frame after the other
+  On,   // a detector thread (pose, preprocess, detector, decoding) overlapped with the
+        // processing thread (crops, lifting, tracker, outputs) one frame behind it
+};
+const char* toString(PipelineMode mode);  // "off", "on"
+
 struct LoopConfig {
-  int queueDepth = 1;               // frames waiting between capture and processing, [1, 8]
-  int framePoolSize = 0;            // 0 = queueDepth + 2 (waiting + processing + capturing)
+  int queueDepth = 1;  // frames waiting between capture and processing, [1, 8]
+  PipelineMode pipeline = PipelineMode::Off;
+  // 0 = queueDepth + 2 (waiting + processing + capturing), + 1 with the pipeline on (the frame
+  // between its two threads)
+  int framePoolSize = 0;
   bool lockMemory = false;          // mlockall
   int realtimePriority = 0;         // SCHED_FIFO priority of the processing thread; 0 = off
   std::vector<int> captureCpus;     // CPU affinity of the capture thread; empty = any

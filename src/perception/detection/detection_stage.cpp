@@ -135,6 +135,17 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
                                     const GsdProvider* gsdProvider) {
   *count = 0;
   stats_ = DetectionStats{};
+  FirstStageOutput first;
+  const DetectionStatus status = detect(frame, out, &first);
+  if (status != DetectionStatus::Ok) {
+    return status;
+  }
+  return refine(frame.frame, frame.geometry, first, out, count, gsdProvider);
+}
+
+DetectionStatus DetectionStage::detect(const preprocess::PreprocessedFrame& frame,
+                                       std::span<Detection> out, FirstStageOutput* first) {
+  *first = FirstStageOutput{};
   if (!initialised_) {
     return DetectionStatus::NotInitialised;
   }
@@ -179,10 +190,31 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
     decode_ms += millisecondsBetween(ran, Clock::now());
   }
   const Clock::time_point nmsStart = Clock::now();
-  const std::size_t kept = decoder_.finishFrame(out);
-  const Clock::time_point nmsEnd = Clock::now();
-  decode_ms += millisecondsBetween(nmsStart, nmsEnd);
+  first->kept = decoder_.finishFrame(out);
+  decode_ms += millisecondsBetween(nmsStart, Clock::now());
+  first->secondStage = secondStage;
+  DetectionStats& stats = first->stats;
+  stats.detector_ms = detector_ms;
+  stats.decode_ms = decode_ms;
+  stats.tiles = static_cast<int>(frame.tiles.size());
+  stats.candidates = static_cast<int>(decoder_.candidateCount());
+  stats.cutCandidates = static_cast<int>(decoder_.cutCandidateCount());
+  stats.droppedForCapacity = static_cast<int>(decoder_.droppedForCapacity());
+  return DetectionStatus::Ok;
+}
 
+DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
+                                       const preprocess::FrameGeometry& geometry,
+                                       const FirstStageOutput& first, std::span<Detection> out,
+                                       std::size_t* count, const GsdProvider* gsdProvider) {
+  *count = 0;
+  stats_ = first.stats;
+  if (!initialised_) {
+    return DetectionStatus::NotInitialised;
+  }
+  const Clock::time_point secondStart = Clock::now();
+  const bool secondStage = first.secondStage;
+  const std::size_t kept = std::min(first.kept, out.size());
   // Second stage, best detections first.
   if (secondStage && kept > 0) {
     double frameGsd = options_.gsd.fixedGsd_m;
@@ -196,7 +228,7 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
       if (!(gsd > 0.0) || !std::isfinite(gsd)) {
         gsd = frameGsd;
       }
-      if (cropper_.classify(frame.frame, gsd, &out[i]) == SecondStageStatus::Ok) {
+      if (cropper_.classify(correctedFrame, gsd, &out[i]) == SecondStageStatus::Ok) {
         ++stats_.crops;
       } else {
         ++stats_.cropFailures;
@@ -223,16 +255,10 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
   // overlap each other on the ground, so the "contained in" test is safe within a tile too.
   const std::size_t refinedKept =
       secondStage ? suppressRefinedDuplicates(out.first(verified)) : verified;
-  markFrameEdge(frame.geometry, out.first(refinedKept));
+  markFrameEdge(geometry, out.first(refinedKept));
   stats_.refinedDuplicates = static_cast<int>(verified - refinedKept);
-  stats_.crops_ms = millisecondsBetween(nmsEnd, Clock::now());
-  stats_.detector_ms = detector_ms;
-  stats_.decode_ms = decode_ms;
-  stats_.tiles = static_cast<int>(frame.tiles.size());
-  stats_.candidates = static_cast<int>(decoder_.candidateCount());
-  stats_.cutCandidates = static_cast<int>(decoder_.cutCandidateCount());
+  stats_.crops_ms = millisecondsBetween(secondStart, Clock::now());
   stats_.detections = static_cast<int>(refinedKept);
-  stats_.droppedForCapacity = static_cast<int>(decoder_.droppedForCapacity());
   *count = refinedKept;
   return DetectionStatus::Ok;
 }

@@ -12,8 +12,12 @@
 // out.size() detections (kMaxDetectionsPerFrame is the intended capacity) and returns a
 // status, never throws and performs no heap allocation after init(). A detection whose
 // second stage could not run (no GSD, beyond maxCrops) keeps its first-stage values (uniform
-// types, no gamma) and is counted in stats(). Not thread-safe; the detector engine uses
-// engine.threads workers, the crop engine cropEngineThreads.
+// types, no gamma) and is counted in stats(). run() is the two halves below one after the other:
+// detect() (detector, decoding, suppression: the detector engine and the decoder) and refine()
+// (the second stage on the kept detections: the crop engine); the pipelined loop runs detect()
+// of one frame on one thread while refine() of the frame before runs on another - the halves
+// share no mutable state, and refine() alone writes stats(). Otherwise not thread-safe; the
+// detector engine uses engine.threads workers, the crop engine cropEngineThreads.
 #pragma once
 
 #include <array>
@@ -75,6 +79,13 @@ struct DetectionStats {
   double crops_ms = 0.0;       // crops + crop engine + output application
 };
 
+// What detect() leaves for refine() besides the detections (in the caller's array).
+struct FirstStageOutput {
+  std::size_t kept = 0;      // detections written by detect(), best first
+  bool secondStage = false;  // the crop network runs on this frame
+  DetectionStats stats{};    // the first stage's fields (tiles ... decode_ms)
+};
+
 class DetectionStage {
  public:
   DetectionStage() = default;
@@ -88,6 +99,16 @@ class DetectionStage {
   // Real-time path. *count receives the number of detections written to out.
   DetectionStatus run(const preprocess::PreprocessedFrame& frame, std::span<Detection> out,
                       std::size_t* count, const GsdProvider* gsdProvider = nullptr);
+  // The first half of run(): the detector on every tile, decoding and suppression into out.
+  // Touches only the detector engine and the decoder.
+  DetectionStatus detect(const preprocess::PreprocessedFrame& frame, std::span<Detection> out,
+                         FirstStageOutput* first);
+  // The second half: the crop network on the first `first.kept` detections of out (in place),
+  // cut from correctedFrame (the frame detect() saw), the verifier, the last suppression and the
+  // frame-edge marks; *count receives the detections kept. Sets stats().
+  DetectionStatus refine(const cv::Mat& correctedFrame, const preprocess::FrameGeometry& geometry,
+                         const FirstStageOutput& first, std::span<Detection> out,
+                         std::size_t* count, const GsdProvider* gsdProvider = nullptr);
 
   const DetectionStats& stats() const { return stats_; }
   // The crop network has the verifier output (minVehicleProbability can act).

@@ -53,8 +53,8 @@ double PoseGsdProvider::groundSampleDistance_m(const detection::Detection& detec
                                   Eigen::Vector2d(detection.box.cx, detection.box.cy));
 }
 
-void FramePipeline::setError(const char* stage, const char* detail) {
-  std::snprintf(lastError_.data(), lastError_.size(), "%s: %s", stage, detail);
+void FramePipeline::setError(std::array<char, 256>& error, const char* stage, const char* detail) {
+  std::snprintf(error.data(), error.size(), "%s: %s", stage, detail);
 }
 
 bool FramePipeline::init(const PipelineOptions& options, const camera::CameraModel& rawCamera,
@@ -106,45 +106,112 @@ bool FramePipeline::init(const PipelineOptions& options, const camera::CameraMod
       *why = "detection lifter: " + detail;
     return false;
   }
+  // The preprocessor writes a corrected frame of its own when it undistorts or balances;
+  // otherwise its output is a view of the caller's frame.
+  ownsCorrected_ = preprocessor_.undistorts() || pre.whiteBalance;
+  workingScale_ = preprocessor_.workingScale();
+  detectGsd_m_ = 0.0;
+  detectScaleChanges_ = 0;
+  frameGsd_m_ = 0.0;
+  workingScaleChanges_ = 0;
+  corrected_ = cv::Mat();
   lastError_[0] = '\0';
   initialised_ = true;
   return true;
 }
 
+void FramePipeline::prepare(DetectedFrame& frame) const {
+  frame = DetectedFrame{};
+  if (initialised_ && ownsCorrected_) {
+    const camera::Intrinsics& k = preprocessor_.frameCamera().intrinsics();
+    frame.copy.create(k.height_px, k.width_px, CV_8UC3);
+  }
+}
+
 PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                                       const telemetry::PoseEstimate& pose) {
-  timings_ = PipelineTimings{};
-  liftSummary_ = FrameLiftSummary{};
-  footprint_ = FrameFootprint{};
+  detect(bgrFrame, timestamp_ns, pose, serial_);
+  return finish(serial_);
+}
+
+PipelineStatus FramePipeline::detect(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
+                                     const telemetry::PoseEstimate& pose, DetectedFrame& out) {
+  out.timings = PipelineTimings{};
+  out.first = detection::FirstStageOutput{};
+  out.timestamp_ns = timestamp_ns;
+  out.frameWidth_px = bgrFrame.cols;
+  out.frameHeight_px = bgrFrame.rows;
+  out.error[0] = '\0';
   if (!initialised_) {
-    setError("pipeline", "process() before a successful init()");
-    return PipelineStatus::NotInitialised;
+    setError(out.error, "pipeline", "process() before a successful init()");
+    out.camera = FrameCameraPose{};
+    return out.status = PipelineStatus::NotInitialised;
   }
   const auto start = std::chrono::steady_clock::now();
   // The camera pose at the frame time, computed once: the working scale, the second stage's GSD
   // and lifting use it.
-  const FrameCameraPose camera =
-      detectionLifter_.cameraPoseFor(lifter_, pose.status, toDronePose(pose.pose));
-  if (camera.status == LiftStatus::Ok) {
+  out.camera = detectionLifter_.cameraPoseFor(lifter_, pose.status, toDronePose(pose.pose));
+  if (out.camera.status == LiftStatus::Ok) {
     // The working scale follows the height: the GSD where the optical axis meets the ground.
     const camera::Intrinsics& k = preprocessor_.frameCamera().intrinsics();
     const Eigen::Vector2d centre(0.5 * (k.width_px - 1), 0.5 * (k.height_px - 1));
-    frameGsd_m_ = planar_ ? plane_.groundSampleDistance_m(centre)
-                          : groundSampleDistanceAt_m(lifter_, camera.pose, centre);
-    if (preprocessor_.adaptToGsd(frameGsd_m_)) {
-      ++workingScaleChanges_;
+    detectGsd_m_ = planar_ ? plane_.groundSampleDistance_m(centre)
+                           : groundSampleDistanceAt_m(lifter_, out.camera.pose, centre);
+    if (preprocessor_.adaptToGsd(detectGsd_m_)) {
+      ++detectScaleChanges_;
     }
   }
+  out.frameGsd_m = detectGsd_m_;
+  out.workingScaleChanges = detectScaleChanges_;
+  out.workingScale = preprocessor_.workingScale();
   const preprocess::PreprocessStatus pre = preprocessor_.process(bgrFrame);
-  timings_.preprocess_ms = msSince(start);
   if (pre != preprocess::PreprocessStatus::Ok) {
-    setError("preprocessing", preprocessor_.lastError());
-    return PipelineStatus::PreprocessFailed;
+    out.timings.preprocess_ms = msSince(start);
+    setError(out.error, "preprocessing", preprocessor_.lastError());
+    return out.status = PipelineStatus::PreprocessFailed;
   }
+  const preprocess::PreprocessedFrame& frame = preprocessor_.output();
+  out.geometry = frame.geometry;
+  // The next frame's preprocessing overwrites the preprocessor's own buffer: a frame prepared
+  // for the hand-off keeps a copy (a view of the caller's frame needs none).
+  if (!out.copy.empty() && frame.frame.data != bgrFrame.data) {
+    frame.frame.copyTo(out.copy);
+    out.corrected = out.copy;
+  } else {
+    out.corrected = frame.frame;
+  }
+  out.timings.preprocess_ms = msSince(start);
 
+  const detection::DetectionStatus det = detection_.detect(frame, out.detections, &out.first);
+  out.timings.detector_ms = out.first.stats.detector_ms;
+  out.timings.decode_ms = out.first.stats.decode_ms;
+  if (det != detection::DetectionStatus::Ok) {
+    setError(out.error, "detection", detection::toString(det));
+    out.timings.total_ms = msSince(start);
+    return out.status = PipelineStatus::DetectionFailed;
+  }
+  out.timings.total_ms = msSince(start);
+  return out.status = PipelineStatus::Ok;
+}
+
+PipelineStatus FramePipeline::finish(DetectedFrame& in) {
+  timings_ = in.timings;
+  liftSummary_ = FrameLiftSummary{};
+  footprint_ = FrameFootprint{};
+  frameGsd_m_ = in.frameGsd_m;
+  workingScaleChanges_ = in.workingScaleChanges;
+  if (in.status != PipelineStatus::NotInitialised) {
+    workingScale_ = in.workingScale;
+  }
+  if (in.status != PipelineStatus::Ok) {
+    std::snprintf(lastError_.data(), lastError_.size(), "%s", in.error.data());
+    return in.status;
+  }
+  corrected_ = in.corrected;
+  const auto start = std::chrono::steady_clock::now();
   const PoseGsdProvider* gsd = nullptr;
-  if (camera.status == LiftStatus::Ok) {
-    cameraPose_ = camera.pose;
+  if (in.camera.status == LiftStatus::Ok) {
+    cameraPose_ = in.camera.pose;
     if (planar_) {
       gsd_.setPlane(&plane_);
     } else {
@@ -154,26 +221,24 @@ PipelineStatus FramePipeline::process(const cv::Mat& bgrFrame, std::int64_t time
   }
   std::size_t count = 0;
   const detection::DetectionStatus det =
-      detection_.run(preprocessor_.output(), detections_, &count, gsd);
+      detection_.refine(in.corrected, in.geometry, in.first, in.detections, &count, gsd);
   gsd_.setPose(nullptr, nullptr);
-  const detection::DetectionStats& stats = detection_.stats();
-  timings_.detector_ms = stats.detector_ms;
-  timings_.decode_ms = stats.decode_ms;
-  timings_.crops_ms = stats.crops_ms;
+  timings_.crops_ms = detection_.stats().crops_ms;
   if (det != detection::DetectionStatus::Ok) {
-    setError("detection", detection::toString(det));
-    timings_.total_ms = msSince(start);
+    setError(lastError_, "detection", detection::toString(det));
+    timings_.total_ms = in.timings.total_ms + msSince(start);
     return PipelineStatus::DetectionFailed;
   }
 
   const auto liftStart = std::chrono::steady_clock::now();
   liftSummary_ = detectionLifter_.liftFrame(
-      lifter_, timestamp_ns, camera,
-      std::span<const detection::Detection>(detections_.data(), count), observations_);
-  footprint_ = planar_ ? frameFootprint(plane_, bgrFrame.cols, bgrFrame.rows)
-                       : frameFootprint(lifter_, liftSummary_, bgrFrame.cols, bgrFrame.rows);
+      lifter_, in.timestamp_ns, in.camera,
+      std::span<const detection::Detection>(in.detections.data(), count), observations_);
+  footprint_ = planar_ ? frameFootprint(plane_, in.frameWidth_px, in.frameHeight_px)
+                       : frameFootprint(lifter_, liftSummary_, in.frameWidth_px, in.frameHeight_px);
   timings_.lift_ms = msSince(liftStart);
-  timings_.total_ms = msSince(start);
+  // Work time of the frame (the two halves; not the wait between them when pipelined).
+  timings_.total_ms = in.timings.total_ms + msSince(start);
   lastError_[0] = '\0';
   return PipelineStatus::Ok;
 }

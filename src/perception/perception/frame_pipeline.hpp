@@ -19,8 +19,17 @@
 // is given (telemetry off, ground control points: georef/georeference): the pipeline then lifts
 // through a lifting::PlaneLifter on the corrected frame's camera, every frame has the view's
 // camera (the pose is not used) and the GSDs and the footprint come from the ground plane; the
-// pipeline itself must not move after init() (its parts point at each other). Not thread-safe: one
-// loop thread.
+// pipeline itself must not move after init() (its parts point at each other).
+// Two halves: process() is detect() then finish() on one DetectedFrame. detect() runs the pose,
+// the working scale, preprocessing and the detector with its decoding into a DetectedFrame;
+// finish() runs the second stage (crops), lifting and the footprint from one and publishes the
+// frame's results (observations() ... correctedFrame()). The pipelined loop runs detect() of a
+// frame on one thread while finish() of the frame before runs on another, each DetectedFrame used
+// by one half at a time (the caller hands it over): detect() touches only the preprocessor, the
+// detector and the decoder, finish() only the crop network and the published results; the
+// Lifter, the detection lifter and the options are read-only after init(). Otherwise not
+// thread-safe. A DetectedFrame borrows the caller's frame when the preprocessor does not copy it
+// (no undistortion, no white balance): that frame must stay unchanged until finish() is done.
 #pragma once
 
 #include <array>
@@ -101,6 +110,28 @@ class PoseGsdProvider final : public detection::GsdProvider {
   const lifting::PlaneLifter* plane_ = nullptr;
 };
 
+// One frame between the two halves (detect() -> finish()): everything finish() needs, in memory
+// allocated by FramePipeline::prepare() at start-up.
+struct DetectedFrame {
+  PipelineStatus status = PipelineStatus::NotInitialised;
+  std::int64_t timestamp_ns = 0;
+  FrameCameraPose camera{};
+  // The corrected frame the detections' pixels refer to: a view of the caller's frame, of the
+  // preprocessor's buffer (serial use), or of `copy` (prepared for a hand-off across threads).
+  cv::Mat corrected;
+  cv::Mat copy;
+  preprocess::FrameGeometry geometry{};
+  int frameWidth_px = 0;
+  int frameHeight_px = 0;
+  std::array<detection::Detection, detection::kMaxDetectionsPerFrame> detections{};
+  detection::FirstStageOutput first{};
+  PipelineTimings timings{};  // preprocess_ms, detector_ms, decode_ms
+  double frameGsd_m = 0.0;
+  double workingScale = 0.0;
+  std::uint64_t workingScaleChanges = 0;
+  std::array<char, 256> error{};
+};
+
 class FramePipeline {
  public:
   FramePipeline() = default;
@@ -122,6 +153,16 @@ class FramePipeline {
   PipelineStatus process(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
                          const telemetry::PoseEstimate& pose);
 
+  // Start-up, after init(): makes `frame` ready to carry a frame from detect() on one thread to
+  // finish() on another (the corrected frame is copied into it when the preprocessor writes its
+  // own buffer, which the next frame's preprocessing overwrites).
+  void prepare(DetectedFrame& frame) const;
+  // The halves of process() (see the contract); detect() returns the frame's status so far and
+  // finish() the final one (a refused frame: detect()'s status, lastError() set from the frame).
+  PipelineStatus detect(const cv::Mat& bgrFrame, std::int64_t timestamp_ns,
+                        const telemetry::PoseEstimate& pose, DetectedFrame& out);
+  PipelineStatus finish(DetectedFrame& frame);
+
   std::span<const VehicleObservation> observations() const {
     return {observations_.data(), liftSummary_.written};
   }
@@ -131,19 +172,19 @@ class FramePipeline {
   const detection::DetectionStats& detectionStats() const { return detection_.stats(); }
   const PipelineTimings& timings() const { return timings_; }
   // Working px per frame px of the last frame (preprocess options: fixed, or from the GSD).
-  double workingScale() const { return preprocessor_.workingScale(); }
+  double workingScale() const { return workingScale_; }
   // GSD at the image centre of the last frame with a camera pose (0 before the first), and how
   // often the working scale changed since init().
   double frameGsd_m() const { return frameGsd_m_; }
   std::uint64_t workingScaleChanges() const { return workingScaleChanges_; }
   // The corrected full-resolution frame of the last process() (what the detections' pixels
   // refer to; for annotation) and the Lifter on its camera.
-  const cv::Mat& correctedFrame() const { return preprocessor_.output().frame; }
+  const cv::Mat& correctedFrame() const { return corrected_; }
   const lifting::Lifter& lifter() const { return lifter_; }
   const char* lastError() const { return lastError_.data(); }
 
  private:
-  void setError(const char* stage, const char* detail);
+  static void setError(std::array<char, 256>& error, const char* stage, const char* detail);
 
   bool initialised_ = false;
   preprocess::Preprocessor preprocessor_;
@@ -154,7 +195,14 @@ class FramePipeline {
   DetectionLifter detectionLifter_;
   PoseGsdProvider gsd_;
   lifting::CameraPoseWorld cameraPose_{};
-  std::array<detection::Detection, detection::kMaxDetectionsPerFrame> detections_{};
+  DetectedFrame serial_{};  // process()'s own
+  // detect()'s state across frames (the detector half's)
+  double detectGsd_m_ = 0.0;
+  std::uint64_t detectScaleChanges_ = 0;
+  bool ownsCorrected_ = false;  // the preprocessor writes its own corrected frame
+  // the last finished frame's (the finish half's)
+  cv::Mat corrected_;
+  double workingScale_ = 0.0;
   std::array<VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
   FrameLiftSummary liftSummary_{};
   FrameFootprint footprint_{};
