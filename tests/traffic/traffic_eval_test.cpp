@@ -120,9 +120,33 @@ TEST_F(TrafficEval, PerfectTracksAgreeWithTheTruth) {
   EXPECT_EQ(a.countError, 0.0);
   std::ostringstream text;
   printResult(r, true, text);
-  EXPECT_NE(text.str().find("relative error of the totals 0.0 % (acceptance <= 2 %): pass"),
+  EXPECT_EQ(r.typeCellError, 0U);
+  EXPECT_EQ(r.directionCellError, 0U);
+  EXPECT_NE(text.str().find("relative error of the totals 0.0 %, by gate and direction 0.0 %, by "
+                            "gate, direction and type 0.0 %"),
             std::string::npos)
       << text.str();
+}
+
+// A track published under a wrong type keeps the totals and the counts by direction, and moves
+// its crossings to another type's cell: each adds 2 to the by-type error, which fails the counts.
+TEST_F(TrafficEval, AWrongTypeIsACountErrorByType) {
+  const SequenceResult r = evaluate(writeTracks(
+      "retyped.csv", [](std::size_t, const sequence::ObjectTruth&, tracking::TrackState& t) {
+        t.type = t.type == shape::VehicleType::Van ? shape::VehicleType::Sedan
+                                                   : shape::VehicleType::Van;
+        t.typeProbabilities.fill(0.0F);
+        t.typeProbabilities[static_cast<std::size_t>(t.type)] = 1.0F;
+        return true;
+      }));
+  ASSERT_GT(r.truthTotal, 0U);
+  EXPECT_EQ(r.measuredTotal, r.truthTotal);
+  EXPECT_EQ(r.directionCellError, 0U);
+  EXPECT_EQ(r.typeCellError, 2 * r.truthTotal);
+  const Acceptance a = accept(r);
+  EXPECT_EQ(a.countError, 0.0);
+  EXPECT_DOUBLE_EQ(a.typeError, 2.0);
+  EXPECT_FALSE(a.countsPass);
 }
 
 TEST_F(TrafficEval, BrokenTracksLoseTheTurningMovements) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -177,6 +178,24 @@ bool evaluateSequence(const SequenceInput& input, const EvalOptions& options,
   result->measuredCounts = measuredRun.counts;
   result->truthTotal = truthRun.total;
   result->measuredTotal = measuredRun.total;
+  {
+    std::map<CountKey, std::int64_t> byType;
+    std::map<std::pair<std::size_t, int>, std::int64_t> byDirection;
+    for (const auto& [key, n] : truthRun.counts) {
+      byType[key] -= static_cast<std::int64_t>(n);
+      byDirection[{std::get<0>(key), std::get<1>(key)}] -= static_cast<std::int64_t>(n);
+    }
+    for (const auto& [key, n] : measuredRun.counts) {
+      byType[key] += static_cast<std::int64_t>(n);
+      byDirection[{std::get<0>(key), std::get<1>(key)}] += static_cast<std::int64_t>(n);
+    }
+    for (const auto& [key, d] : byType) {
+      result->typeCellError += static_cast<std::uint64_t>(std::llabs(d));
+    }
+    for (const auto& [key, d] : byDirection) {
+      result->directionCellError += static_cast<std::uint64_t>(std::llabs(d));
+    }
+  }
 
   // Turning movements: each true vehicle's nearest track over its frames.
   const double match2 = options.matchDistance_m * options.matchDistance_m;
@@ -256,6 +275,8 @@ SequenceResult sumResults(const std::vector<SequenceResult>& results) {
     total.frames += r.frames;
     total.truthTotal += r.truthTotal;
     total.measuredTotal += r.measuredTotal;
+    total.directionCellError += r.directionCellError;
+    total.typeCellError += r.typeCellError;
     total.movementVehicles += r.movementVehicles;
     total.movementAgreeing += r.movementAgreeing;
     total.movementUnmatched += r.movementUnmatched;
@@ -274,8 +295,11 @@ Acceptance accept(const SequenceResult& r) {
     a.countError =
         std::abs(static_cast<double>(r.measuredTotal) - static_cast<double>(r.truthTotal)) /
         static_cast<double>(r.truthTotal);
+    a.directionError =
+        static_cast<double>(r.directionCellError) / static_cast<double>(r.truthTotal);
+    a.typeError = static_cast<double>(r.typeCellError) / static_cast<double>(r.truthTotal);
   } else {
-    a.countError = r.measuredTotal > 0 ? 1.0 : 0.0;
+    a.countError = a.directionError = a.typeError = r.measuredTotal > 0 ? 1.0 : 0.0;
   }
   if (r.movementVehicles > 0) {
     a.movementShare =
@@ -284,7 +308,7 @@ Acceptance accept(const SequenceResult& r) {
   if (r.queuePeriods > 0) {
     a.queueShare = static_cast<double>(r.queueAgreeing) / static_cast<double>(r.queuePeriods);
   }
-  a.countsPass = a.countError <= 0.02;
+  a.countsPass = a.countError <= 0.02 && a.directionError <= 0.02 && a.typeError <= 0.02;
   a.movementsPass = a.movementShare >= 0.95;
   a.queuesPass = a.queueShare >= 0.90;
   return a;
@@ -311,8 +335,10 @@ void printResult(const SequenceResult& r, bool details, std::ostream& out) {
     }
   }
   out << "  gate counts: truth " << r.truthTotal << ", measured " << r.measuredTotal
-      << ", relative error of the totals " << percent(a.countError)
-      << " (acceptance <= 2 %): " << (a.countsPass ? "pass" : "FAIL") << "\n";
+      << ", relative error of the totals " << percent(a.countError) << ", by gate and direction "
+      << percent(a.directionError) << ", by gate, direction and type " << percent(a.typeError)
+      << " (sum of |measured - truth| over the cells / truth; acceptance <= 2 % each): "
+      << (a.countsPass ? "pass" : "FAIL") << "\n";
   out << "  turning movements: " << r.movementVehicles << " true vehicles crossed two gates, "
       << r.movementAgreeing << " matched tracks with the same origin -> destination ("
       << r.movementUnmatched << " without a track): " << percent(a.movementShare)

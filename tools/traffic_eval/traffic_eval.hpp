@@ -50,6 +50,11 @@ struct SequenceResult {
   std::map<CountKey, std::uint64_t> measuredCounts;
   std::uint64_t truthTotal = 0;
   std::uint64_t measuredTotal = 0;
+  // Sums over the count cells of |measured - truth|: per gate and direction (types pooled), and
+  // per gate, direction and type (a vehicle counted under a wrong type adds 2). Summed per
+  // sequence in a total (cells of different sequences never offset each other).
+  std::uint64_t directionCellError = 0;
+  std::uint64_t typeCellError = 0;
   // Turning movements.
   std::size_t movementVehicles = 0;   // true vehicles that crossed two gates
   std::size_t movementAgreeing = 0;   // their matched track has the same origin -> destination
@@ -70,9 +75,11 @@ SequenceResult sumResults(const std::vector<SequenceResult>& results);
 
 struct Acceptance {
   double countError = 0.0;     // |measured - truth| / truth of the gate totals (0 without truth)
+  double directionError = 0.0;  // directionCellError / truth
+  double typeError = 0.0;       // typeCellError / truth: the counts by type and direction
   double movementShare = 1.0;  // agreeing / vehicles (1 without vehicles)
   double queueShare = 1.0;     // agreeing / zone-periods (1 without any)
-  bool countsPass = true;      // <= 2 %
+  bool countsPass = true;      // totals, by direction and by type and direction all <= 2 %
   bool movementsPass = true;   // >= 95 %
   bool queuesPass = true;      // >= 90 %
   bool pass() const { return countsPass && movementsPass && queuesPass; }
