@@ -157,44 +157,58 @@ TEST(TrackManager, PartialDetectionsMoveTheTrackAcrossNotAlong) {
   }
 }
 
-// A standing bus whose box jumps along its axis frame to frame (the first stage places a long
-// vehicle's ends less surely: +-1.2 m here) is one track. With the long-vehicle noise and the
-// birth overlap rule off, the jumps fail the gate and start further tracks of the same bus.
-TEST(TrackManager, StandingBusWithJumpingBoxIsOneTrack) {
-  auto tracksOfBus = [](const TrackerConfig& config, int* suppressed) {
-    TrackManager m;
-    EXPECT_TRUE(m.init(config));
-    const double heading = 2.46;  // rad, any direction
-    const Eigen::Vector2d axis(std::cos(heading), std::sin(heading));
-    const double jumps_m[] = {0.0, 1.2, -1.0, 0.4, -1.2, 1.1, 0.2, -0.8, 1.2, -1.1};
-    std::vector<std::uint32_t> ids;
-    *suppressed = 0;
-    for (int f = 0; f < 40; ++f) {
-      const std::int64_t t = f * kFrame_ns;
-      const Eigen::Vector2d c = Eigen::Vector2d(40.0, 4.0) + jumps_m[f % 10] * axis;
-      WorldDetection bus = car(c.x(), c.y(), heading, t, 0.6f);
-      bus.length_m = 11.5;
-      bus.width_m = 2.7;
-      auto r = m.step(t, std::vector<WorldDetection>{bus});
-      EXPECT_TRUE(r.hasValue());
-      *suppressed += r->suppressedBirths;
-      for (const TrackState& s : m.tracks()) {
-        if (std::find(ids.begin(), ids.end(), s.id) == ids.end()) {
-          ids.push_back(s.id);
-        }
+// One bus (11.5 x 2.7 m, score 0.6) boxed at boxCentre(frame) for 40 frames at 10 Hz: how many
+// track ids it got and the step reports' overlap counters summed.
+struct BusRun {
+  std::size_t ids = 0;
+  int suppressedBirths = 0;
+  int overlapMatches = 0;
+};
+template <typename BoxCentre>
+BusRun runBus(const TrackerConfig& config, double heading, BoxCentre boxCentre) {
+  TrackManager m;
+  EXPECT_TRUE(m.init(config));
+  std::vector<std::uint32_t> ids;
+  BusRun run;
+  for (int f = 0; f < 40; ++f) {
+    const std::int64_t t = f * kFrame_ns;
+    const Eigen::Vector2d c = boxCentre(f);
+    WorldDetection bus = car(c.x(), c.y(), heading, t, 0.6f);
+    bus.length_m = 11.5;
+    bus.width_m = 2.7;
+    auto r = m.step(t, std::vector<WorldDetection>{bus});
+    EXPECT_TRUE(r.hasValue());
+    run.suppressedBirths += r->suppressedBirths;
+    run.overlapMatches += r->overlapMatches;
+    for (const TrackState& s : m.tracks()) {
+      if (std::find(ids.begin(), ids.end(), s.id) == ids.end()) {
+        ids.push_back(s.id);
       }
     }
-    return ids.size();
+  }
+  run.ids = ids.size();
+  return run;
+}
+
+// A standing bus whose box jumps along its axis frame to frame (the first stage places a long
+// vehicle's ends less surely: +-1.2 m here) is one track. With the long-vehicle noise and the
+// overlap rules off, the jumps fail the gate and start further tracks of the same bus.
+TEST(TrackManager, StandingBusWithJumpingBoxIsOneTrack) {
+  const double heading = 2.46;  // rad, any direction
+  const Eigen::Vector2d axis(std::cos(heading), std::sin(heading));
+  auto jumping = [&axis](int f) {
+    const double jumps_m[] = {0.0, 1.2, -1.0, 0.4, -1.2, 1.1, 0.2, -0.8, 1.2, -1.1};
+    return Eigen::Vector2d(Eigen::Vector2d(40.0, 4.0) + jumps_m[f % 10] * axis);
   };
   TrackerConfig config = smallConfig();
   config.noise.measurementPosition_m = 0.3;
-  int suppressed = 0;
-  EXPECT_EQ(tracksOfBus(config, &suppressed), 1u);
+  EXPECT_EQ(runBus(config, heading, jumping).ids, 1u);
   TrackerConfig off = config;
   off.longVehicleLength_m = 0.0;
   off.maxOverlap = 1.0;
-  EXPECT_GT(tracksOfBus(off, &suppressed), 1u);
-  EXPECT_EQ(suppressed, 0);
+  const BusRun without = runBus(off, heading, jumping);
+  EXPECT_GT(without.ids, 1u);
+  EXPECT_EQ(without.suppressedBirths + without.overlapMatches, 0);
 }
 
 // Two boxes of one vehicle in one frame (a bus boxed whole and again in part) start one track,
@@ -275,36 +289,17 @@ TEST(TrackManager, OfTwoOverlappingTracksTheYoungerIsDeleted) {
 // and is fused into it; the bus stays one track. With the overlap rule off, the jumps start
 // new tracks.
 TEST(TrackManager, ABusBoxThatStandsThenJumpsStaysOneTrack) {
-  auto run = [](double maxOverlap, int* overlapMatches) {
-    TrackerConfig config = smallConfig();
-    config.maxOverlap = maxOverlap;
-    config.maxCoast_s = 0.3;
-    TrackManager m;
-    EXPECT_TRUE(m.init(config));
-    std::vector<std::uint32_t> ids;
-    *overlapMatches = 0;
-    for (int f = 0; f < 40; ++f) {
-      const std::int64_t t = f * kFrame_ns;
-      const double boxX = 4.0 * (f / 4);  // the bus at 1 m per frame, its box in 4 m steps
-      WorldDetection bus = car(boxX, 0.0, 0.0, t, 0.6f);
-      bus.length_m = 11.5;
-      bus.width_m = 2.7;
-      auto r = m.step(t, std::vector<WorldDetection>{bus});
-      EXPECT_TRUE(r.hasValue());
-      *overlapMatches += r->overlapMatches;
-      for (const TrackState& s : m.tracks()) {
-        if (std::find(ids.begin(), ids.end(), s.id) == ids.end()) {
-          ids.push_back(s.id);
-        }
-      }
-    }
-    return ids.size();
-  };
-  int overlapMatches = 0;
-  EXPECT_EQ(run(0.3, &overlapMatches), 1u);
-  EXPECT_GT(overlapMatches, 0);
-  EXPECT_GT(run(1.0, &overlapMatches), 1u);
-  EXPECT_EQ(overlapMatches, 0);
+  // The bus at 1 m per frame, its box in 4 m steps.
+  auto steps = [](int f) { return Eigen::Vector2d(4.0 * (f / 4), 0.0); };
+  TrackerConfig config = smallConfig();
+  config.maxCoast_s = 0.3;
+  const BusRun with = runBus(config, 0.0, steps);
+  EXPECT_EQ(with.ids, 1u);
+  EXPECT_GT(with.overlapMatches, 0);
+  config.maxOverlap = 1.0;
+  const BusRun without = runBus(config, 0.0, steps);
+  EXPECT_GT(without.ids, 1u);
+  EXPECT_EQ(without.overlapMatches, 0);
 }
 
 // A car driving into view at 10 m/s whose partial boxes lag (their centre moves at half its

@@ -133,8 +133,8 @@ TEST_F(TrafficEval, PerfectTracksAgreeWithTheTruth) {
 TEST_F(TrafficEval, AWrongTypeIsACountErrorByType) {
   const SequenceResult r = evaluate(writeTracks(
       "retyped.csv", [](std::size_t, const sequence::ObjectTruth&, tracking::TrackState& t) {
-        t.type = t.type == shape::VehicleType::Van ? shape::VehicleType::Sedan
-                                                   : shape::VehicleType::Van;
+        t.type =
+            t.type == shape::VehicleType::Van ? shape::VehicleType::Sedan : shape::VehicleType::Van;
         t.typeProbabilities.fill(0.0F);
         t.typeProbabilities[static_cast<std::size_t>(t.type)] = 1.0F;
         return true;

@@ -74,14 +74,14 @@ bool evaluateSequence(const SequenceInput& input, const EvalOptions& options,
 SequenceResult sumResults(const std::vector<SequenceResult>& results);
 
 struct Acceptance {
-  double countError = 0.0;     // |measured - truth| / truth of the gate totals (0 without truth)
+  double countError = 0.0;      // |measured - truth| / truth of the gate totals (0 without truth)
   double directionError = 0.0;  // directionCellError / truth
   double typeError = 0.0;       // typeCellError / truth: the counts by type and direction
-  double movementShare = 1.0;  // agreeing / vehicles (1 without vehicles)
-  double queueShare = 1.0;     // agreeing / zone-periods (1 without any)
-  bool countsPass = true;      // totals, by direction and by type and direction all <= 2 %
-  bool movementsPass = true;   // >= 95 %
-  bool queuesPass = true;      // >= 90 %
+  double movementShare = 1.0;   // agreeing / vehicles (1 without vehicles)
+  double queueShare = 1.0;      // agreeing / zone-periods (1 without any)
+  bool countsPass = true;       // totals, by direction and by type and direction all <= 2 %
+  bool movementsPass = true;    // >= 95 %
+  bool queuesPass = true;       // >= 90 %
   bool pass() const { return countsPass && movementsPass && queuesPass; }
 };
 Acceptance accept(const SequenceResult& result);
