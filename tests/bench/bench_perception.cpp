@@ -19,6 +19,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "bench_camera.hpp"
 #include "detection/detection_stage.hpp"
 #include "preprocess/preprocessor.hpp"
 #include "synthetic_frame.hpp"
@@ -30,26 +31,11 @@ using vp::detection::DetectionStage;
 using vp::detection::DetectionStageOptions;
 using vp::detection::DetectionStatus;
 
-constexpr int kFrameWidth_px = 2592;
-constexpr int kFrameHeight_px = 2048;
+using vp::bench::kFrameHeight_px;
+using vp::bench::kFrameWidth_px;
 constexpr int kCropsPerFrame = 30;  // a busy intersection
 
-vp::camera::CameraModel benchCamera() {
-  vp::camera::Intrinsics k;
-  k.width_px = kFrameWidth_px;
-  k.height_px = kFrameHeight_px;
-  k.fx_px = 3000.0;
-  k.fy_px = 3000.0;
-  k.cx_px = 1295.5;
-  k.cy_px = 1023.5;
-  vp::camera::Distortion d;
-  d.model = vp::camera::LensModel::BrownConrady;
-  d.k1 = -0.1;
-  d.k2 = 0.03;
-  vp::camera::CameraModel camera;
-  camera.init(k, d);
-  return camera;
-}
+using vp::bench::benchCamera;
 
 cv::Mat benchFrame() {
   return vp::test::syntheticCarFrame(kFrameWidth_px, kFrameHeight_px, 2024, 60);

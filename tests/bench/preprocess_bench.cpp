@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_camera.hpp"
 #include "platform/v4l2/yuv_to_bgr.hpp"
 #include "preprocess/preprocessor.hpp"
 #include "synthetic_frame.hpp"
@@ -34,27 +35,12 @@ using vp::preprocess::PreprocessOptions;
 using vp::preprocess::Preprocessor;
 using vp::preprocess::PreprocessStatus;
 
-constexpr int kFrameWidth_px = 2592;
-constexpr int kFrameHeight_px = 2048;
+using vp::bench::kFrameHeight_px;
+using vp::bench::kFrameWidth_px;
 
 enum class Input { Bgr, Yuyv, Nv12, YuyvDirect, Nv12Direct };
 
-vp::camera::CameraModel benchCamera() {
-  vp::camera::Intrinsics k;
-  k.width_px = kFrameWidth_px;
-  k.height_px = kFrameHeight_px;
-  k.fx_px = 3000.0;
-  k.fy_px = 3000.0;
-  k.cx_px = 1295.5;
-  k.cy_px = 1023.5;
-  vp::camera::Distortion d;
-  d.model = vp::camera::LensModel::BrownConrady;
-  d.k1 = -0.1;
-  d.k2 = 0.03;
-  vp::camera::CameraModel camera;
-  camera.init(k, d);
-  return camera;
-}
+using vp::bench::benchCamera;
 
 // The camera's buffers for the synthetic frame: luma from the BGR frame's green channel, chroma
 // a slow ramp (both layouts carry the same picture).
