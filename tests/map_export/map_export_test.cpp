@@ -44,10 +44,12 @@ std::string position(double east_m, double north_m) {
   return text;
 }
 
+// `extra`: further members of "properties", each with its leading comma.
 std::string feature(const std::string& kind, const std::string& id, const std::string& name,
-                    const std::string& type, const std::string& coordinates) {
+                    const std::string& type, const std::string& coordinates,
+                    const std::string& extra = "") {
   return R"({"type": "Feature", "properties": {"kind": ")" + kind + R"(", "id": ")" + id +
-         R"(", "name": ")" + name + R"("}, "geometry": {"type": ")" + type +
+         R"(", "name": ")" + name + "\"" + extra + R"(}, "geometry": {"type": ")" + type +
          R"(", "coordinates": )" + coordinates + "}}";
 }
 
@@ -61,9 +63,13 @@ std::string siteText() {
                                     position(-7, -7) + "]]";
   return "{\"type\": \"FeatureCollection\", \"features\": [\n" +
          feature("drivable", "road-1", R"(K\u00f6nigstra\u00dfe \"Nord\")", "Polygon", road) +
-         ",\n" + feature("zone", "box-1", "junction", "Polygon", zoneClockwise) + ",\n" +
+         ",\n" +
+         feature("zone", "box-1", "junction", "Polygon", zoneClockwise,
+                 R"(, "role": "box_junction")") +
+         ",\n" +
          feature("lane", "lane-east", "eastbound", "LineString",
-                 "[" + position(-60, -3.5) + ", " + position(60, -3.5) + "]") +
+                 "[" + position(-60, -3.5) + ", " + position(60, -3.5) + "]",
+                 R"(, "width_m": 3.25)") +
          ",\n" +
          feature("gate", "gate-w", "west", "LineString",
                  "[" + position(-9, -7) + ", " + position(-9, 7) + "]") +
@@ -344,8 +350,10 @@ TEST_F(MapExport, TracksSiteCountsZonesMovementsAndEventsHoldWhatTheInputsSay) {
   expectAt(movement["geometry"]["coordinates"][0], lonLat(-9, 0));
   expectAt(movement["geometry"]["coordinates"][1], lonLat(9, 0));
 
-  // Zone: time-weighted mean occupancy, the longest queue.
+  // Zone: its role as the site file gave it, time-weighted mean occupancy, the longest queue.
   const YAML::Node& zone = f.at("site:box-1");
+  EXPECT_EQ(zone["properties"]["role"].as<std::string>(), "box_junction");
+  EXPECT_FALSE(zone["properties"]["lane"]) << "only a queue zone names a lane";
   EXPECT_NEAR(number(zone, "mean_vehicles"), 1.5, 1e-9);
   EXPECT_EQ(number(zone, "max_vehicles"), 4);
   EXPECT_EQ(number(zone, "max_queue_vehicles"), 5);
@@ -354,6 +362,7 @@ TEST_F(MapExport, TracksSiteCountsZonesMovementsAndEventsHoldWhatTheInputsSay) {
   EXPECT_NEAR(number(zone, "mean_dwell_s"), 20.0, 1e-9);
   // Lane: vehicles and their mean speed over both periods.
   const YAML::Node& lane = f.at("site:lane-east");
+  EXPECT_NEAR(number(lane, "width_m"), 3.25, 1e-9);
   EXPECT_EQ(number(lane, "vehicles"), 4);
   EXPECT_NEAR(number(lane, "mean_speed_mps"), 9.0, 1e-9);
   EXPECT_NEAR(number(lane, "max_speed_mps"), 12.0, 1e-9);

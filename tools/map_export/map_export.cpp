@@ -597,6 +597,15 @@ void appendSite(const LoadedSite& s, const Statistics& stats, std::string& out,
         .text("kind", site::toString(f.kind))
         .text("id", f.id)
         .text("name", f.name);
+    // What the site file says of the feature beyond its name, as a map user reads it back.
+    if (f.kind == site::FeatureKind::Lane) {
+      p.number("width_m", f.width_m, 2);
+    } else if (f.kind == site::FeatureKind::Zone) {
+      p.text("role", site::toString(f.role));
+      if (!f.lane.empty()) {
+        p.text("lane", f.lane);
+      }
+    }
     if (const auto gate = stats.gates.find(&f); gate != stats.gates.end()) {
       const GateTotals& g = gate->second;
       if (stats.counts) {
