@@ -3,6 +3,8 @@
 #include <cmath>
 #include <set>
 
+#include "traffic/track_slots.hpp"
+
 namespace vp::traffic {
 
 namespace {
@@ -92,24 +94,11 @@ bool GateCounter::init(std::span<const Gate> gates, const GateCounterOptions& op
 }
 
 GateCounter::Slot* GateCounter::find(std::uint32_t trackId) {
-  for (Slot& slot : slots_) {
-    if (slot.used && slot.trackId == trackId) {
-      return &slot;
-    }
-  }
-  return nullptr;
+  return findTrackSlot(std::span<Slot>(slots_), trackId);
 }
 
 GateCounter::Slot* GateCounter::claim(std::uint32_t trackId) {
-  for (Slot& slot : slots_) {
-    if (!slot.used) {
-      slot = Slot{};
-      slot.used = true;
-      slot.trackId = trackId;
-      return &slot;
-    }
-  }
-  return nullptr;
+  return claimTrackSlot(std::span<Slot>(slots_), trackId);  // released slots are empty
 }
 
 void GateCounter::cross(Slot& slot, const tracking::TrackState& track, const Eigen::Vector2d& from,

@@ -5,6 +5,8 @@
 #include <limits>
 #include <numbers>
 
+#include "traffic/track_slots.hpp"
+
 namespace vp::traffic {
 
 namespace {
@@ -213,23 +215,11 @@ double TrafficAnalyzer::laneLength_m(std::size_t lane) const {
 }
 
 TrafficAnalyzer::Slot* TrafficAnalyzer::find(std::uint32_t trackId) {
-  for (Slot& slot : slots_) {
-    if (slot.used && slot.trackId == trackId) {
-      return &slot;
-    }
-  }
-  return nullptr;
+  return findTrackSlot(std::span<Slot>(slots_), trackId);
 }
 
 TrafficAnalyzer::Slot* TrafficAnalyzer::claim(std::uint32_t trackId) {
-  for (Slot& slot : slots_) {
-    if (!slot.used) {
-      slot.used = true;
-      slot.trackId = trackId;
-      return &slot;
-    }
-  }
-  return nullptr;
+  return claimTrackSlot(std::span<Slot>(slots_), trackId);  // released slots are empty
 }
 
 void TrafficAnalyzer::emit(const TrafficEvent& event) {

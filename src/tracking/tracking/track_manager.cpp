@@ -336,11 +336,12 @@ int TrackManager::deleteYoungerDuplicates() {
     if (!candidate(slots_[i])) {
       continue;
     }
+    const geometry::RotatedBox boxI = box(slots_[i]);
     for (std::size_t j = i + 1; j < slots_.size() && slots_[i].live; ++j) {
       // Both fed by a detection this step: two boxes the detector kept apart; a duplicate
       // track takes the detections its twin does not (one vehicle, one box per frame).
       if (!candidate(slots_[j]) || (slots_[i].out.updated && slots_[j].out.updated) ||
-          !overlapping(box(slots_[i]), box(slots_[j]))) {
+          !overlapping(boxI, box(slots_[j]))) {
         continue;
       }
       Slot& younger = slots_[i].out.birth_ns > slots_[j].out.birth_ns ||
