@@ -210,6 +210,15 @@ TEST(Topology, VehicleTypeNamesRoundTrip) {
   EXPECT_FALSE(vehicleTypeFromString("tractor").has_value());
 }
 
+TEST(Topology, LargeVehiclesAreTheTransportersOfSeed002) {
+  for (int t = 0; t < kCarTypeCount; ++t) {
+    EXPECT_EQ(categoryOf(static_cast<VehicleType>(t)), VehicleCategory::Car);
+  }
+  EXPECT_EQ(categoryOf(VehicleType::Large), VehicleCategory::Transporter);
+  EXPECT_STREQ(toString(VehicleCategory::Car), "car");
+  EXPECT_STREQ(toString(VehicleCategory::Transporter), "transporter");
+}
+
 TEST(Topology, WheelRadiusIsTheWheelCentreHeight) {
   std::mt19937_64 rng(5);
   const GeneratedCar car = generateCar(VehicleType::Suv, rng);

@@ -147,6 +147,29 @@ TEST_F(TrafficEval, AWrongTypeIsACountErrorByType) {
   EXPECT_EQ(a.countError, 0.0);
   EXPECT_DOUBLE_EQ(a.typeError, 2.0);
   EXPECT_FALSE(a.countsPass);
+  // Sedans and vans are both cars in seed 002's categories: no error by category.
+  EXPECT_EQ(r.categoryCellError, 0U);
+  EXPECT_EQ(a.categoryError, 0.0);
+}
+
+TEST_F(TrafficEval, ACarCountedAsATransporterIsACountErrorByCategory) {
+  const SequenceResult r = evaluate(writeTracks(
+      "large.csv", [](std::size_t, const sequence::ObjectTruth&, tracking::TrackState& t) {
+        t.type = t.type == shape::VehicleType::Large ? shape::VehicleType::Sedan
+                                                     : shape::VehicleType::Large;
+        t.typeProbabilities.fill(0.0F);
+        t.typeProbabilities[static_cast<std::size_t>(t.type)] = 1.0F;
+        return true;
+      }));
+  ASSERT_GT(r.truthTotal, 0U);
+  EXPECT_EQ(r.directionCellError, 0U);
+  EXPECT_EQ(r.categoryCellError, 2 * r.truthTotal);
+  EXPECT_DOUBLE_EQ(accept(r).categoryError, 2.0);
+  std::ostringstream text;
+  printResult(r, false, text);
+  EXPECT_NE(text.str().find("seed 002's category (car; transporter: large): 200.0 %"),
+            std::string::npos)
+      << text.str();
 }
 
 TEST_F(TrafficEval, BrokenTracksLoseTheTurningMovements) {

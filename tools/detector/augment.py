@@ -19,7 +19,9 @@ crop(x0, y0, w, h) (u-x0, v-y0), zero padding     a
 
 Axis-aligned-only boxes stay axis-aligned: their angle stays 0 and rot90 swaps w and h.
 Keypoints (u, v) are transformed like points. Photometric jitter (brightness/contrast,
-white-balance gains, saturation, gamma, Gaussian blur, Gaussian noise) changes pixels only.
+white-balance gains, saturation, gamma, Gaussian blur, Gaussian noise), ``cast_shadow`` (a
+soft-edged shadow of a building or a tree crown laid across the tile) and ``compress`` (JPEG
+re-encoding, as video streams and web frames come) change pixels only.
 ``random_augment`` draws a combination with a numpy Generator (deterministic for a seed).
 """
 
@@ -151,6 +153,46 @@ def photometric(s: Sample, rng: np.random.Generator, strength: float = 1.0) -> S
         img = img + rng.normal(0, rng.uniform(0.0, 0.03), img.shape).astype(np.float32)
     out = s.copy()
     out.image = np.clip(img * 255.0 + 0.5, 0, 255).astype(np.uint8)
+    return out
+
+
+def cast_shadow(s: Sample, rng: np.random.Generator) -> Sample:
+    """Darkens part of the tile as a cast shadow does: the light left is the sky's, so the
+    shadow is dimmer (to 0.25-0.65 of the light) and bluer. The shape is either a building's
+    (a half-plane at a random angle with a straight, slightly soft edge) or a tree crown's
+    (blurred blobs). Real vehicles in building and tree shadow are a known miss; the
+    simulator's shadows alone do not cover them."""
+    h, w = s.image.shape[:2]
+    mask = np.zeros((h, w), np.float32)
+    if rng.random() < 0.5:
+        a = rng.uniform(0, 2 * math.pi)
+        c = np.array([rng.uniform(0, w), rng.uniform(0, h)])
+        yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+        mask = ((xx - c[0]) * math.cos(a) + (yy - c[1]) * math.sin(a) > 0).astype(np.float32)
+        edge = float(rng.uniform(0.5, 3.0))
+    else:
+        for _ in range(int(rng.integers(2, 7))):
+            r = float(rng.uniform(0.08, 0.3)) * min(h, w)
+            cv2.circle(mask, (int(rng.uniform(0, w)), int(rng.uniform(0, h))), int(r), 1.0, -1)
+        edge = float(rng.uniform(2.0, 6.0))
+    mask = cv2.GaussianBlur(mask, (0, 0), edge)[..., None]
+    light = float(rng.uniform(0.25, 0.65))
+    tint = np.array([1.0 + rng.uniform(0.0, 0.25), 1.0, 1.0 - rng.uniform(0.0, 0.15)],
+                    np.float32)  # channel order B, G, R: bluer
+    factor = 1.0 - mask * (1.0 - np.clip(light * tint, 0.0, 1.0))
+    out = s.copy()
+    out.image = np.clip(s.image.astype(np.float32) * factor + 0.5, 0, 255).astype(np.uint8)
+    return out
+
+
+def compress(s: Sample, rng: np.random.Generator) -> Sample:
+    """Re-encodes the tile as JPEG at quality 25-85 (block and ringing artefacts)."""
+    quality = int(rng.integers(25, 86))
+    ok, buf = cv2.imencode(".jpg", s.image, [cv2.IMWRITE_JPEG_QUALITY, quality])
+    if not ok:
+        raise RuntimeError("augment.compress: cv2.imencode failed")
+    out = s.copy()
+    out.image = cv2.imdecode(buf, cv2.IMREAD_COLOR)
     return out
 
 

@@ -143,6 +143,10 @@ def parse_args(argv=None):
     p.add_argument("--flip-head-only", action="store_true",
                    help="train only the front/back branch (needs --flip-branch, --init-from and "
                         "--crop-only): type, shape, refinement and verifier stay as they are")
+    p.add_argument("--shadow-share", type=float, default=0.0,
+                   help="share of first-stage tiles given a cast shadow (augment.cast_shadow)")
+    p.add_argument("--jpeg-share", type=float, default=0.0,
+                   help="share of first-stage tiles re-encoded as JPEG (augment.compress)")
     p.add_argument("--working-width", type=int, default=648)
     p.add_argument("--working-gsd-range", type=float, nargs=2, default=(0.08, 0.18))
     p.add_argument("--shape-loss", choices=["l1", "l2"], default="l1", help="V_L1 or V_L2")
@@ -375,7 +379,12 @@ class Data:
             s = augment.random_crop(s, (a.tile, a.tile), rng,
                                     weights=hard_example_weights(s, a.hard_weight, a.hard_occlusion))
         s = augment.random_geometric(s, rng)
-        return augment.photometric(s, rng)
+        if rng.random() < a.shadow_share:
+            s = augment.cast_shadow(s, rng)
+        s = augment.photometric(s, rng)
+        if rng.random() < a.jpeg_share:
+            s = augment.compress(s, rng)
+        return s
 
     def detector_arrays(self, rng) -> Dict[str, np.ndarray]:
         """One batch of training tiles and their targets, as numpy arrays (``image``: NHWC)."""

@@ -17,6 +17,9 @@ std::uint64_t sum(const std::uint32_t (&byType)[7]) {
   return total;
 }
 
+// Seed 002's categories: the last type (large: buses, trucks) are transporters, the rest cars.
+constexpr std::size_t kTransporterType = 6;
+
 }  // namespace
 
 const char* kindName(vp_msg_TrafficEventKind kind) {
@@ -61,8 +64,12 @@ std::string TrafficBoard::periodLine(const vp_msg_TrafficStatistics& s) const {
   for (std::uint32_t g = 0; g < s.gates._length; ++g) {
     const vp_msg_TrafficGateCount& gate = s.gates._buffer[g];
     const auto total = totals_.find(gate.gate_id);
+    const std::uint64_t transporters =
+        std::uint64_t{gate.forward[kTransporterType]} + gate.backward[kTransporterType];
     line << (g == 0 ? " " : "; ") << "gate " << gate.gate_id << " forward " << sum(gate.forward)
-         << " backward " << sum(gate.backward);
+         << " backward " << sum(gate.backward) << " [cars "
+         << sum(gate.forward) + sum(gate.backward) - transporters << ", transporters "
+         << transporters << "]";
     if (total != totals_.end()) {
       line << " (total " << total->second.first << "/" << total->second.second << ")";
     }

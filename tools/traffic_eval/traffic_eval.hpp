@@ -3,7 +3,8 @@
 // (traffic::TrafficAnalyzer) runs twice with the same options and the same frame times: on the
 // ground-truth vehicles as perfect tracks, and on the app's trajectory file of that sequence.
 // The figures compare the two:
-// - gate counts by gate, direction and type, and the relative error of the totals;
+// - gate counts by gate, direction and type, and the relative error of the totals; the same by
+//   seed 002's categories (car, transporter) is reported beside them;
 // - turning movements: each true vehicle that crossed two gates is matched to the track nearest
 //   to it over its frames (within matchDistance_m, the track with the most such frames); the
 //   vehicle agrees when that track's movement has the same origin and destination gates;
@@ -55,6 +56,8 @@ struct SequenceResult {
   // sequence in a total (cells of different sequences never offset each other).
   std::uint64_t directionCellError = 0;
   std::uint64_t typeCellError = 0;
+  // The same per gate, direction and seed 002's category (car / transporter, shape::categoryOf).
+  std::uint64_t categoryCellError = 0;
   // Turning movements.
   std::size_t movementVehicles = 0;   // true vehicles that crossed two gates
   std::size_t movementAgreeing = 0;   // their matched track has the same origin -> destination
@@ -77,6 +80,7 @@ struct Acceptance {
   double countError = 0.0;      // |measured - truth| / truth of the gate totals (0 without truth)
   double directionError = 0.0;  // directionCellError / truth
   double typeError = 0.0;       // typeCellError / truth: the counts by type and direction
+  double categoryError = 0.0;   // categoryCellError / truth: by seed 002's category (reported)
   double movementShare = 1.0;   // agreeing / vehicles (1 without vehicles)
   double queueShare = 1.0;      // agreeing / zone-periods (1 without any)
   bool countsPass = true;       // totals, by direction and by type and direction all <= 2 %

@@ -163,6 +163,10 @@ std::optional<VehicleType> vehicleTypeFromString(std::string_view name) {
   return std::nullopt;
 }
 
+const char* toString(VehicleCategory category) {
+  return category == VehicleCategory::Transporter ? "transporter" : "car";
+}
+
 const char* toString(SurfacePart part) {
   switch (part) {
     case SurfacePart::Paint:

@@ -33,6 +33,15 @@ constexpr int kVehicleTypeCount = 7;
 const char* toString(VehicleType type);  // "estate", "compact", ..., "large"
 std::optional<VehicleType> vehicleTypeFromString(std::string_view name);  // case-insensitive
 
+// Seed 002's counting categories: cars, and transporters (trucks and buses). Every car type is a
+// car (a van included: it is counted with the cars there); Large is a transporter.
+enum class VehicleCategory : std::uint8_t { Car, Transporter };
+constexpr int kVehicleCategoryCount = 2;
+constexpr VehicleCategory categoryOf(VehicleType type) {
+  return type == VehicleType::Large ? VehicleCategory::Transporter : VehicleCategory::Car;
+}
+const char* toString(VehicleCategory category);  // "car", "transporter"
+
 constexpr int kKeypointCount = 36;  // keypoints of the topology
 constexpr int kEvaluationKeypointCount = 24;
 constexpr int kMaxShapeComponents = 8;  // upper bound on n_s (memory is fixed)

@@ -105,6 +105,27 @@ class AngleConsistency(unittest.TestCase):
         np.testing.assert_array_equal(p.boxes, s.boxes)
         self.assertEqual(p.image.dtype, np.uint8)
 
+    def test_cast_shadow_darkens_and_keeps_geometry(self):
+        s = arrow_image()
+        s.image[:] = np.maximum(s.image, 200)  # a bright tile: any shadow shows
+        darker = 0
+        for seed in range(20):
+            p = augment.cast_shadow(s, np.random.default_rng(seed))
+            np.testing.assert_array_equal(p.boxes, s.boxes)
+            self.assertTrue(np.all(p.image.astype(int) <= s.image.astype(int) + 1))
+            dark = p.image.mean(2) < 0.7 * s.image.mean(2)
+            darker += int(dark.any())
+            if dark.any():  # bluer in the shadow: blue (channel 0) keeps more than red
+                self.assertGreaterEqual(p.image[dark][:, 0].mean(), p.image[dark][:, 2].mean())
+        self.assertGreaterEqual(darker, 15)
+
+    def test_compress_keeps_geometry_and_stays_close(self):
+        s = arrow_image()
+        p = augment.compress(s, np.random.default_rng(0))
+        np.testing.assert_array_equal(p.boxes, s.boxes)
+        self.assertEqual(p.image.shape, s.image.shape)
+        self.assertLess(np.abs(p.image.astype(int) - s.image.astype(int)).mean(), 12)
+
 
 class WeightedFocus(unittest.TestCase):
     """Object-centred tiles follow the per-object weights (train.py --hard-weight)."""
