@@ -42,6 +42,7 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(pre.workingGsd_m, code.preprocess.workingGsd_m);
   EXPECT_EQ(pre.minWorkingScale, code.preprocess.minWorkingScale);
   EXPECT_EQ(pre.maxWorkingScale, code.preprocess.maxWorkingScale);
+  EXPECT_EQ(pre.maxWorkingGsd_m, code.preprocess.maxWorkingGsd_m);
   EXPECT_EQ(pre.networkWidth_px, code.preprocess.networkWidth_px);
   EXPECT_EQ(pre.networkHeight_px, code.preprocess.networkHeight_px);
   EXPECT_EQ(pre.tileOverlap_px, code.preprocess.tileOverlap_px);

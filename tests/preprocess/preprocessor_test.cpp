@@ -236,6 +236,7 @@ TEST(Preprocessor, AdaptsTheWorkingScaleToTheGsdLikeAFixedScale) {
   const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
   const cv::Mat frame = texturedFrame(7);
   PreprocessOptions adaptive;  // workingGsd_m 0.12, anchor 0.25, ladder [0.125, 1]
+  adaptive.maxWorkingGsd_m = 0.0;  // always the height's rung (the next test: fewer tiles)
   Preprocessor pre;
   std::string why;
   ASSERT_TRUE(pre.init(adaptive, camera, {kFrameWidth_px, kFrameHeight_px}, &why)) << why;
@@ -267,6 +268,41 @@ TEST(Preprocessor, AdaptsTheWorkingScaleToTheGsdLikeAFixedScale) {
           << "scale " << scale << " tile " << i;
     }
   }
+}
+
+TEST(Preprocessor, ACoarserRungWithFewerTilesIsTakenWithinTheGsdLimit) {
+  const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
+  PreprocessOptions options;  // workingGsd_m 0.12, maxWorkingGsd_m 0.15: up to 1.25x coarser
+  ASSERT_EQ(options.maxWorkingGsd_m, 0.15);
+  PreprocessOptions off = options;
+  off.maxWorkingGsd_m = 0.0;
+  Preprocessor pre;
+  Preprocessor height;  // always the height's rung
+  std::string why;
+  ASSERT_TRUE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}, &why)) << why;
+  ASSERT_TRUE(height.init(off, camera, {kFrameWidth_px, kFrameHeight_px}, &why)) << why;
+  // 6 cm/px: the height's rung is 0.5 (1296 x 1024 working px); 0.420 (two rungs down, 14.3 cm
+  // working pixels) needs fewer tiles, 0.385 no fewer than that, 0.354 is beyond 0.15 m.
+  ASSERT_TRUE(pre.adaptToGsd(0.06));
+  ASSERT_TRUE(height.adaptToGsd(0.06));
+  EXPECT_NEAR(height.workingScale(), 0.5, 1e-9);
+  EXPECT_NEAR(pre.workingScale(), 0.5 / (kScaleStep * kScaleStep), 1e-9);
+  EXPECT_LT(pre.tileCount(), height.tileCount());
+  // 3.57 cm/px: the height's rung 0.297 (771 x 609: 2 x 2 tiles of 672 x 512); 0.25 (648 x 512,
+  // one tile) gives 14.3 cm working pixels.
+  ASSERT_TRUE(pre.adaptToGsd(0.0357));
+  ASSERT_TRUE(height.adaptToGsd(0.0357));
+  EXPECT_NEAR(height.workingScale(), 0.25 * kScaleStep * kScaleStep, 1e-9);
+  EXPECT_EQ(height.tileCount(), 4U);
+  EXPECT_EQ(pre.workingScale(), kDefaultWorkingScale);
+  EXPECT_EQ(pre.tileCount(), 1U);
+  // Hovering: the choice holds within the hysteresis.
+  EXPECT_FALSE(pre.adaptToGsd(0.0345));
+  EXPECT_FALSE(pre.adaptToGsd(0.0368));
+  // A limit below working_gsd_m is refused, naming the option.
+  options.maxWorkingGsd_m = 0.1;
+  EXPECT_FALSE(pre.init(options, camera, {kFrameWidth_px, kFrameHeight_px}, &why));
+  EXPECT_NE(why.find("max_working_gsd_m"), std::string::npos) << why;
 }
 
 TEST(Preprocessor, ChangingTheWorkingScaleAllocatesNothing) {

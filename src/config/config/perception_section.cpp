@@ -118,6 +118,8 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
       section.number("min_working_scale", kWorkingScaleRange, d.preprocess.minWorkingScale);
   pre.maxWorkingScale =
       section.number("max_working_scale", kWorkingScaleRange, d.preprocess.maxWorkingScale);
+  pre.maxWorkingGsd_m =
+      section.number("max_working_gsd_m", kFixedGsdRange_m, d.preprocess.maxWorkingGsd_m);
   pre.tileOverlap_px =
       section.integer("tile_overlap_px", kTileOverlapRange_px, d.preprocess.tileOverlap_px);
 

@@ -65,6 +65,12 @@ bool validate(const PreprocessOptions& options, std::string* why) {
                     std::to_string(options.workingScale) + " / " +
                     std::to_string(options.maxWorkingScale));
   }
+  if (options.workingGsd_m > 0.0 && options.maxWorkingGsd_m != 0.0 &&
+      !(options.maxWorkingGsd_m >= options.workingGsd_m && options.maxWorkingGsd_m <= 1.0)) {
+    return fail(why, "max_working_gsd_m: must be 0 (off) or in [working_gsd_m, 1] m, got " +
+                         std::to_string(options.maxWorkingGsd_m) + " with working_gsd_m " +
+                         std::to_string(options.workingGsd_m));
+  }
   if (options.networkWidth_px < 32 || options.networkHeight_px < 32) {
     return fail(why, "network input: must be >= 32 x 32 px, got " +
                          std::to_string(options.networkWidth_px) + " x " +
@@ -180,6 +186,10 @@ bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraMo
       tile.strideBytes = working_.step[0];
     }
   }
+  for (std::size_t i = 0; i < rungs_.size(); ++i) {
+    tileCounts_[i] = rungs_[i].tileCount;
+  }
+  idealRung_ = rung_;
   output_ = PreprocessedFrame{};
   selectRung(rung_);
   lastError_[0] = '\0';
@@ -238,7 +248,13 @@ bool Preprocessor::adaptToGsd(double frameGsd_m) {
   if (!initialised_ || !(options_.workingGsd_m > 0.0) || rungs_.size() < 2) {
     return false;
   }
-  const std::size_t next = chooseRung(workingScales(), rung_, frameGsd_m / options_.workingGsd_m);
+  idealRung_ =
+      chooseRung(workingScales(), idealRung_, frameGsd_m / options_.workingGsd_m);
+  const std::size_t next =
+      options_.maxWorkingGsd_m > 0.0
+          ? fewerTilesRung(workingScales(), {tileCounts_.data(), rungs_.size()}, idealRung_,
+                           options_.maxWorkingGsd_m / options_.workingGsd_m)
+          : idealRung_;
   if (next == rung_) {
     return false;
   }

@@ -69,6 +69,10 @@ struct PreprocessOptions {
   double workingGsd_m = kDetectorWorkingGsd_m;
   double minWorkingScale = 0.125;  // the ladder's bounds, 0 < min <= workingScale <= max <= 1
   double maxWorkingScale = 1.0;
+  // With workingGsd_m > 0: a working pixel may grow up to this many metres when a coarser rung
+  // than the height's needs fewer detector tiles (fewerTilesRung; the detector is trained on
+  // 0.08-0.18 m working pixels). 0: always the height's rung. 0 or [workingGsd_m, 1] m.
+  double maxWorkingGsd_m = 0.15;
   int networkWidth_px = 672;  // detector input (must equal the model's input)
   int networkHeight_px = 512;
   int tileOverlap_px = 96;  // working px, >= the longest vehicle at the working scale
@@ -208,7 +212,9 @@ class Preprocessor {
   std::array<float, 3> gains_{1.0F, 1.0F, 1.0F};  // this frame's white-balance gains
   std::vector<Rung> rungs_;
   std::array<double, kMaxScaleRungs> scales_{};
-  std::size_t rung_ = 0;
+  std::size_t rung_ = 0;       // the rung in use
+  std::size_t idealRung_ = 0;  // the height's rung (chooseRung's state); rung_ may be coarser
+  std::array<std::size_t, kMaxScaleRungs> tileCounts_{};
   PreprocessedFrame output_{};
   std::array<char, 200> lastError_{};
 };

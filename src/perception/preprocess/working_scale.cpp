@@ -41,4 +41,21 @@ std::size_t chooseRung(std::span<const double> ladder, std::size_t current, doub
   return static_cast<std::size_t>(std::clamp(target, 0.0, static_cast<double>(ladder.size() - 1)));
 }
 
+std::size_t fewerTilesRung(std::span<const double> ladder, std::span<const std::size_t> tileCounts,
+                           std::size_t ideal, double maxGsdRatio) {
+  if (ideal >= ladder.size() || ladder.size() != tileCounts.size() || !(maxGsdRatio > 1.0)) {
+    return ideal;
+  }
+  std::size_t best = ideal;
+  for (std::size_t k = ideal; k-- > 0;) {
+    if (ladder[ideal] / ladder[k] > maxGsdRatio * (1.0 + 1e-9)) {
+      break;  // ascending ladder: every rung further down is coarser still
+    }
+    if (tileCounts[k] < tileCounts[best]) {
+      best = k;
+    }
+  }
+  return best;
+}
+
 }  // namespace vp::preprocess

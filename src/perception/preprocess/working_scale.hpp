@@ -7,7 +7,10 @@
 // [minScale, maxScale] - and the loop picks a rung. chooseRung() moves to the rung nearest the
 // ideal scale (in log space) only when the ideal lies more than `hysteresis` rungs away from
 // the current one, so a drone hovering near the midpoint between two rungs does not make the
-// scale flicker. Pure functions, no allocation.
+// scale flicker. fewerTilesRung() then may step down from that rung to a coarser one that cuts
+// the working image into fewer detector tiles, as long as a working pixel stays within a given
+// ratio of the trained size (the detector is trained on 8-18 cm working pixels). Pure
+// functions, no allocation.
 #pragma once
 
 #include <cstddef>
@@ -39,5 +42,13 @@ std::size_t buildScaleLadder(double anchor, double minScale, double maxScale,
 // non-finite or non-positive ideal keeps `current`.
 std::size_t chooseRung(std::span<const double> ladder, std::size_t current, double idealScale,
                        double hysteresis_rungs = kScaleHysteresis_rungs);
+
+// The rung the detector runs at when the ideal one is `ideal`: among the rungs k <= ideal whose
+// working pixel is at most maxGsdRatio times the ideal rung's (ladder[ideal] / ladder[k] <=
+// maxGsdRatio), the one with the fewest tiles (tileCounts[k]); of those the finest. It depends
+// on `ideal` alone, so chooseRung()'s hysteresis covers it too. maxGsdRatio <= 1, or sizes that
+// differ, give `ideal`.
+std::size_t fewerTilesRung(std::span<const double> ladder, std::span<const std::size_t> tileCounts,
+                           std::size_t ideal, double maxGsdRatio);
 
 }  // namespace vp::preprocess
