@@ -235,7 +235,7 @@ std::vector<cv::Mat> tileImages(const Preprocessor& pre) {
 TEST(Preprocessor, AdaptsTheWorkingScaleToTheGsdLikeAFixedScale) {
   const camera::CameraModel camera = camera2592(camera::LensModel::Pinhole);
   const cv::Mat frame = texturedFrame(7);
-  PreprocessOptions adaptive;  // workingGsd_m 0.12, anchor 0.25, ladder [0.125, 1]
+  PreprocessOptions adaptive;      // workingGsd_m 0.12, anchor 0.25, ladder [0.125, 1]
   adaptive.maxWorkingGsd_m = 0.0;  // always the height's rung (the next test: fewer tiles)
   Preprocessor pre;
   std::string why;

@@ -58,7 +58,7 @@ TEST(WorkingScaleLadder, FewerTilesRungStepsDownOnlyWithinTheGsdRatio) {
   const std::array<std::size_t, 5> tiles{1, 1, 2, 4, 4};
   // From 0.28 (4 tiles): 0.24 (2 tiles) is 1.167x coarser, 0.22 (1 tile) 1.27x.
   EXPECT_EQ(fewerTilesRung(ladder, tiles, 4, 1.2), 2U);
-  EXPECT_EQ(fewerTilesRung(ladder, tiles, 4, 1.3), 1U);  // the finest of the 1-tile rungs
+  EXPECT_EQ(fewerTilesRung(ladder, tiles, 4, 1.3), 1U);   // the finest of the 1-tile rungs
   EXPECT_EQ(fewerTilesRung(ladder, tiles, 4, 1.05), 4U);  // 0.26 has as many tiles: stay
   EXPECT_EQ(fewerTilesRung(ladder, tiles, 1, 2.0), 1U);   // nothing fewer than 1 tile
   EXPECT_EQ(fewerTilesRung(ladder, tiles, 4, 1.0), 4U);   // off

@@ -6,11 +6,11 @@
 // history a late or restarted reader receives again does not count twice. periodLine() is the
 // line the subscriber prints for each period ("traffic: drone 1 period 3 [t0, t1) ns: gate
 // north-in forward 3 backward 1 [cars 4, transporters 0] (total 12/4); ..."; cars and
-// transporters are seed 002's categories: trucks and buses are transporters); eventLine() the one for each event.
-// fillOverlay() gives the bird's-eye view its gate labels ("F12 B4"), event marks and text panel.
-// The site's world frame: originFrom() estimates the drones' ENU origin from a sample that gives
-// a point both in ENU and in WGS84 (exact at that point; the flat-frame approximation of the
-// drones' own frame elsewhere, a few mm per 100 m).
+// transporters are seed 002's categories: trucks and buses are transporters); eventLine() the one
+// for each event. fillOverlay() gives the bird's-eye view its gate labels ("F12 B4"), event marks
+// and text panel. The site's world frame: originFrom() estimates the drones' ENU origin from a
+// sample that gives a point both in ENU and in WGS84 (exact at that point; the flat-frame
+// approximation of the drones' own frame elsewhere, a few mm per 100 m).
 #pragma once
 
 #include <cstdint>

@@ -309,8 +309,7 @@ Acceptance accept(const SequenceResult& r) {
     a.directionError =
         static_cast<double>(r.directionCellError) / static_cast<double>(r.truthTotal);
     a.typeError = static_cast<double>(r.typeCellError) / static_cast<double>(r.truthTotal);
-    a.categoryError =
-        static_cast<double>(r.categoryCellError) / static_cast<double>(r.truthTotal);
+    a.categoryError = static_cast<double>(r.categoryCellError) / static_cast<double>(r.truthTotal);
   } else {
     a.countError = a.directionError = a.typeError = a.categoryError =
         r.measuredTotal > 0 ? 1.0 : 0.0;
@@ -354,8 +353,8 @@ void printResult(const SequenceResult& r, bool details, std::ostream& out) {
       << " (sum of |measured - truth| over the cells / truth; acceptance <= 2 % each): "
       << (a.countsPass ? "pass" : "FAIL") << "\n";
   out << "  gate counts by gate, direction and seed 002's category (car; transporter: large): "
-      << percent(a.categoryError) << " (acceptance <= 2 %): "
-      << (a.categoryError <= 0.02 ? "pass" : "FAIL") << "\n";
+      << percent(a.categoryError)
+      << " (acceptance <= 2 %): " << (a.categoryError <= 0.02 ? "pass" : "FAIL") << "\n";
   out << "  turning movements: " << r.movementVehicles << " true vehicles crossed two gates, "
       << r.movementAgreeing << " matched tracks with the same origin -> destination ("
       << r.movementUnmatched << " without a track): " << percent(a.movementShare)

@@ -248,8 +248,7 @@ bool Preprocessor::adaptToGsd(double frameGsd_m) {
   if (!initialised_ || !(options_.workingGsd_m > 0.0) || rungs_.size() < 2) {
     return false;
   }
-  idealRung_ =
-      chooseRung(workingScales(), idealRung_, frameGsd_m / options_.workingGsd_m);
+  idealRung_ = chooseRung(workingScales(), idealRung_, frameGsd_m / options_.workingGsd_m);
   const std::size_t next =
       options_.maxWorkingGsd_m > 0.0
           ? fewerTilesRung(workingScales(), {tileCounts_.data(), rungs_.size()}, idealRung_,
