@@ -188,59 +188,68 @@ TEST(TileBorder, AStraddlingVehicleIsDetectedOnceWheneverItsWholeTileFindsIt) {
 // stage marks it (Detection::atFrameEdge, with the share of its box inside the frame) for the
 // tracker, and only such detections.
 TEST(FrameBorder, DetectionsOfVehiclesCutByTheFrameBorderAreMarked) {
-  // Cars drive in and out of the frame on a straight road (v5 finds two strongly cut ones
-  // there; at the intersection of seed 9105 only one). Marking, not recall, is tested:
-  // a low threshold keeps the weak detections of cut vehicles.
-  vp::sim::Simulator simulator;
-  vp::sim::FrameOutput frame;
-  vp::detection::DetectionStage stage;
-  vp::preprocess::Preprocessor preprocessor;
-  ASSERT_NO_FATAL_FAILURE(prepare(heldOutFrame(vp::sim::SceneKind::Straight, 9105), 0.1F, 0.5,
-                                  simulator, frame, stage, preprocessor));
-  std::vector<Detection> all(vp::detection::kMaxDetectionsPerFrame);
-  std::size_t count = 0;
-  ASSERT_EQ(stage.run(preprocessor.output(), all, &count), vp::detection::DetectionStatus::Ok);
-  all.resize(count);
-
-  const double w = frame.image.cols, h = frame.image.rows;
+  // Cars drive in and out of the frame on a straight road (v5 finds two strongly cut ones in
+  // seed 9105's first frame on x86-64). Marking, not recall, is tested: a low threshold keeps
+  // the weak detections of cut vehicles. The simulator draws another scene from the same seed
+  // on a CPU that fuses multiply-adds (aarch64, docs/simulator.md "Determinism"), so the next
+  // seeds are taken until the frames hold two cut vehicles the detector finds.
   int cutFound = 0, cutMarked = 0, insideFound = 0, insideMarked = 0, insideShareNotOne = 0;
-  for (const auto& object : frame.objects) {
-    const RotatedBox& truth = object.imageBox;
-    // The detection lying most on the vehicle (a cut vehicle's box is only its visible part,
-    // so its centre can be far from the whole vehicle's): at least half of it on the truth.
-    const Detection* best = nullptr;
-    double bestShare = 0.5;
-    for (const Detection& d : all) {
-      const double share = vp::geometry::intersectionArea(truth, d.box) / vp::geometry::area(d.box);
-      if (share > bestShare) {
-        bestShare = share;
-        best = &d;
+  for (const std::uint64_t seed : {9105U, 9106U, 9107U, 9108U}) {
+    if (cutFound >= 2 && insideFound >= 10) {
+      break;
+    }
+    vp::sim::Simulator simulator;
+    vp::sim::FrameOutput frame;
+    vp::detection::DetectionStage stage;
+    vp::preprocess::Preprocessor preprocessor;
+    ASSERT_NO_FATAL_FAILURE(prepare(heldOutFrame(vp::sim::SceneKind::Straight, seed), 0.1F, 0.5,
+                                    simulator, frame, stage, preprocessor));
+    std::vector<Detection> all(vp::detection::kMaxDetectionsPerFrame);
+    std::size_t count = 0;
+    ASSERT_EQ(stage.run(preprocessor.output(), all, &count), vp::detection::DetectionStatus::Ok);
+    all.resize(count);
+
+    const double w = frame.image.cols, h = frame.image.rows;
+    for (const auto& object : frame.objects) {
+      const RotatedBox& truth = object.imageBox;
+      // The detection lying most on the vehicle (a cut vehicle's box is only its visible part,
+      // so its centre can be far from the whole vehicle's): at least half of it on the truth.
+      const Detection* best = nullptr;
+      double bestShare = 0.5;
+      for (const Detection& d : all) {
+        const double share =
+            vp::geometry::intersectionArea(truth, d.box) / vp::geometry::area(d.box);
+        if (share > bestShare) {
+          bestShare = share;
+          best = &d;
+        }
       }
-    }
-    if (best == nullptr || object.occlusion > 0.5) {
-      continue;
-    }
-    const double reach = truth.length;  // a car length from every border: wholly inside
-    if (object.truncation > 0.1) {
-      ++cutFound;
-      cutMarked += best->atFrameEdge;
-      // The share of the box inside the frame, for the tracker (its partial detections).
-      const vp::geometry::RotatedBox image{0.5 * w - 0.5, 0.5 * h - 0.5, w, h, 0.0};
-      EXPECT_NEAR(best->insideShare,
-                  vp::geometry::intersectionArea(best->box, image) / vp::geometry::area(best->box),
-                  1e-4);
-      std::printf("cut vehicle: truncation %.2f, detection inside share %.2f\n", object.truncation,
-                  static_cast<double>(best->insideShare));
-    } else if (object.truncation == 0.0 && truth.cx > reach && truth.cx < w - reach &&
-               truth.cy > reach && truth.cy < h - reach) {
-      ++insideFound;
-      insideMarked += best->atFrameEdge;
-      insideShareNotOne += best->insideShare != 1.0F;
+      if (best == nullptr || object.occlusion > 0.5) {
+        continue;
+      }
+      const double reach = truth.length;  // a car length from every border: wholly inside
+      if (object.truncation > 0.1) {
+        ++cutFound;
+        cutMarked += best->atFrameEdge;
+        // The share of the box inside the frame, for the tracker (its partial detections).
+        const vp::geometry::RotatedBox image{0.5 * w - 0.5, 0.5 * h - 0.5, w, h, 0.0};
+        EXPECT_NEAR(
+            best->insideShare,
+            vp::geometry::intersectionArea(best->box, image) / vp::geometry::area(best->box), 1e-4);
+        std::printf("seed %llu cut vehicle: truncation %.2f, detection inside share %.2f\n",
+                    static_cast<unsigned long long>(seed), object.truncation,
+                    static_cast<double>(best->insideShare));
+      } else if (object.truncation == 0.0 && truth.cx > reach && truth.cx < w - reach &&
+                 truth.cy > reach && truth.cy < h - reach) {
+        ++insideFound;
+        insideMarked += best->atFrameEdge;
+        insideShareNotOne += best->insideShare != 1.0F;
+      }
     }
   }
   std::printf("frame border: %d cut vehicles found, %d marked; %d inside found, %d marked\n",
               cutFound, cutMarked, insideFound, insideMarked);
-  EXPECT_GE(cutFound, 2) << "the scene must put vehicles across the frame's border";
+  EXPECT_GE(cutFound, 2) << "the scenes must put vehicles across the frame's border";
   EXPECT_EQ(cutMarked, cutFound);
   EXPECT_GE(insideFound, 10);
   EXPECT_EQ(insideMarked, 0);
