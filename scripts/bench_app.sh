@@ -15,6 +15,10 @@
 # thread's pools get N - 1); RUNS=3 (default 1) repeats each run and prints the median of the
 # figures over the runs (fps, per-stage and end-to-end median/p99) after the single runs.
 # Without SEQUENCE_DIR, FRAMES frames are rendered with vp_simulate (seed 5) into /tmp.
+# FRAME_FORMAT=ppm replays a copy of the sequence whose frames are uncompressed PPM (made once
+# beside it, SEQUENCE_DIR.ppm, with /usr/bin/python3 and OpenCV): the replay's capture thread
+# then reads the frames instead of decoding 2592 x 2048 JPEGs on the same cores, closer to a
+# camera that delivers raw frames (the default, jpg, replays the frames as recorded).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${BUILD:-build/release}"
@@ -34,6 +38,35 @@ if [ -z "$sequence" ]; then
     "$build/tools/simulator/vp_simulate" --scene intersection --seed 5 --frames "$frames" \
       --out "$sequence" >/dev/null
   fi
+fi
+if [ "${FRAME_FORMAT:-jpg}" = ppm ]; then
+  raw="${sequence%/}.ppm"
+  if [ ! -f "$raw/frames.csv" ]; then
+    rm -rf "$raw"
+    cp -r "$sequence" "$raw"
+    /usr/bin/python3 - "$raw" <<'PY'
+import os, sys
+import cv2
+os.chdir(sys.argv[1])
+lines = open("frames.csv").read().splitlines()
+out = [lines[0]]
+for line in lines[1:]:
+    parts = line.split(",")
+    image = cv2.imread(parts[-1], cv2.IMREAD_COLOR)
+    if image is None:
+        sys.exit(f"bench_app.sh: cannot decode {parts[-1]}")
+    ppm = os.path.splitext(parts[-1])[0] + ".ppm"
+    if not cv2.imwrite(ppm, image):
+        sys.exit(f"bench_app.sh: cannot write {ppm}")
+    os.remove(parts[-1])
+    out.append(",".join(parts[:-1] + [ppm]))
+open("frames.csv", "w").write("\n".join(out) + "\n")
+PY
+  fi
+  sequence="$raw"
+elif [ "${FRAME_FORMAT:-jpg}" != jpg ]; then
+  echo "bench_app.sh: FRAME_FORMAT must be jpg or ppm, got '${FRAME_FORMAT}'" >&2
+  exit 2
 fi
 echo "bench_app: $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg); sequence $sequence; logs in $out"
 
