@@ -1,5 +1,6 @@
 // The one-sweep resize (AreaResizer with gains) against the straightforward reference: the
-// white-balance tables applied to the whole frame, then cv::resize(INTER_AREA). Every
+// white-balance tables applied to the whole frame, then cv::resize(INTER_AREA) (on x86-64; see
+// referenceAreaResize for other CPUs). Every
 // instruction-set variant of the kernels (scalar - what ARM builds run -, SSE2, AVX2 where the
 // CPU has it) must give the same bytes, on random and simulated frames, odd sizes, integer and
 // fractional factors, saturating gains, and any split of the rows over threads.
@@ -72,6 +73,26 @@ cv::Mat referenceBalanced(const cv::Mat& frame, const std::array<float, 3>& gain
   return balanced;
 }
 
+// The area resize the kernels must equal: cv::resize(INTER_AREA) on x86-64, where the training
+// pipeline runs; on other CPUs the plain AreaResizer (one block, no gains), whose own tests pin
+// its output to x86-64 OpenCV's by hash (area_resizer_test.cpp: arm64 OpenCV fuses the
+// multiply-adds of its fractional path and is not that reference).
+cv::Mat referenceAreaResize(const cv::Mat& src, cv::Size dst) {
+  cv::Mat out;
+#if defined(__x86_64__)
+  cv::resize(src, out, dst, 0, 0, cv::INTER_AREA);
+#else
+  const kernels::Isa isa = kernels::activeIsa();
+  kernels::limitIsa(Isa::Scalar);
+  AreaResizer plain;
+  EXPECT_TRUE(plain.init(src.size(), dst, 1));
+  out.create(dst, CV_8UC3);
+  EXPECT_TRUE(plain.apply(src, out));
+  kernels::limitIsa(isa);
+#endif
+  return out;
+}
+
 double maxDifference(const cv::Mat& a, const cv::Mat& b) {
   return cv::norm(a, b, cv::NORM_INF);
 }
@@ -97,8 +118,7 @@ void expectLikeReference(const cv::Mat& src, cv::Size dst, int blocks,
     resizer.applyRows(src, ours, begin, end, b, gains, gains != nullptr ? &gained : nullptr);
   }
   const cv::Mat input = gains != nullptr ? referenceBalanced(src, *gains) : src;
-  cv::Mat reference;
-  cv::resize(input, reference, dst, 0, 0, cv::INTER_AREA);
+  const cv::Mat reference = referenceAreaResize(input, dst);
   EXPECT_EQ(maxDifference(ours, reference), 0.0);
   if (gains != nullptr) {
     // Every source row written once, as the tables make it.
@@ -193,8 +213,7 @@ TEST(FusedPreprocessor, WhiteBalancedFrameAndTilesEqualTheReference) {
       const cv::Mat balanced = referenceBalanced(frame, gains.gain);
       EXPECT_EQ(maxDifference(out.frame, balanced), 0.0);
       const cv::Size working(out.geometry.workingWidth_px, out.geometry.workingHeight_px);
-      cv::Mat small;
-      cv::resize(balanced, small, working, 0, 0, cv::INTER_AREA);
+      const cv::Mat small = referenceAreaResize(balanced, working);
       const TileView& tile = out.tiles[0];
       const cv::Mat tileMat(tile.rect.height_px, tile.rect.width_px, CV_8UC3,
                             const_cast<std::uint8_t*>(tile.data), tile.strideBytes);
