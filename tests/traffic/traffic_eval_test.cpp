@@ -31,32 +31,44 @@ class TrafficEval : public ::testing::Test {
     dir_ =
         new fs::path(fs::temp_directory_path() / ("vp_traffic_eval_" + std::to_string(::getpid())));
     fs::remove_all(*dir_);
-    sim::SimOptions options;
-    options.scene = sim::SceneKind::Intersection;
-    options.seed = 7;
-    options.frames = 150;  // 15 s at 10 Hz
-    options.outDir = (*dir_ / "intersection_7").string();
-    options.width = 160;
-    options.height = 128;
-    options.png = true;
-    options.supersampling = 1;
-    options.asmPath = std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml";
-    sim::Simulator simulator;
-    std::string why;
-    ASSERT_TRUE(simulator.init(options, &why) && simulator.write(&why)) << why;
+    // Seed 7 has vehicles crossing two gates on x86-64; the simulator draws other scenes from a
+    // seed on CPUs whose math library rounds differently (docs/simulator.md "Determinism"), so
+    // the next seeds are taken until the 15 s hold such a vehicle.
+    for (const std::uint64_t seed : {7U, 8U, 9U, 10U, 11U, 12U}) {
+      sim::SimOptions options;
+      options.scene = sim::SceneKind::Intersection;
+      options.seed = seed;
+      options.frames = 150;  // 15 s at 10 Hz
+      options.outDir = (*dir_ / ("intersection_" + std::to_string(seed))).string();
+      options.width = 160;
+      options.height = 128;
+      options.png = true;
+      options.supersampling = 1;
+      options.asmPath = std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml";
+      sim::Simulator simulator;
+      std::string why;
+      ASSERT_TRUE(simulator.init(options, &why) && simulator.write(&why)) << why;
+      sequence_ = options.outDir;
+      const SequenceResult perfect =
+          evaluate(writeTracks("probe.csv", [](std::size_t, const sequence::ObjectTruth&,
+                                               tracking::TrackState&) { return true; }));
+      if (perfect.movementVehicles > 0) {
+        return;
+      }
+    }
   }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);
     delete dir_;
   }
 
-  std::string sequence() const { return (*dir_ / "intersection_7").string(); }
+  static std::string sequence() { return sequence_; }
 
   // The ground truth as a trajectory file; edit(frame index, truth, track) may change the track
   // and returns false to leave the row out.
-  std::string writeTracks(const std::string& name,
-                          const std::function<bool(std::size_t, const sequence::ObjectTruth&,
-                                                   tracking::TrackState&)>& edit) const {
+  static std::string writeTracks(const std::string& name,
+                                 const std::function<bool(std::size_t, const sequence::ObjectTruth&,
+                                                          tracking::TrackState&)>& edit) {
     sequence::SequenceReader reader;
     std::string why;
     EXPECT_TRUE(reader.open(sequence(), &why)) << why;
@@ -90,7 +102,7 @@ class TrafficEval : public ::testing::Test {
     return path;
   }
 
-  SequenceResult evaluate(const std::string& tracks) const {
+  static SequenceResult evaluate(const std::string& tracks) {
     SequenceResult result;
     std::string why;
     EXPECT_TRUE(evaluateSequence({sequence(), tracks}, EvalOptions{}, &result, &why)) << why;
@@ -98,9 +110,11 @@ class TrafficEval : public ::testing::Test {
   }
 
   static fs::path* dir_;
+  static std::string sequence_;  // the chosen sequence
 };
 
 fs::path* TrafficEval::dir_ = nullptr;
+std::string TrafficEval::sequence_;
 
 TEST_F(TrafficEval, PerfectTracksAgreeWithTheTruth) {
   const SequenceResult r =
@@ -216,7 +230,9 @@ TEST_F(TrafficEval, TheCommandReportsAndRefusesBadInput) {
                            out, err),
             0)
       << err.str();
-  EXPECT_NE(out.str().find("intersection_7: 150 frames"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find(fs::path(sequence()).filename().string() + ": 150 frames"),
+            std::string::npos)
+      << out.str();
   EXPECT_NE(out.str().find("gate counts (gate direction type: truth measured)"), std::string::npos);
   EXPECT_NE(out.str().find("turning movements: "), std::string::npos);
   EXPECT_NE(out.str().find("queue length: "), std::string::npos);
