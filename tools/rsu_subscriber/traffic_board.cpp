@@ -3,6 +3,8 @@
 
 #include <sstream>
 
+#include "shape/vehicle_model.hpp"
+
 namespace vp::rsu {
 namespace {
 
@@ -16,9 +18,6 @@ std::uint64_t sum(const std::uint32_t (&byType)[7]) {
   }
   return total;
 }
-
-// Seed 002's categories: the last type (large: buses, trucks) are transporters, the rest cars.
-constexpr std::size_t kTransporterType = 6;
 
 }  // namespace
 
@@ -64,8 +63,13 @@ std::string TrafficBoard::periodLine(const vp_msg_TrafficStatistics& s) const {
   for (std::uint32_t g = 0; g < s.gates._length; ++g) {
     const vp_msg_TrafficGateCount& gate = s.gates._buffer[g];
     const auto total = totals_.find(gate.gate_id);
-    const std::uint64_t transporters =
-        std::uint64_t{gate.forward[kTransporterType]} + gate.backward[kTransporterType];
+    std::uint64_t transporters = 0;  // seed 002's category (shape::categoryOf)
+    for (std::size_t t = 0; t < 7; ++t) {
+      if (shape::categoryOf(static_cast<shape::VehicleType>(t)) ==
+          shape::VehicleCategory::Transporter) {
+        transporters += std::uint64_t{gate.forward[t]} + gate.backward[t];
+      }
+    }
     line << (g == 0 ? " " : "; ") << "gate " << gate.gate_id << " forward " << sum(gate.forward)
          << " backward " << sum(gate.backward) << " [cars "
          << sum(gate.forward) + sum(gate.backward) - transporters << ", transporters "

@@ -186,8 +186,16 @@ bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraMo
       tile.strideBytes = working_.step[0];
     }
   }
+  // The rung each height's rung runs at (fewerTilesRung depends on that rung alone): once here.
+  std::array<std::size_t, kMaxScaleRungs> tileCounts{};
   for (std::size_t i = 0; i < rungs_.size(); ++i) {
-    tileCounts_[i] = rungs_[i].tileCount;
+    tileCounts[i] = rungs_[i].tileCount;
+  }
+  for (std::size_t i = 0; i < rungs_.size(); ++i) {
+    runRung_[i] = options.workingGsd_m > 0.0 && options.maxWorkingGsd_m > 0.0
+                      ? fewerTilesRung(workingScales(), {tileCounts.data(), rungs_.size()}, i,
+                                       options.maxWorkingGsd_m / options.workingGsd_m)
+                      : i;
   }
   idealRung_ = rung_;
   output_ = PreprocessedFrame{};
@@ -249,11 +257,7 @@ bool Preprocessor::adaptToGsd(double frameGsd_m) {
     return false;
   }
   idealRung_ = chooseRung(workingScales(), idealRung_, frameGsd_m / options_.workingGsd_m);
-  const std::size_t next =
-      options_.maxWorkingGsd_m > 0.0
-          ? fewerTilesRung(workingScales(), {tileCounts_.data(), rungs_.size()}, idealRung_,
-                           options_.maxWorkingGsd_m / options_.workingGsd_m)
-          : idealRung_;
+  const std::size_t next = runRung_[idealRung_];
   if (next == rung_) {
     return false;
   }

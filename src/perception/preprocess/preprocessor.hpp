@@ -214,7 +214,8 @@ class Preprocessor {
   std::array<double, kMaxScaleRungs> scales_{};
   std::size_t rung_ = 0;       // the rung in use
   std::size_t idealRung_ = 0;  // the height's rung (chooseRung's state); rung_ may be coarser
-  std::array<std::size_t, kMaxScaleRungs> tileCounts_{};
+  std::array<std::size_t, kMaxScaleRungs> runRung_{};  // per height's rung: the rung run
+
   PreprocessedFrame output_{};
   std::array<char, 200> lastError_{};
 };
