@@ -12,7 +12,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git python3
   libeigen3-dev libopencv-dev libyaml-cpp-dev libgeographiclib-dev
   libtiff-dev libgeotiff-dev
-  libxnnpack-dev libpthreadpool-dev libonnx-dev libprotobuf-dev libdnnl-dev
+  libxnnpack-dev libpthreadpool-dev libonnx-dev libprotobuf-dev libdnnl-dev ocl-icd-opencl-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   clang-format
   cyclonedds-dev cyclonedds-tools libcycloneddsidl0

@@ -84,6 +84,25 @@ lifting::DronePose toDronePose(const telemetry::PoseSample& sample) {
   return pose;
 }
 
+namespace {
+
+// The options' ranges, the same for a DTM and a plane.
+bool optionsValid(const DetectionLifterOptions& options, std::string* why) {
+  if (options.boxHeightShare >= 0.0 && options.boxHeightShare <= 1.0 &&
+      options.nominalHeight_m > 0.0 && options.nominalHeight_m <= 10.0) {
+    return true;
+  }
+  if (why != nullptr) {
+    *why =
+        "detection lifter: box height share must be in [0, 1] and the nominal height in "
+        "(0, 10] m, got " +
+        std::to_string(options.boxHeightShare) + " and " + std::to_string(options.nominalHeight_m);
+  }
+  return false;
+}
+
+}  // namespace
+
 bool DetectionLifter::init(const terrain::TerrainModel& terrain, const geodesy::LocalFrame& frame,
                            const shape::ActiveShapeModel& shapeModel, std::string* why) {
   return init(terrain, frame, shapeModel, DetectionLifterOptions{}, why);
@@ -98,15 +117,7 @@ bool DetectionLifter::init(const terrain::TerrainModel& terrain, const geodesy::
     }
     return false;
   }
-  if (!(options.boxHeightShare >= 0.0 && options.boxHeightShare <= 1.0) ||
-      !(options.nominalHeight_m > 0.0 && options.nominalHeight_m <= 10.0)) {
-    if (why != nullptr) {
-      *why =
-          "detection lifter: box height share must be in [0, 1] and the nominal height in "
-          "(0, 10] m, got " +
-          std::to_string(options.boxHeightShare) + " and " +
-          std::to_string(options.nominalHeight_m);
-    }
+  if (!optionsValid(options, why)) {
     return false;
   }
   options_ = options;
@@ -126,16 +137,7 @@ bool DetectionLifter::init(const lifting::PlaneLifter& plane, const geodesy::Loc
     }
     return false;
   }
-  // The same option checks as with a DTM (any terrain passes them here).
-  if (!(options.boxHeightShare >= 0.0 && options.boxHeightShare <= 1.0) ||
-      !(options.nominalHeight_m > 0.0 && options.nominalHeight_m <= 10.0)) {
-    if (why != nullptr) {
-      *why =
-          "detection lifter: box height share must be in [0, 1] and the nominal height in "
-          "(0, 10] m, got " +
-          std::to_string(options.boxHeightShare) + " and " +
-          std::to_string(options.nominalHeight_m);
-    }
+  if (!optionsValid(options, why)) {
     return false;
   }
   options_ = options;
