@@ -13,10 +13,17 @@ used at most once.
 Prints and writes (--out, JSON) precision, recall, F1, the median and MAD (x1.4826) of the
 absolute heading error of matched vehicles, the share reversed (error > 90 degrees) and the
 cumulative histogram of the heading error; --list-reversed also lists each reversed vehicle
-(image, label box, detection) for pictures of the failures.
+(image, label box, detection), --list-false each detection matching no label and --list-missed
+each label no detection matched, for pictures of the failures (``failure_sheet.py``).
+
+The false detections are also counted by where they are: those whose box reaches beyond the
+image (a vehicle cut by the border; the set labels none, so every such box is false by its
+rule) and the rest; ``precision_inside`` is the precision without the former. It explains the
+official figure, it does not replace it.
 
   tools/detector/eval_rotated_real.py --root ../shared/data/real/bev-intersection-de \
-      --detections dets.csv [--out report.json] [--list-reversed reversed.csv]
+      --detections dets.csv [--out report.json] [--list-reversed reversed.csv] \
+      [--list-false false.csv] [--list-missed missed.csv]
 
 Run with Debian's Python (/usr/bin/python3).
 """
@@ -31,6 +38,7 @@ import os
 import sys
 from typing import Dict, List, Tuple
 
+import cv2
 import numpy as np
 
 if __package__ in (None, ""):
@@ -38,7 +46,7 @@ if __package__ in (None, ""):
 
 from detector.datasets import DatasetError  # noqa: E402
 from detector.evaluate import match  # noqa: E402
-from detector.geometry import abs_angle_difference  # noqa: E402
+from detector.geometry import abs_angle_difference, enclosing_aabb  # noqa: E402
 from detector.mine_negatives import read_detections  # noqa: E402
 
 
@@ -72,8 +80,20 @@ def read_rotated_labels(root: str) -> Dict[str, np.ndarray]:
     return out
 
 
-def evaluate(labels: Dict[str, np.ndarray], dets: Dict, iou: float = 0.5, min_score: float = 0.0):
-    tp = n_det = n_lab = 0
+def reaches_border(box: np.ndarray, size: Tuple[int, int]) -> bool:
+    """Whether a rotated box (cx, cy, length, width, angle) reaches beyond a (width, height)
+    image."""
+    cx, cy, w, h = enclosing_aabb(box)[0]
+    return bool(cx - w / 2 < 0 or cy - h / 2 < 0 or cx + w / 2 > size[0] or cy + h / 2 > size[1])
+
+
+def evaluate(labels: Dict[str, np.ndarray], dets: Dict, iou: float = 0.5, min_score: float = 0.0,
+             failures: Dict[str, list] | None = None,
+             sizes: Dict[str, Tuple[int, int]] | None = None):
+    """(report, reversed rows); with ``failures`` (a dict) also fills its ``false`` rows
+    (image, score, detection box) and ``missed`` rows (image, label box); with ``sizes`` (stem
+    -> image width, height) the report splits the false detections by the border."""
+    tp = n_det = n_lab = false_border = 0
     errors, reversed_rows = [], []
     for stem, boxes in labels.items():
         found = [(s, b) for s, b in dets.get(stem, []) if s >= min_score]
@@ -82,6 +102,17 @@ def evaluate(labels: Dict[str, np.ndarray], dets: Dict, iou: float = 0.5, min_sc
         pairs, _, _ = match(np.array([b for _, b in found]).reshape(-1, 5),
                             np.array([sc for sc, _ in found]), boxes.reshape(-1, 5),
                             np.zeros(len(boxes), bool), iou)
+        used = {k for k, _ in pairs}
+        if sizes is not None and stem in sizes:
+            false_border += sum(1 for k in range(len(found))
+                                if k not in used and reaches_border(found[k][1], sizes[stem]))
+        if failures is not None:
+            used_det = {k for k, _ in pairs}
+            used_lab = {j for _, j in pairs}
+            failures.setdefault("false", []).extend(
+                (stem, found[k][0], *found[k][1]) for k in range(len(found)) if k not in used_det)
+            failures.setdefault("missed", []).extend(
+                (stem, *boxes[j]) for j in range(len(boxes)) if j not in used_lab)
         for k, j in pairs:
             tp += 1
             err = math.degrees(float(abs_angle_difference(found[k][1][4], boxes[j][4])))
@@ -97,6 +128,10 @@ def evaluate(labels: Dict[str, np.ndarray], dets: Dict, iou: float = 0.5, min_sc
         "precision": p, "recall": r, "f1": 2 * p * r / (p + r) if p + r else 0.0,
         "heading_median_deg": med,
         "heading_mad_deg": float(1.4826 * np.median(np.abs(e - med))) if len(e) else math.nan,
+        "false_detections": n_det - tp,
+        "false_reaching_border": false_border if sizes is not None else None,
+        "precision_inside": (tp / (n_det - false_border) if n_det - false_border else 0.0)
+        if sizes is not None else None,
         "reversed": int((e > 90).sum()), "reversed_share": float((e > 90).mean()) if len(e) else math.nan,
         "heading_cumulative": {f"<={t}": float((e <= t).mean()) if len(e) else math.nan
                                for t in (2, 5, 10, 20, 45, 90, 135, 180)},
@@ -113,6 +148,8 @@ def main(argv=None) -> int:
     p.add_argument("--min-score", type=float, default=0.0, help="ignore detections below")
     p.add_argument("--out", default=None, help="write the report as JSON")
     p.add_argument("--list-reversed", default=None, help="write the reversed vehicles as CSV")
+    p.add_argument("--list-false", default=None, help="write the detections matching no label as CSV")
+    p.add_argument("--list-missed", default=None, help="write the labels no detection matched as CSV")
     a = p.parse_args(argv)
     if not 0 < a.iou <= 1:
         p.error("--iou must be in (0, 1]")
@@ -127,11 +164,21 @@ def main(argv=None) -> int:
         print(f"eval_rotated_real.py: {a.detections}: {len(unknown)} images without labels, "
               f"e.g. '{unknown[0]}'", file=sys.stderr)
         return 1
-    report, rows = evaluate(labels, dets, a.iou, a.min_score)
+    sizes = {}
+    for stem in labels:
+        hits = sorted(glob.glob(os.path.join(a.root, "images", glob.escape(stem) + ".*")))
+        img = cv2.imread(hits[0], cv2.IMREAD_UNCHANGED) if hits else None
+        if img is not None:
+            sizes[stem] = (img.shape[1], img.shape[0])
+    failures: Dict[str, list] = {}
+    report, rows = evaluate(labels, dets, a.iou, a.min_score, failures, sizes)
     report["detections_file"] = os.path.abspath(a.detections)
     print(f"P {report['precision']:.3f}  R {report['recall']:.3f}  F1 {report['f1']:.3f}  "
           f"heading median {report['heading_median_deg']:.2f} deg  reversed "
           f"{report['reversed']}/{report['true_positives']} ({100 * report['reversed_share']:.1f} %)")
+    print(f"false detections {report['false_detections']}: {report['false_reaching_border']} reach the "
+          f"image border (the set labels no vehicle cut by it), precision without them "
+          f"{report['precision_inside']:.3f}")
     if a.out:
         with open(a.out, "w") as f:
             json.dump(report, f, indent=2)
@@ -141,6 +188,16 @@ def main(argv=None) -> int:
             w.writerow(["image", "cx_px", "cy_px", "length_px", "width_px", "heading_rad", "score",
                         "det_cx_px", "det_cy_px", "det_length_px", "det_width_px", "det_angle_rad"])
             w.writerows(rows)
+    lists = ((a.list_false, "false", ["image", "score", "det_cx_px", "det_cy_px", "det_length_px",
+                                      "det_width_px", "det_angle_rad"]),
+             (a.list_missed, "missed", ["image", "cx_px", "cy_px", "length_px", "width_px",
+                                        "heading_rad"]))
+    for path, key, header in lists:
+        if path:
+            with open(path, "w", newline="") as f:
+                w = csv.writer(f)
+                w.writerow(header)
+                w.writerows(failures.get(key, []))
     return 0
 
 

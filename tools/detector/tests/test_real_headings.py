@@ -1,5 +1,6 @@
 """Real driving-direction labels: real_headings.py labels vehicles from their lane-mates (and
-from motion), eval_rotated_real.py measures heading on rotated real labels, and train.py
+from motion), eval_rotated_real.py measures heading on rotated real labels (failure_sheet.py
+draws its failure lists), and train.py
 --heading-samples / --flip-branch / --flip-head-only train the front/back output on them."""
 
 import io
@@ -14,7 +15,7 @@ import cv2
 import numpy as np
 
 import _common  # noqa: F401
-from detector import eval_rotated_real, mine_negatives, real_headings, train
+from detector import eval_rotated_real, failure_sheet, mine_negatives, real_headings, train
 from detector.datasets import read_sequence
 from test_train_smoke import tiny_run_args, write_synthetic_sequence
 
@@ -90,12 +91,21 @@ class RotatedRealEvaluation(unittest.TestCase):
                       (0.8, np.array([300, 101, 58, 25, math.pi / 2 + 0.02])),  # good
                       (0.7, np.array([500, 500, 60, 25, 0.0]))],              # false
                 "b": []}
-        report, rows = eval_rotated_real.evaluate(labels, dets)
+        failures = {}
+        report, rows = eval_rotated_real.evaluate(labels, dets, failures=failures)
+        self.assertEqual([(f[0], f[1]) for f in failures["false"]], [("a", 0.7)])
+        self.assertEqual([(m[0], m[1]) for m in failures["missed"]], [("b", 100.0)])
         self.assertEqual(report["true_positives"], 2)
         self.assertAlmostEqual(report["precision"], 2 / 3)
         self.assertAlmostEqual(report["recall"], 2 / 3)
         self.assertEqual(report["reversed"], 1)
         self.assertEqual([r[0] for r in rows], ["a"])
+        # With the image sizes, a false box reaching beyond the image is counted apart.
+        dets["b"] = [(0.6, np.array([10.0, 300.0, 60, 25, 0.0]))]
+        report, _ = eval_rotated_real.evaluate(labels, dets, sizes={"a": (640, 640), "b": (640, 480)})
+        self.assertEqual(report["false_detections"], 2)
+        self.assertEqual(report["false_reaching_border"], 1)
+        self.assertAlmostEqual(report["precision_inside"], 2 / 3)
 
     def test_malformed_label_names_file_and_line(self):
         with tempfile.TemporaryDirectory() as root:
@@ -105,6 +115,41 @@ class RotatedRealEvaluation(unittest.TestCase):
             with self.assertRaises(Exception) as e:
                 eval_rotated_real.read_rotated_labels(root)
             self.assertIn("x.txt:2:", str(e.exception))
+
+
+class FailureSheet(unittest.TestCase):
+    def setUp(self):
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        self.root = tmp.name
+        os.makedirs(os.path.join(self.root, "images"))
+        cv2.imwrite(os.path.join(self.root, "images", "f_1.png"), np.full((200, 300, 3), 128, np.uint8))
+
+    def write_list(self, text):
+        path = os.path.join(self.root, "list.csv")
+        with open(path, "w") as f:
+            f.write(text)
+        return path
+
+    def test_a_tile_per_row_with_the_detection_drawn_in_red(self):
+        listing = self.write_list("image,score,det_cx_px,det_cy_px,det_length_px,det_width_px,det_angle_rad\n"
+                                  "f_1,0.9,150,100,60,25,0.0\nf_1,0.8,10,10,60,25,1.0\n")
+        out = os.path.join(self.root, "sheet.png")
+        with redirect_stdout(io.StringIO()):
+            self.assertEqual(failure_sheet.main(["--root", self.root, "--list", listing, "--out", out,
+                                                 "--tile-px", "64", "--columns", "3"]), 0)
+        sheet = cv2.imread(out)
+        self.assertEqual(sheet.shape[:2], (64 + 16, 3 * 64))  # two tiles and a blank, one row
+        first = sheet[:64, :64].astype(int)
+        red = (first[..., 2] > 180) & (first[..., 1] < 100)
+        self.assertGreater(int(red.sum()), 20)
+        self.assertGreater(int(red[:, 12:20].sum()), 0)  # the back edge, a quarter of the tile in
+
+    def test_a_row_without_a_box_names_the_file_and_line(self):
+        listing = self.write_list("image,score\nf_1,0.9\n")
+        with self.assertRaises(failure_sheet.SheetError) as e:
+            failure_sheet.read_list(listing)
+        self.assertIn("list.csv:2", str(e.exception))
 
 
 class HeadingTraining(unittest.TestCase):
