@@ -110,7 +110,7 @@ void Renderer::appendVehicle(const VehicleModel& model, const VehiclePose& pose,
     s.objectId = objectId;
     surfaces.push_back(s);
   };
-  // Slots follow the Material enum from Paint to Underbody.
+  // Slots follow the Material enum from Paint to RoofPaint.
   surface(Material::Paint, model.look.paint, 0.25F + 0.5F * model.look.metallic, 60.0F);
   surface(Material::Glass, model.look.glassTint, 0.9F, 150.0F);
   surface(Material::Tyre, {0.03F, 0.03F, 0.03F}, 0.05F, 10.0F);
@@ -118,6 +118,8 @@ void Renderer::appendVehicle(const VehicleModel& model, const VehiclePose& pose,
   surface(Material::HeadLight, {0.6F, 0.6F, 0.58F}, 0.8F, 80.0F);
   surface(Material::TailLight, {0.45F, 0.03F, 0.03F}, 0.5F, 60.0F);
   surface(Material::Underbody, {0.025F, 0.025F, 0.025F}, 0.0F, 10.0F);
+  surface(Material::RoofPaint, model.look.twoTone ? model.look.roofPaint : model.look.paint,
+          0.25F + 0.5F * model.look.metallic, 60.0F);
   const double c = std::cos(pose.heading_rad);
   const double s = std::sin(pose.heading_rad);
   const auto rotate = [&](const Eigen::Vector3d& v) {
@@ -541,6 +543,7 @@ Eigen::Vector3f Renderer::shade(const PinholeView& view, double x, double y, std
       break;
     }
     case Material::Paint:
+    case Material::RoofPaint:
       reflect = 0.35F * specular;
       break;
     case Material::Glass:
@@ -664,6 +667,7 @@ bool Renderer::smoothSurface(std::uint32_t surface) const {
   switch (surfaces_[surface].material) {
     case Material::Canopy:
     case Material::Paint:
+    case Material::RoofPaint:
     case Material::Glass:
     case Material::Tyre:
     case Material::Rim:

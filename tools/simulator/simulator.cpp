@@ -201,7 +201,7 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   if (!asm_.load(asmPath, why)) {
     return false;
   }
-  factory_ = std::make_unique<VehicleFactory>(asm_);
+  factory_ = std::make_unique<VehicleFactory>(asm_, options.twoToneShare);
   traffic_.init(scene_, *factory_, pathHalf, options.warmUpS, kFrameIntervalS, rng);
   sensor_.init(camera_, canvas_, sensorSpec_);
   renderer_.init(scene_, world_, lo, hi, rig_.altitude_m / rig_.intrinsics.fx_px,

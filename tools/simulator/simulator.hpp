@@ -53,6 +53,9 @@ struct SimOptions {
   bool staticHover = false;
   bool instanceMasks = false;  // also write instances/<frame>.png (16-bit object ids)
   double warmUpS = 30.0;
+  // Share of cars with a roof in a contrasting colour (a white roof on a dark car, a black one on
+  // a light car), 0..1. The scene of a seed is the same whatever the share; 0 renders as before.
+  double twoToneShare = 0.0;
 };
 
 struct RigSpec {

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string_view>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -33,6 +36,20 @@ Material materialOf(shape::SurfacePart part) {
       return Material::Underbody;
   }
   return Material::Paint;
+}
+
+// The roof panel is the paint between the four roof corners (vehicle_model.cpp's side profile).
+bool isRoofKeypoint(int index) {
+  static const std::array<bool, shape::kKeypointCount> kRoof = [] {
+    std::array<bool, shape::kKeypointCount> roof{};
+    const auto& names = shape::keypointNames();
+    for (int i = 0; i < shape::kKeypointCount; ++i) {
+      roof[static_cast<std::size_t>(i)] =
+          std::string_view(names[static_cast<std::size_t>(i)]).rfind("roof_", 0) == 0;
+    }
+    return roof;
+  }();
+  return index >= 0 && index < shape::kKeypointCount && kRoof[static_cast<std::size_t>(index)];
 }
 
 void addTriangle(VehicleModel& m, int a, int b, int c, Material material) {
@@ -182,6 +199,18 @@ VehicleLook drawLook(Rng& rng) {
   return look;
 }
 
+void makeTwoTone(VehicleLook& look, Rng& rng) {
+  const Eigen::Vector3f& body = look.paint;
+  const float luminance = 0.2126F * body.x() + 0.7152F * body.y() + 0.0722F * body.z();
+  look.twoTone = true;
+  if (luminance < 0.25F) {  // linear light: every paint but white, silver, beige and yellow
+    look.roofPaint = rng.chance(0.75) ? srgbToLinear(235, 236, 234) : srgbToLinear(175, 178, 182);
+  } else {
+    const double black = rng.uniform(14, 30);
+    look.roofPaint = srgbToLinear(black, black, black * 1.05);
+  }
+}
+
 shape::VehicleType VehicleFactory::drawCarType(Rng& rng) const {
   // Seed 000's UAV data are dominated by estate, compact, sedan and van; sports cars and SUVs
   // are rarer. We keep every type well represented for training.
@@ -203,7 +232,9 @@ std::shared_ptr<const VehicleModel> VehicleFactory::carFromGamma(shape::VehicleT
     m->vertices.emplace_back(k.col(i));
   }
   for (const shape::Triangle& t : shape::mesh()) {
-    addTriangle(*m, t.v[0], t.v[1], t.v[2], materialOf(t.part));
+    const bool roof = look.twoTone && t.part == shape::SurfacePart::Paint &&
+                      isRoofKeypoint(t.v[0]) && isRoofKeypoint(t.v[1]) && isRoofKeypoint(t.v[2]);
+    addTriangle(*m, t.v[0], t.v[1], t.v[2], roof ? Material::RoofPaint : materialOf(t.part));
   }
   const auto& wheels = shape::wheelCentreKeypoints();
   for (int w = 0; w < shape::kWheelCount; ++w) {
@@ -243,7 +274,22 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeCar(Rng& rng,
       gamma.gamma[static_cast<std::size_t>(s)] = static_cast<float>(z[s]);
     }
   }
-  return carFromGamma(type, gamma, drawLook(rng));
+  VehicleLook look = drawLook(rng);
+  if (twoToneShare_ > 0.0) {
+    // Drawn from the car's own shape, not the sequence stream: the scene (every car, its place
+    // and its motion) stays the one the seed gives without two-tone roofs; only roofs change.
+    std::uint64_t h = 1469598103934665603ULL ^ static_cast<std::uint64_t>(type);
+    for (int s = 0; s < n; ++s) {
+      std::uint32_t bits = 0;
+      std::memcpy(&bits, &gamma.gamma[static_cast<std::size_t>(s)], sizeof bits);
+      h = (h ^ bits) * 1099511628211ULL;
+    }
+    Rng own(h);
+    if (own.chance(twoToneShare_)) {
+      makeTwoTone(look, own);
+    }
+  }
+  return carFromGamma(type, gamma, look);
 }
 
 std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {

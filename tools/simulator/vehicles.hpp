@@ -33,6 +33,7 @@ enum class Material : std::uint8_t {
   HeadLight,
   TailLight,
   Underbody,
+  RoofPaint,  // the roof panel of a two-tone car (VehicleLook::roofPaint)
   Wall,
   Roof,
   Canopy,
@@ -50,7 +51,9 @@ struct VehicleTriangle {
 
 struct VehicleLook {
   Eigen::Vector3f paint{0.5F, 0.5F, 0.5F};
-  float metallic = 0.3F;  // specular strength of the clear coat
+  bool twoTone = false;                         // the roof panel in roofPaint, not paint
+  Eigen::Vector3f roofPaint{0.5F, 0.5F, 0.5F};  // used only when twoTone
+  float metallic = 0.3F;                        // specular strength of the clear coat
   Eigen::Vector3f glassTint{0.02F, 0.025F, 0.03F};
   std::string colourName = "grey";
 };
@@ -82,7 +85,10 @@ AxleGeometry axleGeometry(const shape::KeypointModel& keypoints);
 
 class VehicleFactory {
  public:
-  explicit VehicleFactory(const shape::ActiveShapeModel& asmModel) : asm_(&asmModel) {}
+  // twoToneShare: share of cars whose roof is painted in a contrasting colour (0..1), drawn
+  // apart from the sequence stream: the same seed gives the same scene, only roofs repainted.
+  explicit VehicleFactory(const shape::ActiveShapeModel& asmModel, double twoToneShare = 0.0)
+      : asm_(&asmModel), twoToneShare_(twoToneShare) {}
 
   // A car of the given type (one of the six ASM types) with gamma drawn from its prior.
   std::shared_ptr<const VehicleModel> makeCar(Rng& rng, shape::VehicleType type) const;
@@ -99,8 +105,12 @@ class VehicleFactory {
 
  private:
   const shape::ActiveShapeModel* asm_;
+  double twoToneShare_ = 0.0;
 };
 
 VehicleLook drawLook(Rng& rng);
+// Paints the roof of a look in a colour that contrasts with its body: white or silver on a dark
+// car, gloss black on a light one (the two-tone paint of small cars and panorama roofs).
+void makeTwoTone(VehicleLook& look, Rng& rng);
 
 }  // namespace vp::sim
