@@ -228,6 +228,21 @@ def export(args) -> dict:
     jobs = [("detector", det, hw, calib_det, "vp_detector")]
     if crop is not None:
         jobs.append(("crop", crop, (CROP_H, CROP_W), calib_crop, "vp_vehicle_crop"))
+    kept_ranges = {}
+    for path_kept in args.ranges_from:
+        try:
+            model_kept = onnx.load(path_kept)
+        except OSError as exc:
+            raise SystemExit(f"--ranges-from {path_kept}: {exc}") from None
+        meta = {p.key: p.value for p in model_kept.metadata_props}
+        kind = {"vp_detector": "detector", "vp_vehicle_crop": "crop"}.get(meta.get("vp.model.name", ""))
+        if kind is None:
+            raise SystemExit(f"--ranges-from {path_kept}: metadata vp.model.name is "
+                             f"'{meta.get('vp.model.name', '')}', not vp_detector or vp_vehicle_crop")
+        file_ranges = qdq.ranges_of_qdq(model_kept)
+        if not file_ranges:
+            raise SystemExit(f"--ranges-from {path_kept}: no activation QuantizeLinear nodes")
+        kept_ranges[kind] = (path_kept, file_ranges)
     qmodels = {}
     for name, module, shape, calib, model_name in jobs:
         module.export_mode = True
@@ -240,7 +255,19 @@ def export(args) -> dict:
         n_cal = max(1, len(calib) * 3 // 4) if len(calib) > 1 else 1
         cal_in = qdq.preprocess(calib[:n_cal], cfg)
         chk_in = qdq.preprocess(calib[n_cal:] if len(calib) > n_cal else calib[:1], cfg)
-        qm = qdq.quantize_model(fp32, cal_in, cfg)
+        ranges = None
+        kept = kept_ranges.get(name)
+        if kept is not None:
+            ranges = qdq.collect_ranges(qdq.prepare_float_model(fp32), cal_in, cfg)
+            path_kept, file_ranges = kept
+            missing = [t for t in file_ranges if t not in ranges]
+            if missing:
+                raise SystemExit(f"--ranges-from {path_kept}: tensor '{missing[0]}' is not in the "
+                                 f"exported {name} (another network?)")
+            ranges.update(file_ranges)
+            print(f"{name}: {len(file_ranges)} of {len(ranges)} activation ranges from {path_kept}, "
+                  f"the rest (fused into their activation, not quantized) calibrated")
+        qm = qdq.quantize_model(fp32, cal_in, cfg, ranges)
         bad = engine_ops_only(qm)
         if bad:
             raise SystemExit(f"{name} QDQ: operators the engine does not run: {', '.join(bad)}")
@@ -302,6 +329,10 @@ def parse_args(argv=None):
                    help="with a verifier crop network: background rows of these mine_negatives.py "
                         "lists join the crop calibration (the vehicle_logit range must cover them)")
     p.add_argument("--method", choices=["minmax", "percentile", "mse"], default="minmax")
+    p.add_argument("--ranges-from", nargs="*", default=[], metavar="QDQ_ONNX",
+                   help="keep the activation quantization of these int8 files of the same networks "
+                        "(e.g. models/detector/detector_int8.onnx) instead of calibrating it: a "
+                        "fine-tune's export then differs from the file in its weights only")
     p.add_argument("--eval-data", nargs="*", default=[])
     p.add_argument("--engine-bench", default=None, help="path of vp_bench_engine")
     p.add_argument("--seed", type=int, default=0)

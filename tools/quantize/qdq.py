@@ -497,6 +497,28 @@ def collect_ranges(model: onnx.ModelProto, inputs: Sequence[np.ndarray],
     return collector.ranges()
 
 
+def ranges_of_qdq(qdq_model: onnx.ModelProto) -> Dict[str, Tuple[float, float]]:
+    """{activation tensor: (lo, hi)} of a QDQ model this module wrote: the int8 range of each
+    activation QuantizeLinear's scale and zero point, which ``qparams`` maps back to the same
+    scale and zero point. Lets a re-export keep a shipped file's activation quantization."""
+    init = {t.name: t for t in qdq_model.graph.initializer}
+    out: Dict[str, Tuple[float, float]] = {}
+    for node in qdq_model.graph.node:
+        if node.op_type != "QuantizeLinear" or not node.name.endswith("_QuantizeLinear"):
+            continue
+        base = node.name[:-len("_QuantizeLinear")]
+        s_t, zp_t = init.get(node.input[1]), init.get(node.input[2])
+        if s_t is None or zp_t is None:
+            continue
+        s = numpy_helper.to_array(s_t)
+        zp = numpy_helper.to_array(zp_t)
+        if s.size != 1 or zp.size != 1:
+            continue  # per-channel weights, not an activation
+        s, zp = float(s.reshape(())), int(zp.reshape(()))
+        out[base] = ((-128 - zp) * s, (127 - zp) * s)
+    return out
+
+
 def qparams(lo: float, hi: float) -> Tuple[float, int]:
     """Asymmetric int8 scale and zero point for [lo, hi] (extended to contain 0)."""
     lo, hi = min(float(lo), 0.0), max(float(hi), 0.0)

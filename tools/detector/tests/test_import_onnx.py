@@ -102,6 +102,29 @@ class ImportOnnx(unittest.TestCase):
         errs = import_onnx.check_against_file(det, onnx.load(self.det_int8), x)
         self.assertLess(max(errs.values()), 1e-5)
 
+    def test_a_files_activation_ranges_requantize_it_exactly(self):
+        # export.py --ranges-from: the ranges read back from a QDQ file, with other calibration
+        # inputs, give that file's activation scales and zero points again.
+        fp32 = onnx.load(os.path.join(self.tmp, "crop_fp32.onnx"))
+        shipped = onnx.load(self.crop_int8)
+        ranges = qdq.ranges_of_qdq(shipped)
+        self.assertGreater(len(ranges), 10)
+        cfg = qdq.QuantConfig(model_name="vp_test", model_version="42", method="minmax", **NORMALIZATION)
+        other = qdq.preprocess(qdq.synthetic_images(2, CROP_H, CROP_W, seed=9), cfg)
+        calibrated = qdq.collect_ranges(qdq.prepare_float_model(fp32), other, cfg)
+        calibrated.update(ranges)
+        again = qdq.quantize_model(fp32, other, cfg, calibrated)
+        fresh = qdq.quantize_model(fp32, other, cfg)  # calibrated on the other inputs alone
+
+        def scales(m):
+            return {t.name: onnx.numpy_helper.to_array(t) for t in m.graph.initializer
+                    if t.name.endswith("_scale") or t.name.endswith("_zero_point")}
+        a, b, c = scales(shipped), scales(again), scales(fresh)
+        self.assertEqual(set(a), set(b))
+        for name in a:
+            np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+        self.assertTrue(any(not np.array_equal(a[n], c[n]) for n in a))
+
     def test_a_file_of_another_model_is_refused(self):
         with self.assertRaisesRegex(ValueError, "Detector does not run at the file's input size"):
             import_onnx.import_files(self.crop_int8, None, 3, log=lambda *_: None)
