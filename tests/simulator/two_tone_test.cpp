@@ -119,6 +119,8 @@ TEST(TwoTone, AShareOfCarsAndTheSameScene) {
     };
     const auto out = std::make_pair(read(dir / "ground_truth" / "objects.csv"),
                                     read(dir / "frames" / "000000.png"));
+    // The sequence says how it was made (its notes), and only when the option is on.
+    EXPECT_EQ(read(dir / "sequence.yaml").find("two-tone share") != std::string::npos, share > 0.0);
     fs::remove_all(dir);
     return out;
   };

@@ -339,6 +339,9 @@ std::string Simulator::summary() const {
     << " street furniture, gimbal "
     << (rig_.gimbalReference == geodesy::GimbalReference::Earth ? "earth" : "body")
     << (options_.telemetryNoise ? ", telemetry with noise" : ", telemetry = true pose");
+  if (options_.twoToneShare > 0.0) {
+    s << ", two-tone share " << num(options_.twoToneShare);
+  }
   return s.str();
 }
 
