@@ -36,7 +36,7 @@ import json
 import math
 import os
 import sys
-from typing import Dict, List, Tuple
+from typing import Dict, Tuple
 
 import cv2
 import numpy as np
@@ -80,6 +80,12 @@ def read_rotated_labels(root: str) -> Dict[str, np.ndarray]:
     return out
 
 
+def image_path(root: str, stem: str) -> str | None:
+    """The image of a label stem in ``root/images`` (any extension), or None."""
+    hits = sorted(glob.glob(os.path.join(root, "images", glob.escape(stem) + ".*")))
+    return hits[0] if hits else None
+
+
 def reaches_border(box: np.ndarray, size: Tuple[int, int]) -> bool:
     """Whether a rotated box (cx, cy, length, width, angle) reaches beyond a (width, height)
     image."""
@@ -102,12 +108,11 @@ def evaluate(labels: Dict[str, np.ndarray], dets: Dict, iou: float = 0.5, min_sc
         pairs, _, _ = match(np.array([b for _, b in found]).reshape(-1, 5),
                             np.array([sc for sc, _ in found]), boxes.reshape(-1, 5),
                             np.zeros(len(boxes), bool), iou)
-        used = {k for k, _ in pairs}
+        used_det = {k for k, _ in pairs}
         if sizes is not None and stem in sizes:
             false_border += sum(1 for k in range(len(found))
-                                if k not in used and reaches_border(found[k][1], sizes[stem]))
+                                if k not in used_det and reaches_border(found[k][1], sizes[stem]))
         if failures is not None:
-            used_det = {k for k, _ in pairs}
             used_lab = {j for _, j in pairs}
             failures.setdefault("false", []).extend(
                 (stem, found[k][0], *found[k][1]) for k in range(len(found)) if k not in used_det)
@@ -166,8 +171,8 @@ def main(argv=None) -> int:
         return 1
     sizes = {}
     for stem in labels:
-        hits = sorted(glob.glob(os.path.join(a.root, "images", glob.escape(stem) + ".*")))
-        img = cv2.imread(hits[0], cv2.IMREAD_UNCHANGED) if hits else None
+        path = image_path(a.root, stem)
+        img = cv2.imread(path, cv2.IMREAD_UNCHANGED) if path else None
         if img is not None:
             sizes[stem] = (img.shape[1], img.shape[0])
     failures: Dict[str, list] = {}

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import glob
 import math
 import os
 import sys
@@ -26,6 +25,11 @@ from typing import Dict, List, Optional, Tuple
 
 import cv2
 import numpy as np
+
+if __package__ in (None, ""):
+    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from detector.eval_rotated_real import image_path  # noqa: E402
 
 LABEL_KEYS = ("cx_px", "cy_px", "length_px", "width_px", "heading_rad")
 DETECTION_KEYS = ("det_cx_px", "det_cy_px", "det_length_px", "det_width_px", "det_angle_rad")
@@ -98,10 +102,10 @@ def tile(image: np.ndarray, stem: str, label, det, tile_px: int) -> np.ndarray:
 
 
 def find_image(root: str, stem: str) -> str:
-    hits = glob.glob(os.path.join(root, "images", glob.escape(stem) + ".*"))
-    if not hits:
+    path = image_path(root, stem)
+    if path is None:
         raise SheetError(f"{root}/images: no image for '{stem}'")
-    return sorted(hits)[0]
+    return path
 
 
 def sheet(root: str, rows, tile_px: int, columns: int) -> np.ndarray:
