@@ -7,8 +7,9 @@
 #   tools/detector/make_sim_data.sh OUTDIR FIRST_SEED COUNT [FRAMES=4] [WIDTHxHEIGHT=1296x1024]
 #
 # Environment: VP_SIMULATE (default build/release/tools/simulator/vp_simulate, else build/ci),
-# THREADS (default 2). Sequences already complete in OUTDIR are skipped, so an interrupted run
-# resumes where it stopped.
+# THREADS (default 2), SIM_ARGS (further vp_simulate options for every sequence, e.g.
+# "--two-tone-share 0.35"). Sequences already complete in OUTDIR are skipped, so an interrupted
+# run resumes where it stopped.
 set -euo pipefail
 if [[ $# -lt 3 || "$1" == "--help" || "$1" == "-h" ]]; then
   sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'
@@ -33,6 +34,6 @@ for ((i = 0; i < count; i++)); do
   if [[ -f "$dir/sequence.yaml" ]] && [[ $(ls "$dir/frames" | wc -l) -ge $frames ]]; then continue; fi
   rm -rf "$dir"
   "$sim" --scene "$scene" --seed "$seed" --frames "$frames" --out "$dir" \
-    --width "$width" --height "$height" --threads "${THREADS:-2}" >/dev/null
+    --width "$width" --height "$height" --threads "${THREADS:-2}" ${SIM_ARGS:-} >/dev/null
 done
 echo "make_sim_data.sh: $count sequences in $out"

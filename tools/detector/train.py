@@ -50,7 +50,7 @@ import math
 import os
 import sys
 import time
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -114,8 +114,9 @@ def parse_args(argv=None):
     p.add_argument("--hard-occlusion", type=float, default=0.2,
                    help="occlusion share from which a vehicle counts as hard (--hard-weight)")
     p.add_argument("--hard-negatives", default=None,
-                   help="CSV of false detections on training frames (mine_negatives.py): "
-                        "--negative-share of the tiles of those frames are centred on one")
+                   help="CSV of false detections on training frames or real training images "
+                        "(mine_negatives.py --data or --images): --negative-share of the tiles "
+                        "of those frames are centred on one")
     p.add_argument("--negative-share", type=float, default=0.25,
                    help="share of a listed frame's tiles centred on one of its hard negatives")
     p.add_argument("--verifier-samples", nargs="+", default=[], metavar="CSV",
@@ -223,12 +224,16 @@ def hard_example_weights(s: Sample, weight: float, min_occlusion: float) -> Opti
     return np.where(hard & ~s.ignore, weight, 1.0)
 
 
-def read_hard_negatives(path: str, seq: List[Sample]) -> Dict[int, np.ndarray]:
-    """The hard negatives of mine_negatives.py per training frame: index into ``seq`` ->
-    [K, 2] pixel centres in the frame as stored. Rows of frames not in ``seq`` are skipped
-    (mined on other data); a malformed file is an error naming the row."""
-    index = {os.path.abspath(s.image_path): i for i, s in enumerate(seq) if s.image_path}
-    points: Dict[int, list] = {}
+def read_hard_negatives(path: str, seq: List[Sample],
+                        real: Sequence[Sample] = ()) -> Dict[Tuple[str, int], np.ndarray]:
+    """The hard negatives of mine_negatives.py per training frame: ("seq", index into ``seq``)
+    or ("real", index into ``real``) -> [K, 2] pixel centres in the frame as stored. Rows of
+    frames in neither list are skipped (mined on other data, or a held-out real image); a
+    malformed file is an error naming the row."""
+    index = {os.path.abspath(s.image_path): ("seq", i) for i, s in enumerate(seq) if s.image_path}
+    index.update({os.path.abspath(s.image_path): ("real", i)
+                  for i, s in enumerate(real) if s.image_path})
+    points: Dict[Tuple[str, int], list] = {}
     try:
         with open(path, newline="") as f:
             reader = csv.DictReader(f)
@@ -311,7 +316,7 @@ class Data:
                           if not s.ignore[j] and s.types[j] >= 0 and not s.aa_only[j]
                           and s.direction_known[j] and math.isfinite(s.gsd_m[j])]
         self.cache = FrameCache(args.cache_frames)
-        self.negatives = (read_hard_negatives(args.hard_negatives, self.seq)
+        self.negatives = (read_hard_negatives(args.hard_negatives, self.seq, self.real)
                           if args.hard_negatives else {})
         self.verifier = [read_verifier_samples(p) for p in args.verifier_samples]
         self.verifier = {label: [r for rows in self.verifier for r in rows if r[-1] == label]
@@ -367,7 +372,7 @@ class Data:
             target = rng.uniform(*a.working_gsd_range)
             f = gsd / target if math.isfinite(gsd) else a.working_width / s.image.shape[1]
         f *= math.exp(rng.uniform(-0.15, 0.15))
-        negatives = self.negatives.get(i) if pool == "seq" else None
+        negatives = self.negatives.get((pool, i))
         h0, w0 = s.image.shape[:2]
         s = augment.scale(s, f)
         if negatives is not None and rng.random() < a.negative_share:

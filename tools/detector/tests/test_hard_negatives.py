@@ -126,8 +126,12 @@ class HardNegatives(unittest.TestCase):
             ("/elsewhere/frames/000000.png", 10.0, 10.0, 0.7),  # not a training frame: skipped
         ])
         negatives = train.read_hard_negatives(path, self.frames)
-        self.assertEqual(list(negatives), [1])
-        np.testing.assert_array_equal(negatives[1], [[40.0, 50.0], [41.0, 51.0]])
+        self.assertEqual(list(negatives), [("seq", 1)])
+        np.testing.assert_array_equal(negatives[("seq", 1)], [[40.0, 50.0], [41.0, 51.0]])
+        # Real training images are keyed apart from the sequence frames (mined with --images).
+        negatives = train.read_hard_negatives(path, self.frames[:1], real=self.frames[1:2])
+        self.assertEqual(list(negatives), [("real", 0)])
+        np.testing.assert_array_equal(negatives[("real", 0)], [[40.0, 50.0], [41.0, 51.0]])
         bad = self.negatives_file([(self.frames[0].image_path, "x", 5.0, 0.5)], "bad.csv")
         with self.assertRaises(SystemExit) as e:
             train.read_hard_negatives(bad, self.frames)
