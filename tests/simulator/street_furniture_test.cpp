@@ -1,7 +1,8 @@
-// Tests of the simulator's street furniture (benches, shelters, kiosks, stair entrances):
-// the same seed gives the same furniture, different seeds different furniture; every item
-// stands off the drivable area with its kerb clearance and clear of buildings; no vehicle,
-// parked or moving, ever overlaps one; and sizes stay within the real objects' ranges.
+// Tests of the simulator's street furniture (benches, shelters, kiosks, stair entrances, and
+// the opt-in sign posts and street lamps): the same seed gives the same furniture, different
+// seeds different furniture; every item stands off the drivable area with its kerb clearance
+// and clear of buildings; no vehicle, parked or moving, ever overlaps one; sizes stay within
+// the real objects' ranges; the poles leave the rest of a seed's scene as it was.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -23,9 +24,13 @@ using vp::sim::SceneSpec;
 constexpr std::array<SceneKind, 3> kKinds = {SceneKind::Intersection, SceneKind::Straight,
                                              SceneKind::Parking};
 
-SceneSpec sceneFor(SceneKind kind, std::uint64_t seed) {
+SceneSpec sceneFor(SceneKind kind, std::uint64_t seed, bool poles = false) {
   vp::sim::Rng rng(seed);
-  return vp::sim::generateScene(kind, rng);
+  SceneSpec scene = vp::sim::generateScene(kind, rng);
+  if (poles) {
+    vp::sim::addPoles(scene);
+  }
+  return scene;
 }
 
 bool sameFurniture(const SceneSpec& a, const SceneSpec& b) {
@@ -61,7 +66,7 @@ TEST(StreetFurniture, OffTheLanesClearOfBuildingsWithRealSizes) {
   std::map<FurnitureKind, int> counts;
   for (const SceneKind kind : kKinds) {
     for (std::uint64_t seed = 1; seed <= 30; ++seed) {
-      const SceneSpec scene = sceneFor(kind, seed);
+      const SceneSpec scene = sceneFor(kind, seed, /*poles=*/true);
       for (const auto& item : scene.furniture) {
         ++counts[item.kind];
         const vp::sim::Footprint f = vp::sim::footprintOf(item);
@@ -94,6 +99,14 @@ TEST(StreetFurniture, OffTheLanesClearOfBuildingsWithRealSizes) {
             EXPECT_TRUE(item.length_m >= 3.0 && item.length_m <= 6.0) << item.length_m;
             EXPECT_TRUE(item.width_m >= 1.5 && item.width_m <= 2.0) << item.width_m;
             break;
+          case FurnitureKind::SignPost:  // the plate's width; its top 2.6-3.6 m up
+            EXPECT_TRUE(item.length_m >= 0.6 && item.length_m <= 0.9) << item.length_m;
+            EXPECT_TRUE(item.height_m >= 2.6 && item.height_m <= 3.6) << item.height_m;
+            break;
+          case FurnitureKind::StreetLamp:
+            EXPECT_TRUE(item.height_m >= 6.0 && item.height_m <= 10.0) << item.height_m;
+            EXPECT_TRUE(item.reach_m >= 0.8 && item.reach_m <= 2.5) << item.reach_m;
+            break;
           default:
             EXPECT_TRUE(item.length_m >= 1.5 && item.length_m <= 8.0) << item.length_m;
             break;
@@ -102,11 +115,14 @@ TEST(StreetFurniture, OffTheLanesClearOfBuildingsWithRealSizes) {
     }
   }
   // Every kind is placed (the density is documented per pavement and per scene).
-  for (const FurnitureKind k : {FurnitureKind::Bench, FurnitureKind::Shelter, FurnitureKind::Kiosk,
-                                FurnitureKind::StairEntrance}) {
+  for (const FurnitureKind k :
+       {FurnitureKind::Bench, FurnitureKind::Shelter, FurnitureKind::Kiosk,
+        FurnitureKind::StairEntrance, FurnitureKind::SignPost, FurnitureKind::StreetLamp}) {
     EXPECT_GT(counts[k], 0) << toString(k) << " never placed in 90 scenes";
   }
   EXPECT_GT(counts[FurnitureKind::Bench], 90) << "fewer than one bench per scene";
+  EXPECT_GT(counts[FurnitureKind::SignPost], 180) << "fewer than two sign posts per scene";
+  EXPECT_GT(counts[FurnitureKind::StreetLamp], 180) << "fewer than two street lamps per scene";
 }
 
 TEST(StreetFurniture, NoVehicleEverOverlapsFurniture) {
@@ -120,7 +136,8 @@ TEST(StreetFurniture, NoVehicleEverOverlapsFurniture) {
   for (const SceneKind kind : kKinds) {
     for (std::uint64_t seed = 1; seed <= 4; ++seed) {
       vp::sim::Rng rng(seed);
-      const SceneSpec scene = vp::sim::generateScene(kind, rng);
+      SceneSpec scene = vp::sim::generateScene(kind, rng);
+      vp::sim::addPoles(scene);
       vp::sim::Traffic traffic;
       traffic.init(scene, factory, 120.0, 30.0, 0.1, rng);
       for (int step = 0; step < 300; ++step) {  // 30 s of traffic after the warm-up
@@ -145,6 +162,30 @@ TEST(StreetFurniture, NoVehicleEverOverlapsFurniture) {
   }
   EXPECT_GT(checked, 100000);
   EXPECT_GT(near, 0) << "no vehicle ever came within 3 m of furniture: the test proves little";
+}
+
+TEST(StreetFurniture, PolesAreAddedAfterTheSceneAndChangeNothingElse) {
+  std::size_t added = 0;
+  for (const SceneKind kind : kKinds) {
+    for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+      const SceneSpec plain = sceneFor(kind, seed);
+      const SceneSpec poles = sceneFor(kind, seed, /*poles=*/true);
+      ASSERT_GE(poles.furniture.size(), plain.furniture.size()) << toString(kind) << " " << seed;
+      added += poles.furniture.size() - plain.furniture.size();
+      SceneSpec firstPart = poles;
+      firstPart.furniture.resize(plain.furniture.size());
+      EXPECT_TRUE(sameFurniture(plain, firstPart)) << toString(kind) << " seed " << seed;
+      for (std::size_t i = plain.furniture.size(); i < poles.furniture.size(); ++i) {
+        const FurnitureKind k = poles.furniture[i].kind;
+        EXPECT_TRUE(k == FurnitureKind::SignPost || k == FurnitureKind::StreetLamp) << toString(k);
+      }
+      EXPECT_EQ(plain.buildings.size(), poles.buildings.size());
+      EXPECT_EQ(plain.trees.size(), poles.trees.size());
+      EXPECT_EQ(plain.light.sunAzimuth_deg, poles.light.sunAzimuth_deg);
+      EXPECT_TRUE(sameFurniture(poles, sceneFor(kind, seed, /*poles=*/true)));
+    }
+  }
+  EXPECT_GT(added, 18U * 4U) << "fewer than four poles per scene";
 }
 
 TEST(StreetFurniture, FootprintOverlapIsASeparatingAxisTest) {

@@ -1,5 +1,6 @@
 // Renderer::buildFurniture: the static geometry of the scene's street furniture (benches,
-// bus shelters, kiosks, stair/underpass entrances) as boxes and quads standing on the DTM.
+// bus shelters, kiosks, stair/underpass entrances, sign posts, street lamps) as boxes and quads
+// standing on the DTM.
 // They are static casters like buildings, so their shadows come from the same shadow map.
 #include <algorithm>
 #include <array>
@@ -139,6 +140,24 @@ void Renderer::buildFurniture() {
                     stepsIndex);
           }
         }
+        break;
+      }
+      case FurnitureKind::SignPost: {
+        const std::uint32_t pole = surface(Material::Furniture, item.albedo, 0.4F, 40.0F);
+        const std::uint32_t plate = surface(Material::Furniture, item.roofAlbedo, 0.3F, 30.0F);
+        const double plateBottom = item.height_m - item.length_m;
+        box(0.0, 0.0, 0.035, 0.035, 0.0, item.height_m - 0.05, pole, pole);
+        box(0.0, 0.045, hl, 0.012, plateBottom, item.height_m, plate, pole);
+        break;
+      }
+      case FurnitureKind::StreetLamp: {
+        const std::uint32_t pole = surface(Material::Furniture, item.albedo, 0.4F, 40.0F);
+        const std::uint32_t head = surface(Material::Furniture, item.roofAlbedo, 0.5F, 60.0F);
+        const double h = item.height_m;
+        const double r = item.reach_m;
+        box(0.0, 0.0, 0.08, 0.08, 0.0, h, pole, pole);
+        box(0.0, 0.5 * r, 0.04, 0.5 * r, h - 0.08, h, pole, pole);       // the arm
+        box(0.0, r + 0.25, 0.18, 0.35, h - 0.22, h - 0.04, head, head);  // the lamp head
         break;
       }
     }

@@ -120,8 +120,10 @@ struct Tree {
 };
 
 // Street furniture: static non-vehicle objects on pavements and grass (street_furniture.cpp).
-// They are not vehicles in the ground truth; the detector must learn to ignore them.
-enum class FurnitureKind { Bench, Shelter, Kiosk, StairEntrance };
+// They are not vehicles in the ground truth; the detector must learn to ignore them. Sign posts
+// and street lamps (addPoles) are tall and thin: from a tilted camera the pole, the plate or
+// the arm and their shadows make car-sized lines and blobs.
+enum class FurnitureKind { Bench, Shelter, Kiosk, StairEntrance, SignPost, StreetLamp };
 const char* toString(FurnitureKind kind);
 
 struct StreetFurniture {
@@ -130,9 +132,10 @@ struct StreetFurniture {
   double heading_rad = 0.0;      // direction of the length axis; the front faces +left normal
   double length_m = 1.8;
   double width_m = 0.6;   // footprint depth (across the length axis)
-  double height_m = 0.8;  // top above the ground (bench backrest, shelter roof, railing)
+  double height_m = 0.8;  // top above the ground (bench backrest, shelter roof, railing, pole)
+  double reach_m = 0.0;   // street lamps: the arm's reach from the pole towards the front
   Eigen::Vector3f albedo{0.5F, 0.5F, 0.5F};      // slats, frame, walls, parapet
-  Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};  // shelter glass tint, kiosk roof
+  Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};  // shelter glass tint, kiosk roof, sign plate
   bool backrest = true;                          // benches
   std::uint32_t seed = 0;
   Eigen::Vector2d axis() const { return {std::cos(heading_rad), std::sin(heading_rad)}; }
@@ -242,5 +245,9 @@ Footprint footprintOf(const StreetFurniture& item);
 // was without them.
 void addStreetFurniture(SceneSpec& scene);
 void addRoofFixtures(Building& building);
+// Sign posts and street lamps along the kerbs (street_furniture.cpp), appended to
+// scene.furniture: opt-in (vp_simulate --poles), from an Rng of its own, so that a seed's scene
+// is otherwise the one it is without them.
+void addPoles(SceneSpec& scene);
 
 }  // namespace vp::sim

@@ -173,6 +173,9 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   origin_ = drawOrigin(rng);
   terrainSpec_ = drawTerrain(rng);
   scene_ = generateScene(options.scene, rng);
+  if (options.poles) {
+    addPoles(scene_);
+  }
   drawRig();
   if (canvas_.width == 0) {
     return fail(why, "could not draw a valid lens model");
@@ -341,6 +344,9 @@ std::string Simulator::summary() const {
     << (options_.telemetryNoise ? ", telemetry with noise" : ", telemetry = true pose");
   if (options_.twoToneShare > 0.0) {
     s << ", two-tone share " << num(options_.twoToneShare);
+  }
+  if (options_.poles) {
+    s << ", sign posts and street lamps";
   }
   return s.str();
 }

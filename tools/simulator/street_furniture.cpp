@@ -1,8 +1,9 @@
 // Street furniture of a scene: benches, bus shelters, kiosks and stair/underpass entrances on
-// the pavements and the grass. Real drone footage shows the detector boxing these (a white
-// bench looks like a small white car from 90 m); the simulator draws them so that training
-// sees them as background. Sizes follow real objects; every site is checked against the
-// drivable area, the buildings, the tree trunks and the other furniture.
+// the pavements and the grass; with addPoles, sign posts and street lamps along the kerbs. Real
+// drone footage shows the detector boxing these (a white bench looks like a small white car from 90
+// m); the simulator draws them so that training sees them as background. Sizes follow real objects;
+// every site is checked against the drivable area, the buildings, the tree trunks and the other
+// furniture.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -75,6 +76,34 @@ StreetFurniture makeItem(FurnitureKind kind, Rng& rng) {
       item.height_m = rng.uniform(0.95, 1.1);                                // railing top
       item.albedo = tone(rng, Eigen::Vector3f(0.5F, 0.49F, 0.46F), 0.15);    // concrete parapet
       item.roofAlbedo = tone(rng, Eigen::Vector3f(0.2F, 0.2F, 0.21F), 0.3);  // railing
+      break;
+    }
+    case FurnitureKind::SignPost: {
+      // The plate (0.6-0.9 m, round, square or triangular signs alike as a square) on a pole
+      // whose top is 2.6-3.6 m up; length is the plate's width along the item's axis.
+      item.length_m = rng.uniform(0.6, 0.9);
+      item.width_m = 0.12;
+      item.height_m = rng.uniform(2.0, 2.7) + item.length_m;
+      item.albedo = tone(rng, Eigen::Vector3f(0.5F, 0.5F, 0.5F), 0.15);  // galvanised pole
+      // White, blue, red, yellow plates (their faces; the back is the pole's grey).
+      static const std::array<Eigen::Vector3f, 4> kPlates = {
+          Eigen::Vector3f(0.78F, 0.78F, 0.76F), Eigen::Vector3f(0.04F, 0.12F, 0.42F),
+          Eigen::Vector3f(0.55F, 0.05F, 0.05F), Eigen::Vector3f(0.75F, 0.58F, 0.05F)};
+      item.roofAlbedo = tone(rng,
+                             kPlates[static_cast<std::size_t>(
+                                 rng.weighted(std::array<double, 4>{0.35, 0.35, 0.2, 0.1}))],
+                             0.08);
+      break;
+    }
+    case FurnitureKind::StreetLamp: {
+      item.length_m = 0.3;  // the pole's base
+      item.width_m = 0.3;
+      item.height_m = rng.uniform(6.0, 10.0);
+      item.reach_m = rng.uniform(0.8, 2.5);
+      // Galvanised grey 60 %, painted dark grey or green 40 %.
+      item.albedo = rng.chance(0.6) ? tone(rng, Eigen::Vector3f(0.5F, 0.5F, 0.5F), 0.15)
+                                    : tone(rng, Eigen::Vector3f(0.07F, 0.09F, 0.08F), 0.3);
+      item.roofAlbedo = tone(rng, Eigen::Vector3f(0.25F, 0.25F, 0.26F), 0.3);  // lamp head
       break;
     }
   }
@@ -186,7 +215,64 @@ void addGrassFurniture(SceneSpec& scene, Rng& rng) {
   }
 }
 
+// Along each side of each road: street lamps every U(25, 40) m on a lit side (70 %), sign
+// posts at sites every U(15, 45) m (60 % of the sites), and at an intersection a sign post on
+// the right of each approach at its stop line. Each stands kKerbClearance_m behind the kerb
+// (the lamp's arm and a plate overhang the pavement above a vehicle's height, not the lanes)
+// and outside every tree's crown.
+void addPoleRow(SceneSpec& scene, const Road& road, int side, Rng& rng) {
+  const double kerb = scene.kerbWidth_m;
+  const double roadHalf = side > 0 ? road.leftHalf_m() : road.rightHalf_m();
+  const Eigen::Vector2d front = -side * road.leftNormal();  // towards the road
+  const double roadHeading = std::atan2(road.dir.y(), road.dir.x());
+  const double first = road.along(scene.viewCentre) - scene.extent_m * 0.7;
+  const double last = first + scene.extent_m * 1.4;
+  const auto place = [&](StreetFurniture item, double along) {
+    const double lateral = side * (roadHalf + kerb + kKerbClearance_m + 0.5 * item.width_m);
+    item.centre = road.centre + along * road.dir + lateral * road.leftNormal();
+    // Poles stand clear of the street trees' crowns (a lamp inside a crown would not be seen,
+    // and lighting plans keep them apart).
+    const bool underCrown = std::any_of(scene.trees.begin(), scene.trees.end(), [&](const Tree& t) {
+      return (t.position - item.centre).norm() < t.canopyRadius_m + 0.5;
+    });
+    if (!underCrown && siteClear(scene, item, kerb + kKerbClearance_m - 0.01)) {
+      scene.furniture.push_back(item);
+    }
+  };
+  if (rng.chance(0.7)) {
+    const double spacing = rng.uniform(25.0, 40.0);
+    for (double a = first + rng.uniform(0.0, spacing); a < last; a += spacing) {
+      StreetFurniture lamp = makeItem(FurnitureKind::StreetLamp, rng);
+      lamp.heading_rad = std::atan2(-front.x(), front.y());  // the arm (front) over the road
+      place(lamp, a);
+    }
+  }
+  for (double a = first + rng.uniform(0.0, 30.0); a < last; a += rng.uniform(15.0, 45.0)) {
+    if (rng.chance(0.6)) {
+      StreetFurniture sign = makeItem(FurnitureKind::SignPost, rng);
+      sign.heading_rad = roadHeading + (rng.chance(0.6) ? 0.5 * kPi : 0.0);  // facing traffic
+      place(sign, a);
+    }
+  }
+  if (scene.kind == SceneKind::Intersection && road.stopDistance_m < 1e8) {
+    // Traffic on the right of the centreline (forward lanes, side -1) approaches the junction
+    // at along = -stopDistance; on the left (side +1) at +stopDistance.
+    StreetFurniture sign = makeItem(FurnitureKind::SignPost, rng);
+    sign.heading_rad = roadHeading + 0.5 * kPi;
+    place(sign, side < 0 ? -road.stopDistance_m - 1.0 : road.stopDistance_m + 1.0);
+  }
+}
+
 }  // namespace
+
+void addPoles(SceneSpec& scene) {
+  Rng rng((static_cast<std::uint64_t>(scene.style.seed) << 32U) ^ 0x9015'b0a7ULL);
+  for (const Road& road : scene.roads) {
+    for (int side = -1; side <= 1; side += 2) {
+      addPoleRow(scene, road, side, rng);
+    }
+  }
+}
 
 const char* toString(FurnitureKind kind) {
   switch (kind) {
@@ -198,6 +284,10 @@ const char* toString(FurnitureKind kind) {
       return "kiosk";
     case FurnitureKind::StairEntrance:
       return "stair_entrance";
+    case FurnitureKind::SignPost:
+      return "sign_post";
+    case FurnitureKind::StreetLamp:
+      return "street_lamp";
   }
   return "unknown";
 }
