@@ -64,11 +64,25 @@ TEST(StreetFurniture, SameSeedSameSceneDifferentSeedDifferentScene) {
 
 TEST(StreetFurniture, OffTheLanesClearOfBuildingsWithRealSizes) {
   std::map<FurnitureKind, int> counts;
+  int facingTraffic = 0;
   for (const SceneKind kind : kKinds) {
     for (std::uint64_t seed = 1; seed <= 30; ++seed) {
       const SceneSpec scene = sceneFor(kind, seed, /*poles=*/true);
       for (const auto& item : scene.furniture) {
         ++counts[item.kind];
+        if (item.kind == FurnitureKind::SignPost) {
+          // Facing the traffic: the plate's axis across the nearest road.
+          double best = 1e9;
+          double across = 0.0;
+          for (const auto& road : scene.roads) {
+            const double d = std::fabs(road.lateral(item.centre));
+            if (d < best) {
+              best = d;
+              across = std::fabs(item.axis().dot(road.leftNormal()));
+            }
+          }
+          facingTraffic += across > 0.7 ? 1 : 0;
+        }
         const vp::sim::Footprint f = vp::sim::footprintOf(item);
         const Eigen::Vector2d n(-f.axis.y(), f.axis.x());
         // Every point of the footprint (a 5 x 5 grid over it) lies behind the kerb with the
@@ -122,6 +136,8 @@ TEST(StreetFurniture, OffTheLanesClearOfBuildingsWithRealSizes) {
   }
   EXPECT_GT(counts[FurnitureKind::Bench], 90) << "fewer than one bench per scene";
   EXPECT_GT(counts[FurnitureKind::SignPost], 180) << "fewer than two sign posts per scene";
+  EXPECT_GT(facingTraffic, counts[FurnitureKind::SignPost] / 3)
+      << "sign plates facing the traffic are mostly dropped by the site check";
   EXPECT_GT(counts[FurnitureKind::StreetLamp], 180) << "fewer than two street lamps per scene";
 }
 

@@ -228,7 +228,12 @@ void addPoleRow(SceneSpec& scene, const Road& road, int side, Rng& rng) {
   const double first = road.along(scene.viewCentre) - scene.extent_m * 0.7;
   const double last = first + scene.extent_m * 1.4;
   const auto place = [&](StreetFurniture item, double along) {
-    const double lateral = side * (roadHalf + kerb + kKerbClearance_m + 0.5 * item.width_m);
+    // The footprint's half extent across the road (a plate facing the traffic lies across it).
+    const Eigen::Vector2d axis = item.axis();
+    const double halfAcross =
+        0.5 * item.length_m * std::fabs(axis.dot(road.leftNormal())) +
+        0.5 * item.width_m * std::fabs(Eigen::Vector2d(-axis.y(), axis.x()).dot(road.leftNormal()));
+    const double lateral = side * (roadHalf + kerb + kKerbClearance_m + halfAcross);
     item.centre = road.centre + along * road.dir + lateral * road.leftNormal();
     // Poles stand clear of the street trees' crowns (a lamp inside a crown would not be seen,
     // and lighting plans keep them apart).
