@@ -134,6 +134,11 @@ perception:
   white_balance_sample_stride_px: 8
   white_balance_white_share: 0.2
   white_balance_max_gain: 3.0
+  exposure: false
+  exposure_dark_mean: 30
+  exposure_target_mean: 90
+  exposure_max_gain: 6
+  exposure_sample_stride_px: 4
   working_scale: 0.5
   tile_overlap_px: 64
   score_threshold: 0.35
@@ -764,6 +769,16 @@ const MalformedCase kMalformedCases[] = {
      "perception.white_balance_white_share", "must be in (0, 1], got 0"},
     {"white_balance_max_gain: 3.0", "white_balance_max_gain: 0.5",
      "perception.white_balance_max_gain", "must be in [1, 16], got 0.5"},
+    {"exposure: false", "exposure: off", "perception.exposure",
+     "expected true or false, got 'off'"},
+    {"exposure_dark_mean: 30", "exposure_dark_mean: 256", "perception.exposure_dark_mean",
+     "must be in [0, 255], got 256"},
+    {"exposure_target_mean: 90", "exposure_target_mean: 20", "perception.exposure_target_mean",
+     "must be >= exposure_dark_mean (30), got 20"},
+    {"exposure_max_gain: 6", "exposure_max_gain: 17", "perception.exposure_max_gain",
+     "must be in [1, 16], got 17"},
+    {"exposure_sample_stride_px: 4", "exposure_sample_stride_px: 0",
+     "perception.exposure_sample_stride_px", "must be in [1, 64], got 0"},
     {"working_scale: 0.5", "working_scale: 1.5", "perception.working_scale",
      "must be in (0, 1], got 1.5"},
     {"tile_overlap_px: 64", "tile_overlap_px: -1", "perception.tile_overlap_px",
@@ -1618,6 +1633,11 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(pre.whiteBalanceOptions.sampleStride_px, 8);
   EXPECT_DOUBLE_EQ(pre.whiteBalanceOptions.whitePointShare, 0.2);
   EXPECT_DOUBLE_EQ(pre.whiteBalanceOptions.maxGain, 3.0);
+  EXPECT_FALSE(pre.exposure.enabled);
+  EXPECT_DOUBLE_EQ(pre.exposure.darkMeanLuma, 30.0);
+  EXPECT_DOUBLE_EQ(pre.exposure.targetMeanLuma, 90.0);
+  EXPECT_DOUBLE_EQ(pre.exposure.maxGain, 6.0);
+  EXPECT_EQ(pre.exposure.sampleStride_px, 4);
   EXPECT_DOUBLE_EQ(pre.workingScale, 0.5);
   EXPECT_EQ(pre.tileOverlap_px, 64);
   EXPECT_FLOAT_EQ(det.decoder.scoreThreshold, 0.35F);

@@ -82,6 +82,9 @@ options:
                         front/back of vehicles most likely large from the crop at the box's
                         middle (default: from crops at its two ends, as the app's
                         perception.crop_large_vehicle_ends)
+  --no-exposure         no gain for under-exposed images (default: images darker than a mean
+                        luminance of 40 are brightened to 100, as the app's
+                        perception.exposure)
   --help                this text
 )";
 
@@ -99,6 +102,7 @@ struct Options {
   // frame), are ~4.8 cm/px: 0.4 brings them to the detector's ~12 cm/px.
   double workingScale = 0.4;
   bool workingScaleGiven = false;
+  bool exposure = true;  // the preprocessor's gain for under-exposed images
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -151,7 +155,8 @@ Options parseArguments(int argc, char** argv) {
                     {"--no-mirror-refine", &second.mirrorRefine, false},
                     {"--no-turn", &second.turnAverage, false},
                     {"--refine-large-length", &second.refineLargeVehicleLength, true},
-                    {"--no-large-vehicle-ends", &second.largeVehicleEnds, false}};
+                    {"--no-large-vehicle-ends", &second.largeVehicleEnds, false},
+                    {"--no-exposure", &o.exposure, false}};
     bool isSwitch = false;
     for (const auto& s : switches) {
       if (arg == s.name) {
@@ -255,8 +260,9 @@ bool initStage(const Options& options, vp::detection::DetectionStage& stage, std
 
 // The preprocessing of both modes: the module's defaults but for the image geometry.
 vp::preprocess::PreprocessOptions preprocessOptions(const vp::detection::DetectionStage& stage,
-                                                    double workingScale) {
+                                                    double workingScale, bool exposure) {
   vp::preprocess::PreprocessOptions pre;
+  pre.exposure.enabled = exposure;
   // The detector is trained on raw frames and the labels are raw pixels (also the module's
   // default; stated because the tool's boxes must be in the images' own pixels).
   pre.undistort = false;
@@ -307,7 +313,8 @@ int runSequence(const Options& options) {
     return fail(why);
   // A recording's frames are the app's: the training resolution unless told otherwise.
   const vp::preprocess::PreprocessOptions pre = preprocessOptions(
-      stage, options.workingScaleGiven ? options.workingScale : 648.0 / rig.intrinsics.width_px);
+      stage, options.workingScaleGiven ? options.workingScale : 648.0 / rig.intrinsics.width_px,
+      options.exposure);
   vp::preprocess::Preprocessor preprocessor;
   const cv::Size size(rig.intrinsics.width_px, rig.intrinsics.height_px);
   if (!preprocessor.init(pre, camera, size, &why))
@@ -426,7 +433,8 @@ int runImages(const Options& options) {
       vp::camera::CameraModel camera;
       if (!camera.init(k, vp::camera::Distortion{}, &why))
         return fail(file.string() + ": " + why);
-      const vp::preprocess::PreprocessOptions pre = preprocessOptions(stage, options.workingScale);
+      const vp::preprocess::PreprocessOptions pre =
+          preprocessOptions(stage, options.workingScale, options.exposure);
       if (!slot->preprocessor.init(pre, camera, image.size(), &why))
         return fail(file.string() + ": " + why);
     }

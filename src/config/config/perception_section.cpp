@@ -28,6 +28,7 @@ const Range kCarLengthRange_m = Range{0.0, 30.0, true};
 const Range kWhiteBalanceGridRange = Range::closed(1.0, 8.0);  // rows x cols <= 64 regions
 const Range kSampleStrideRange_px = Range::closed(1.0, 64.0);
 const Range kMaxGainRange = Range::closed(1.0, 16.0);
+const Range kLumaRange = Range::closed(0.0, 255.0);  // 8-bit mean luminance
 
 constexpr std::string_view kBackendNames = "int8, fp32, opencv, int8-dnnl, auto";
 
@@ -111,6 +112,21 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
   wb.whitePointShare =
       section.number("white_balance_white_share", kShareRange, wbDefaults.whitePointShare);
   wb.maxGain = section.number("white_balance_max_gain", kMaxGainRange, wbDefaults.maxGain);
+  preprocess::ExposureOptions& exposure = pre.exposure;
+  const preprocess::ExposureOptions& exposureDefaults = d.preprocess.exposure;
+  exposure.enabled = section.boolean("exposure", exposureDefaults.enabled);
+  exposure.darkMeanLuma =
+      section.number("exposure_dark_mean", kLumaRange, exposureDefaults.darkMeanLuma);
+  exposure.targetMeanLuma =
+      section.number("exposure_target_mean", kLumaRange, exposureDefaults.targetMeanLuma);
+  if (exposure.targetMeanLuma < exposure.darkMeanLuma) {
+    section.fail("exposure_target_mean", "must be >= exposure_dark_mean (" +
+                                             formatNumber(exposure.darkMeanLuma) + "), got " +
+                                             formatNumber(exposure.targetMeanLuma));
+  }
+  exposure.maxGain = section.number("exposure_max_gain", kMaxGainRange, exposureDefaults.maxGain);
+  exposure.sampleStride_px = section.integer("exposure_sample_stride_px", kSampleStrideRange_px,
+                                             exposureDefaults.sampleStride_px);
   pre.workingScale = section.number("working_scale", kWorkingScaleRange, d.preprocess.workingScale);
   checkWorkingScale(section, pre.workingScale, config.camera.intrinsics);
   pre.workingGsd_m = section.number("working_gsd_m", kFixedGsdRange_m, d.preprocess.workingGsd_m);

@@ -92,6 +92,9 @@ bool validate(const PreprocessOptions& options, std::string* why) {
   if (options.whiteBalance && !validate(options.whiteBalanceOptions, &detail)) {
     return fail(why, detail);
   }
+  if (!validate(options.exposure, &detail)) {
+    return fail(why, detail);
+  }
   return true;
 }
 
@@ -128,7 +131,7 @@ bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraMo
       return fail(why, "undistorted camera: " + detail);
     }
   }
-  if (remapActive_ || options.whiteBalance) {
+  if (remapActive_ || options.whiteBalance || options.exposure.enabled) {
     corrected_.create(frameSize, CV_8UC3);
     corrected_.setTo(cv::Scalar::all(0));
   } else {
@@ -314,12 +317,20 @@ PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
   // balanced full-resolution row (output().frame, for the crops and the annotated video) and
   // the working image - except after undistortion, where the resize would read and write the
   // one owned buffer: there the gains go on in place first.
+  // The exposure gain goes on the same way, multiplied into the white balance's gains; a frame
+  // that is not dark (gain 1) without white balance is not copied at all.
   const std::array<float, 3>* gains = nullptr;
   cv::Mat* gained = nullptr;
-  if (options_.whiteBalance) {
-    output_.whiteBalance = balancer_.estimate(*current);
-    balancer_.setGains(output_.whiteBalance);
-    gains_ = output_.whiteBalance.gain;
+  output_.whiteBalance = options_.whiteBalance ? balancer_.estimate(*current) : WhiteBalanceGains{};
+  output_.exposure =
+      options_.exposure.enabled ? estimateExposure(*current, options_.exposure) : ExposureGain{};
+  if (options_.whiteBalance || output_.exposure.applied) {
+    WhiteBalanceGains combined = output_.whiteBalance;
+    for (float& gain : combined.gain) {
+      gain *= output_.exposure.gain;
+    }
+    balancer_.setGains(combined);
+    gains_ = combined.gain;
     if (remapActive_) {
       auto body = [&](int begin, int end, int /*slot*/) {
         balancer_.applyRows(corrected_, corrected_, begin, end);
@@ -329,8 +340,6 @@ PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
       gains = &gains_;
       gained = &corrected_;
     }
-  } else {
-    output_.whiteBalance = WhiteBalanceGains{};
   }
   const Clock::time_point balanced = Clock::now();
   output_.timings.whiteBalance_ms =
@@ -399,7 +408,13 @@ PreprocessStatus Preprocessor::process(const YuvFrame& frame) {
   source.strideBytes = frame.strideBytes;
   source.uv = frame.uv;
   source.uvStrideBytes = frame.uvStrideBytes;
-  resize(source, nullptr, nullptr);
+  // The exposure from the Y bytes (YUYV: every second byte), applied in the resize sweep.
+  output_.exposure = options_.exposure.enabled
+                         ? estimateExposureYuv(frame.data, frame.strideBytes, frame.width_px,
+                                               frame.height_px, nv12 ? 1 : 2, options_.exposure)
+                         : ExposureGain{};
+  gains_ = {output_.exposure.gain, output_.exposure.gain, output_.exposure.gain};
+  resize(source, output_.exposure.applied ? &gains_ : nullptr, nullptr);
   output_.whiteBalance = WhiteBalanceGains{};
   output_.timings = PreprocessTimings{};
   output_.timings.resize_ms = millisecondsSince(start);

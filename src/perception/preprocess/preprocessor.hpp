@@ -9,6 +9,10 @@
 //  2. white balance (optional; seed 001's near-white points, WhiteBalancer): gains estimated
 //     on this frame and applied to the full-resolution frame (into the owned buffer; the
 //     caller's frame is never written);
+//  2b. exposure (optional, on by default; exposure.hpp): a frame darker than the detector's
+//     training frames gets a gain equal on all channels, applied like the white balance's
+//     gains (combined with them when both run), in the same sweep and into the same buffer;
+//     output().exposure says what was found;
 //  3. area downscale by the working scale (AreaResizer, = cv::resize INTER_AREA) into the
 //     working image, whose padding right/bottom (to at least the network input) holds padValue;
 //     steps 2 (its gains) and 3 are one sweep over the frame's rows, split over the threads:
@@ -40,6 +44,7 @@
 
 #include "camera/camera_model.hpp"
 #include "preprocess/area_resizer.hpp"
+#include "preprocess/exposure.hpp"
 #include "preprocess/frame_remap.hpp"
 #include "preprocess/row_parallel.hpp"
 #include "preprocess/tiling.hpp"
@@ -62,6 +67,10 @@ struct PreprocessOptions {
   bool undistort = false;
   bool whiteBalance = false;  // seed 001 AWB (the detector is trained without it)
   WhiteBalanceOptions whiteBalanceOptions{};
+  // Gain for under-exposed frames (on by default; normally exposed frames are left as they
+  // are). Costs the owned full-resolution buffer (one frame) that the gained frame is written
+  // to for the crops.
+  ExposureOptions exposure{};
   double workingScale = kDefaultWorkingScale;  // working px per frame px, (0, 1]
   // > 0: adapt the working scale to the frame's GSD (adaptToGsd) so that one working pixel
   // covers about this many metres; workingScale is then the scale until the first GSD and the
@@ -106,7 +115,8 @@ struct TileView {
 
 struct PreprocessTimings {
   double undistort_ms = 0.0;
-  // The gains' estimate (and, after undistortion only, their application in place).
+  // The white balance's and the exposure's gains (and, after undistortion only, their
+  // application in place).
   double whiteBalance_ms = 0.0;
   double resize_ms = 0.0;  // the resize sweep (with the gains applied on the way in)
   double total_ms = 0.0;
@@ -117,6 +127,7 @@ struct PreprocessedFrame {
   FrameGeometry geometry{};
   std::span<const TileView> tiles;
   WhiteBalanceGains whiteBalance{};  // gains of this frame (found = false when AWB is off)
+  ExposureGain exposure{};           // this frame's exposure gain (1 when off or not dark)
   PreprocessTimings timings{};
 };
 
