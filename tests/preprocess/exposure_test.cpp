@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "pinhole_camera.hpp"
 #include "preprocess/preprocessor.hpp"
 #include "preprocess/white_balance.hpp"
 
@@ -33,16 +34,7 @@ cv::Mat texturedFrame(double mean, std::uint64_t seed) {
 }
 
 camera::CameraModel pinhole() {
-  camera::Intrinsics k;
-  k.width_px = kWidth_px;
-  k.height_px = kHeight_px;
-  k.fx_px = 2300.0;
-  k.fy_px = 2300.0;
-  k.cx_px = 1295.5;
-  k.cy_px = 1023.5;
-  camera::CameraModel camera;
-  EXPECT_TRUE(camera.init(k, camera::Distortion{}));
-  return camera;
+  return test::pinholeCamera(kWidth_px, kHeight_px);
 }
 
 TEST(Exposure, DarkFramesGetTheGainToTheTargetMean) {

@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "pinhole_camera.hpp"
 
 #include "preprocess/area_kernels.hpp"
 #include "preprocess/area_resizer.hpp"
@@ -225,16 +226,7 @@ TEST(FusedPreprocessor, WhiteBalancedFrameAndTilesEqualTheReference) {
 }
 
 camera::CameraModel pinhole(int width, int height) {
-  camera::Intrinsics k;
-  k.width_px = width;
-  k.height_px = height;
-  k.fx_px = 2300.0;
-  k.fy_px = 2300.0;
-  k.cx_px = 0.5 * width - 0.5;
-  k.cy_px = 0.5 * height - 0.5;
-  camera::CameraModel camera;
-  EXPECT_TRUE(camera.init(k, camera::Distortion{}));
-  return camera;
+  return test::pinholeCamera(width, height);
 }
 
 // A camera buffer: YUYV (2 bytes a pixel) or NV12 (Y plane, then UV rows), rows padded to
