@@ -1,5 +1,5 @@
-// DetectionStage on the shipped models (models/detector/, an untrained interim export with
-// the final interface: nothing here assumes accuracy): a 2592 x 2048 frame runs end to end,
+// DetectionStage on the shipped models (models/detector/; the tests check interfaces and
+// consistency, not accuracy): a 2592 x 2048 frame runs end to end,
 // performs zero heap allocations per frame after the first, and bad input gives statuses.
 #include "detection/detection_stage.hpp"
 #include "synthetic_frame.hpp"
@@ -15,6 +15,8 @@
 
 #include "alloc_counter.hpp"
 #include "inference/dnnl_int8.hpp"
+#include "preprocess/preprocessor.hpp"
+#include "preprocess/white_balance.hpp"
 
 namespace vp::detection {
 namespace {
@@ -399,6 +401,66 @@ TEST(DetectionStage, OneDnnBackendDecodesTheSameDetectionsAsXnnpack) {
       100.0 * agreeingShare);
   EXPECT_GE(solid, 20U) << "the frame gives too few confident detections for the comparison";
   EXPECT_GE(agreeingShare, kAgreeingShare);
+}
+
+// An under-exposed frame (the scene at a fifth of its brightness) is detected as the same
+// frame exposed right: the preprocessor gains the working image, the crops get the gain
+// through FirstStageOutput::frameGain (no full-size copy). The reference is the dark frame
+// gained beforehand through the same tables with the exposure off: the tiles are identical
+// (tests/preprocess/exposure_test.cpp), the crops differ only by where the rounding falls (gain
+// before or after the bilinear sampling), so every detection must have its twin: centre within
+// 1 px, the same type, score within 0.02. Without the crops' gain the types and boxes change.
+TEST(DetectionStage, ADarkFrameIsDetectedAsTheSameFrameExposedRight) {
+  cv::Mat dark;
+  sceneFrame().convertTo(dark, CV_8UC3, 0.2);
+  std::string why;
+  preprocess::Preprocessor exposed;
+  ASSERT_TRUE(exposed.init(preprocess::PreprocessOptions{}, camera2592(), dark.size(), &why))
+      << why;
+  ASSERT_EQ(exposed.process(dark), preprocess::PreprocessStatus::Ok);
+  const float gain = exposed.output().frameGain;
+  ASSERT_TRUE(exposed.output().exposure.applied);
+  ASSERT_GT(gain, 2.0F);
+  preprocess::WhiteBalancer tables;
+  preprocess::WhiteBalanceGains gains;
+  gains.gain = {gain, gain, gain};
+  tables.setGains(gains);
+  cv::Mat bright(dark.size(), CV_8UC3);
+  tables.applyRows(dark, bright, 0, dark.rows);
+  preprocess::PreprocessOptions off;
+  off.exposure.enabled = false;
+  preprocess::Preprocessor reference;
+  ASSERT_TRUE(reference.init(off, camera2592(), bright.size(), &why)) << why;
+  ASSERT_EQ(reference.process(bright), preprocess::PreprocessStatus::Ok);
+  ASSERT_FLOAT_EQ(reference.output().frameGain, 1.0F);
+
+  DetectionStageOptions options = stageOptions(1);
+  options.maxCrops = kMaxDetectionsPerFrame;
+  options.decoder.scoreThreshold = 0.2F;  // confident detections: no weak maxima at the edge
+  DetectionStage stage;
+  ASSERT_TRUE(stage.init(options, static_cast<int>(exposed.tileCount()), &why)) << why;
+  std::array<std::array<Detection, kMaxDetectionsPerFrame>, 2> out{};
+  std::array<std::size_t, 2> count{};
+  ASSERT_EQ(stage.run(exposed.output(), out[0], &count[0]), DetectionStatus::Ok);
+  ASSERT_EQ(stage.run(reference.output(), out[1], &count[1]), DetectionStatus::Ok);
+  ASSERT_GE(count[1], 10U);
+  EXPECT_EQ(count[0], count[1]);
+  for (std::size_t i = 0; i < count[1]; ++i) {
+    const Detection& r = out[1][i];
+    const Detection* twin = nullptr;
+    double best = 1e9;
+    for (std::size_t j = 0; j < count[0]; ++j) {
+      const double d = std::hypot(out[0][j].box.cx - r.box.cx, out[0][j].box.cy - r.box.cy);
+      if (d < best) {
+        best = d;
+        twin = &out[0][j];
+      }
+    }
+    ASSERT_NE(twin, nullptr);
+    EXPECT_LE(best, 1.0) << "detection " << i;
+    EXPECT_EQ(topTwoTypes(*twin).first, topTwoTypes(r).first) << "detection " << i;
+    EXPECT_LE(std::abs(twin->score - r.score), 0.02F) << "detection " << i;
+  }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Exposure: the gain for under-exposed frames (preprocess/exposure.hpp) and its place in the
-// Preprocessor: dark frames are brightened in both the working image and the full-resolution
-// frame (what the crops read), normally exposed frames are not touched, nothing is allocated.
+// Preprocessor: dark frames are brightened in the working image (and in the owned
+// full-resolution frame when white balance or undistortion writes one; otherwise the crops get
+// the gain through frameGain), normally exposed frames are not touched, nothing is allocated.
 #include "preprocess/exposure.hpp"
 
 #include <cstdint>
@@ -144,10 +145,12 @@ TEST(Exposure, ADarkFrameIsPreprocessedAsIfItHadBeenExposedRight) {
   EXPECT_NEAR(exposure.meanLuma, 19.5F, 0.5F);  // uniform in [8, 32)
   EXPECT_NEAR(exposure.gain, 100.0F / 19.5F, 0.15F);
   EXPECT_EQ(cv::norm(dark, copy, cv::NORM_INF), 0.0) << "the caller's frame was written";
-  EXPECT_NE(withGain.output().frame.data, dark.data);
+  // No full-size copy: the crops get the gain (frameGain) instead.
+  EXPECT_EQ(withGain.output().frame.data, dark.data);
+  EXPECT_FLOAT_EQ(withGain.output().frameGain, exposure.gain);
 
   // The same frame gained beforehand through the same tables, preprocessed without exposure:
-  // the full-resolution frame and the tiles are identical.
+  // the tiles are identical.
   WhiteBalancer tables;
   WhiteBalanceGains gains;
   gains.gain = {exposure.gain, exposure.gain, exposure.gain};
@@ -159,9 +162,20 @@ TEST(Exposure, ADarkFrameIsPreprocessedAsIfItHadBeenExposedRight) {
   Preprocessor without;
   ASSERT_TRUE(without.init(off, pinhole(), dark.size()));
   ASSERT_EQ(without.process(gained), PreprocessStatus::Ok);
-  EXPECT_EQ(cv::norm(withGain.output().frame, gained, cv::NORM_INF), 0.0);
   EXPECT_EQ(cv::norm(firstTile(withGain), firstTile(without), cv::NORM_INF), 0.0);
-  EXPECT_NEAR(cv::mean(withGain.output().frame)[1], 100.0, 3.0);
+  EXPECT_NEAR(cv::mean(firstTile(withGain))[1], 100.0, 3.0);
+
+  // With white balance there is an owned frame: the gain goes into it, multiplied into the
+  // balance's gains, and nothing is left for the crops.
+  PreprocessOptions balanced;
+  balanced.whiteBalance = true;
+  Preprocessor withBalance;
+  ASSERT_TRUE(withBalance.init(balanced, pinhole(), dark.size()));
+  ASSERT_EQ(withBalance.process(dark), PreprocessStatus::Ok);
+  ASSERT_TRUE(withBalance.output().exposure.applied);
+  EXPECT_FLOAT_EQ(withBalance.output().frameGain, 1.0F);
+  EXPECT_NE(withBalance.output().frame.data, dark.data);
+  EXPECT_GT(cv::mean(withBalance.output().frame)[1], 4.0 * cv::mean(dark)[1]);
 }
 
 TEST(Exposure, ANormallyExposedFrameIsNotTouched) {
@@ -170,6 +184,7 @@ TEST(Exposure, ANormallyExposedFrameIsNotTouched) {
   ASSERT_TRUE(on.init(PreprocessOptions{}, pinhole(), frame.size()));
   ASSERT_EQ(on.process(frame), PreprocessStatus::Ok);
   EXPECT_FALSE(on.output().exposure.applied);
+  EXPECT_FLOAT_EQ(on.output().frameGain, 1.0F);
   EXPECT_EQ(on.output().frame.data, frame.data) << "copied although nothing changed";
   PreprocessOptions offOptions;
   offOptions.exposure.enabled = false;

@@ -146,6 +146,7 @@ DetectionStatus DetectionStage::run(const preprocess::PreprocessedFrame& frame,
 DetectionStatus DetectionStage::detect(const preprocess::PreprocessedFrame& frame,
                                        std::span<Detection> out, FirstStageOutput* first) {
   *first = FirstStageOutput{};
+  first->frameGain = frame.frameGain;
   if (!initialised_) {
     return DetectionStatus::NotInitialised;
   }
@@ -217,6 +218,7 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
   const std::size_t kept = std::min(first.kept, out.size());
   // Second stage, best detections first.
   if (secondStage && kept > 0) {
+    cropper_.setFrameGain(first.frameGain);
     double frameGsd = options_.gsd.fixedGsd_m;
     if (!(frameGsd > 0.0)) {
       frameGsd = medianLengthGsd(out.first(kept), options_.gsd, gsdScratch_);

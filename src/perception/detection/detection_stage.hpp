@@ -83,7 +83,11 @@ struct DetectionStats {
 struct FirstStageOutput {
   std::size_t kept = 0;      // detections written by detect(), best first
   bool secondStage = false;  // the crop network runs on this frame
-  DetectionStats stats{};    // the first stage's fields (tiles ... decode_ms)
+  // The gain the corrected frame's pixels still need to look like the working image (the
+  // preprocessor's exposure gain when only the working image got it): refine() applies it to
+  // the crops.
+  float frameGain = 1.0F;
+  DetectionStats stats{};  // the first stage's fields (tiles ... decode_ms)
 };
 
 class DetectionStage {

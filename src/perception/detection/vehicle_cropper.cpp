@@ -278,6 +278,34 @@ bool VehicleCropper::init(const std::string& cropModelPath,
   return true;
 }
 
+void VehicleCropper::setFrameGain(float gain) {
+  if (gain == frameGain_) {
+    return;
+  }
+  frameGain_ = gain;
+  for (int v = 0; v < 256; ++v) {
+    const long scaled = std::lrint(static_cast<float>(v) * gain);
+    gainTable_[static_cast<std::size_t>(v)] =
+        static_cast<std::uint8_t>(std::clamp(scaled, 0L, 255L));
+  }
+}
+
+bool VehicleCropper::cut(const cv::Mat& frame, const CropMap& map, cv::Mat& crop) const {
+  if (!cutCrop(frame, map, crop)) {
+    return false;
+  }
+  if (frameGain_ != 1.0F) {
+    // The frame's pixels still lack the exposure gain the working image got (setFrameGain).
+    for (int v = 0; v < crop.rows; ++v) {
+      std::uint8_t* row = crop.ptr<std::uint8_t>(v);
+      for (int i = 0; i < crop.cols * crop.channels(); ++i) {
+        row[i] = gainTable_[row[i]];
+      }
+    }
+  }
+  return true;
+}
+
 SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
                                            Detection* detection) {
   if (!initialised()) {
@@ -287,7 +315,7 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
     return SecondStageStatus::BadGsd;
   }
   const geometry::RotatedBox& box = detection->box;
-  if (!cutCrop(frame, cropAffine(box.cx, box.cy, box.angle, gsd_m), crop_)) {
+  if (!cut(frame, cropAffine(box.cx, box.cy, box.angle, gsd_m), crop_)) {
     return SecondStageStatus::CropFailed;
   }
   const inference::ImageView view{crop_.data, crop_.cols, crop_.rows, crop_.step[0]};
@@ -365,10 +393,9 @@ SecondStageStatus VehicleCropper::endsFlipLogit(const cv::Mat& frame, double gsd
   for (int end = 0; end < 2; ++end) {  // 0: ahead, looking ahead; 1: behind, looking back
     const double sign = end == 0 ? 1.0 : -1.0;
     const double angle = end == 0 ? box.angle : geometry::wrapTwoPi(box.angle + geometry::kPi);
-    if (!cutCrop(
-            frame,
-            cropAffine(box.cx + sign * offset_px * c, box.cy + sign * offset_px * s, angle, gsd_m),
-            mirrored_)) {
+    if (!cut(frame,
+             cropAffine(box.cx + sign * offset_px * c, box.cy + sign * offset_px * s, angle, gsd_m),
+             mirrored_)) {
       return SecondStageStatus::CropFailed;
     }
     const inference::ImageView view{mirrored_.data, mirrored_.cols, mirrored_.rows,
@@ -394,7 +421,7 @@ SecondStageStatus VehicleCropper::turnedFlipLogit(const cv::Mat& frame, double g
   if (!(gsd_m > 0.0) || !std::isfinite(gsd_m)) {
     return SecondStageStatus::BadGsd;
   }
-  if (!cutCrop(frame, cropAffine(box.cx, box.cy, box.angle, gsd_m), crop_)) {
+  if (!cut(frame, cropAffine(box.cx, box.cy, box.angle, gsd_m), crop_)) {
     return SecondStageStatus::CropFailed;
   }
   cv::flip(crop_, mirrored_, -1);  // both axes: the crop cut at angle + pi, pixel for pixel

@@ -54,6 +54,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <string>
 
@@ -148,6 +149,11 @@ class VehicleCropper {
   SecondStageStatus turnedFlipLogit(const cv::Mat& frame, double gsd_m,
                                     const geometry::RotatedBox& box, float* flipLogit);
 
+  // Real-time: the gain the frame's pixels still need (the preprocessor's exposure gain when it
+  // went into the working image only, preprocess::PreprocessedFrame::frameGain); every crop cut
+  // from now on is mapped through saturate(round(v * gain)). 1: none (the default).
+  void setFrameGain(float gain);
+
   const cv::Mat& lastCrop() const { return crop_; }  // diagnostics and tests
   int shapeCount() const { return shapeCount_; }
   bool hasVerifier() const { return hasVerifier_; }
@@ -156,8 +162,12 @@ class VehicleCropper {
   std::span<const float> values(std::size_t outputIndex) const;  // the engine's last run
   // Runs the mirrored crop and averages into the first run's copies (contract).
   SecondStageStatus mirrorAverage(CropNetOutputs* outputs);
+  // cutCrop() and then the frame gain.
+  bool cut(const cv::Mat& frame, const CropMap& map, cv::Mat& crop) const;
 
   inference::Engine engine_;
+  float frameGain_ = 1.0F;
+  std::array<std::uint8_t, 256> gainTable_{};
   SecondStageOptions options_{};
   cv::Mat crop_;
   cv::Mat mirrored_;

@@ -131,7 +131,7 @@ bool Preprocessor::init(const PreprocessOptions& options, const camera::CameraMo
       return fail(why, "undistorted camera: " + detail);
     }
   }
-  if (remapActive_ || options.whiteBalance || options.exposure.enabled) {
+  if (remapActive_ || options.whiteBalance) {
     corrected_.create(frameSize, CV_8UC3);
     corrected_.setTo(cv::Scalar::all(0));
   } else {
@@ -317,14 +317,20 @@ PreprocessStatus Preprocessor::process(const cv::Mat& bgrFrame) {
   // balanced full-resolution row (output().frame, for the crops and the annotated video) and
   // the working image - except after undistortion, where the resize would read and write the
   // one owned buffer: there the gains go on in place first.
-  // The exposure gain goes on the same way, multiplied into the white balance's gains; a frame
-  // that is not dark (gain 1) without white balance is not copied at all.
+  // The exposure gain is multiplied into the white balance's gains when there is an owned
+  // frame to write (white balance or undistortion); otherwise it goes into the working image
+  // only and output().frameGain hands it to the crops: no full-size copy of the frame.
   const std::array<float, 3>* gains = nullptr;
   cv::Mat* gained = nullptr;
   output_.whiteBalance = options_.whiteBalance ? balancer_.estimate(*current) : WhiteBalanceGains{};
   output_.exposure =
       options_.exposure.enabled ? estimateExposure(*current, options_.exposure) : ExposureGain{};
-  if (options_.whiteBalance || output_.exposure.applied) {
+  output_.frameGain = 1.0F;
+  if (!options_.whiteBalance && !remapActive_ && output_.exposure.applied) {
+    gains_ = {output_.exposure.gain, output_.exposure.gain, output_.exposure.gain};
+    gains = &gains_;
+    output_.frameGain = output_.exposure.gain;
+  } else if (options_.whiteBalance || output_.exposure.applied) {
     WhiteBalanceGains combined = output_.whiteBalance;
     for (float& gain : combined.gain) {
       gain *= output_.exposure.gain;
@@ -415,6 +421,7 @@ PreprocessStatus Preprocessor::process(const YuvFrame& frame) {
                          : ExposureGain{};
   gains_ = {output_.exposure.gain, output_.exposure.gain, output_.exposure.gain};
   resize(source, output_.exposure.applied ? &gains_ : nullptr, nullptr);
+  output_.frameGain = 1.0F;  // no full-resolution frame on this path
   output_.whiteBalance = WhiteBalanceGains{};
   output_.timings = PreprocessTimings{};
   output_.timings.resize_ms = millisecondsSince(start);

@@ -11,8 +11,10 @@
 //     caller's frame is never written);
 //  2b. exposure (optional, on by default; exposure.hpp): a frame darker than the detector's
 //     training frames gets a gain equal on all channels, applied like the white balance's
-//     gains (combined with them when both run), in the same sweep and into the same buffer;
-//     output().exposure says what was found;
+//     gains in the same sweep. With white balance or undistortion it is multiplied into their
+//     gains and written to the owned full-resolution frame too; otherwise only the working
+//     image gets it (no full-size copy, no buffer for it) and output().frameGain tells readers
+//     of the full-resolution frame (the crops) to apply it themselves;
 //  3. area downscale by the working scale (AreaResizer, = cv::resize INTER_AREA) into the
 //     working image, whose padding right/bottom (to at least the network input) holds padValue;
 //     steps 2 (its gains) and 3 are one sweep over the frame's rows, split over the threads:
@@ -68,8 +70,7 @@ struct PreprocessOptions {
   bool whiteBalance = false;  // seed 001 AWB (the detector is trained without it)
   WhiteBalanceOptions whiteBalanceOptions{};
   // Gain for under-exposed frames (on by default; normally exposed frames are left as they
-  // are). Costs the owned full-resolution buffer (one frame) that the gained frame is written
-  // to for the crops.
+  // are).
   ExposureOptions exposure{};
   double workingScale = kDefaultWorkingScale;  // working px per frame px, (0, 1]
   // > 0: adapt the working scale to the frame's GSD (adaptToGsd) so that one working pixel
@@ -128,6 +129,9 @@ struct PreprocessedFrame {
   std::span<const TileView> tiles;
   WhiteBalanceGains whiteBalance{};  // gains of this frame (found = false when AWB is off)
   ExposureGain exposure{};           // this frame's exposure gain (1 when off or not dark)
+  // The gain `frame`'s pixels still need to match the working image: exposure.gain when the
+  // gain went into the working image only (no white balance, no undistortion), else 1.
+  float frameGain = 1.0F;
   PreprocessTimings timings{};
 };
 
