@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "geometry/rotated_box.hpp"
+#include "preprocess/white_balance.hpp"
 
 namespace vp::detection {
 
@@ -283,11 +284,7 @@ void VehicleCropper::setFrameGain(float gain) {
     return;
   }
   frameGain_ = gain;
-  for (int v = 0; v < 256; ++v) {
-    const long scaled = std::lrint(static_cast<float>(v) * gain);
-    gainTable_[static_cast<std::size_t>(v)] =
-        static_cast<std::uint8_t>(std::clamp(scaled, 0L, 255L));
-  }
+  gainTable_ = preprocess::gainTable(gain);  // the preprocessor's rounding, byte for byte
 }
 
 bool VehicleCropper::cut(const cv::Mat& frame, const CropMap& map, cv::Mat& crop) const {

@@ -222,12 +222,18 @@ WhiteBalanceGains WhiteBalancer::estimate(const cv::Mat& bgrFrame) {
   return result;
 }
 
+std::array<std::uint8_t, 256> gainTable(float gain) {
+  std::array<std::uint8_t, 256> table{};
+  for (int v = 0; v < 256; ++v) {
+    const long scaled = std::lrint(static_cast<float>(v) * gain);
+    table[static_cast<std::size_t>(v)] = static_cast<std::uint8_t>(std::clamp(scaled, 0L, 255L));
+  }
+  return table;
+}
+
 void WhiteBalancer::setGains(const WhiteBalanceGains& gains) {
-  for (int c = 0; c < 3; ++c) {
-    for (int v = 0; v < 256; ++v) {
-      const long scaled = std::lrint(static_cast<float>(v) * gains.gain[c]);
-      table_[c][v] = static_cast<std::uint8_t>(std::clamp(scaled, 0L, 255L));
-    }
+  for (std::size_t c = 0; c < 3; ++c) {
+    table_[c] = gainTable(gains.gain[c]);
   }
 }
 

@@ -53,6 +53,10 @@ struct WhiteBalanceGains {
 // Checks the options; false with a message naming the key otherwise.
 bool validate(const WhiteBalanceOptions& options, std::string* why);
 
+// The 8-bit table of one gain: entry v = saturate(round(v * gain)) - how every gain of the
+// preprocessing is applied (white balance, exposure; the crops' exposure gain too).
+std::array<std::uint8_t, 256> gainTable(float gain);
+
 class WhiteBalancer {
  public:
   WhiteBalancer() = default;
