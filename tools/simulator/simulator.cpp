@@ -204,7 +204,7 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   if (!asm_.load(asmPath, why)) {
     return false;
   }
-  factory_ = std::make_unique<VehicleFactory>(asm_, options.twoToneShare);
+  factory_ = std::make_unique<VehicleFactory>(asm_, options.twoToneShare, options.cityCarShare);
   traffic_.init(scene_, *factory_, pathHalf, options.warmUpS, kFrameIntervalS, rng);
   sensor_.init(camera_, canvas_, sensorSpec_);
   renderer_.init(scene_, world_, lo, hi, rig_.altitude_m / rig_.intrinsics.fx_px,
@@ -344,6 +344,9 @@ std::string Simulator::summary() const {
     << (options_.telemetryNoise ? ", telemetry with noise" : ", telemetry = true pose");
   if (options_.twoToneShare > 0.0) {
     s << ", two-tone share " << num(options_.twoToneShare);
+  }
+  if (options_.cityCarShare > 0.0) {
+    s << ", city-car share " << num(options_.cityCarShare);
   }
   if (options_.poles) {
     s << ", sign posts and street lamps";

@@ -56,6 +56,9 @@ struct SimOptions {
   // Share of cars with a roof in a contrasting colour (a white roof on a dark car, a black one on
   // a light car), 0..1. The scene of a seed is the same whatever the share; 0 renders as before.
   double twoToneShare = 0.0;
+  // Share of compact cars shortened to city cars (2.5-3.6 m, vehicles.hpp), 0..1; drawn from
+  // each car's own shape like the two-tone share. Their ground truth has no gamma.
+  double cityCarShare = 0.0;
   // Sign posts and street lamps along the kerbs (addPoles); the rest of a seed's scene is the
   // same with or without them.
   bool poles = false;

@@ -221,13 +221,20 @@ shape::VehicleType VehicleFactory::drawCarType(Rng& rng) const {
 
 std::shared_ptr<const VehicleModel> VehicleFactory::carFromGamma(shape::VehicleType type,
                                                                  const shape::ShapeParams& gamma,
-                                                                 const VehicleLook& look) const {
+                                                                 const VehicleLook& look,
+                                                                 double lengthScale,
+                                                                 double widthScale) const {
   auto m = std::make_shared<VehicleModel>();
   m->type = type;
   m->gamma = gamma;
   m->hasKeypoints = true;
   m->look = look;
-  const shape::KeypointModel k = asm_->shape(gamma);
+  shape::KeypointModel k = asm_->shape(gamma);
+  if (lengthScale != 1.0 || widthScale != 1.0) {
+    k.row(0) *= lengthScale;  // vehicle frame: x forward, y left, z up
+    k.row(1) *= widthScale;
+    m->gamma.count = 0;  // no gamma describes the scaled shape
+  }
   for (int i = 0; i < shape::kKeypointCount; ++i) {
     m->vertices.emplace_back(k.col(i));
   }
@@ -289,7 +296,25 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeCar(Rng& rng,
       makeTwoTone(look, own);
     }
   }
-  return carFromGamma(type, gamma, look);
+  double lengthScale = 1.0;
+  double widthScale = 1.0;
+  if (cityCarShare_ > 0.0 && type == shape::VehicleType::Compact) {
+    // Its own stream from the car's shape too (another hash basis than the two-tone draw's):
+    // which compact cars become city cars does not depend on the two-tone share.
+    std::uint64_t h = 0x84222325cbf29ce4ULL;
+    for (int s = 0; s < n; ++s) {
+      std::uint32_t bits = 0;
+      std::memcpy(&bits, &gamma.gamma[static_cast<std::size_t>(s)], sizeof bits);
+      h = (h ^ bits) * 1099511628211ULL;
+    }
+    Rng own(h);
+    if (own.chance(cityCarShare_)) {
+      const double length_m = shape::boundingBoxSize(asm_->shape(gamma)).x();
+      lengthScale = own.uniform(kCityCarLength_m.min_m, kCityCarLength_m.max_m) / length_m;
+      widthScale = own.uniform(kCityCarWidthScaleMin, 1.0);
+    }
+  }
+  return carFromGamma(type, gamma, look, lengthScale, widthScale);
 }
 
 std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {

@@ -44,6 +44,16 @@ enum class Material : std::uint8_t {
   SolarPanel,  // dark blue cells in a grid (axis: along the panel rows)
 };
 
+// City cars (--city-car-share): compact cars shortened to this overall length and narrowed by
+// kCityCarWidthScale, as the two-seaters and small hatchbacks of European towns (2.5 m two-seaters
+// to 3.6 m four-seat hatchbacks); the ASM's compact type starts at 3.55 m.
+struct CityCarLength {
+  double min_m = 2.5;
+  double max_m = 3.6;
+};
+inline constexpr CityCarLength kCityCarLength_m{};
+inline constexpr double kCityCarWidthScaleMin = 0.90;
+
 struct VehicleTriangle {
   std::array<std::uint16_t, 3> v{};
   Material material = Material::Paint;
@@ -87,17 +97,24 @@ class VehicleFactory {
  public:
   // twoToneShare: share of cars whose roof is painted in a contrasting colour (0..1), drawn
   // apart from the sequence stream: the same seed gives the same scene, only roofs repainted.
-  explicit VehicleFactory(const shape::ActiveShapeModel& asmModel, double twoToneShare = 0.0)
-      : asm_(&asmModel), twoToneShare_(twoToneShare) {}
+  // cityCarShare: share of compact cars shortened to a city car (kCityCarLength_m), drawn the
+  // same way: every other car, and the scene's draws, stay those of the seed.
+  explicit VehicleFactory(const shape::ActiveShapeModel& asmModel, double twoToneShare = 0.0,
+                          double cityCarShare = 0.0)
+      : asm_(&asmModel), twoToneShare_(twoToneShare), cityCarShare_(cityCarShare) {}
 
   // A car of the given type (one of the six ASM types) with gamma drawn from its prior.
   std::shared_ptr<const VehicleModel> makeCar(Rng& rng, shape::VehicleType type) const;
   // A bus or truck.
   std::shared_ptr<const VehicleModel> makeLarge(Rng& rng) const;
-  // Builds the model of a car from given gamma (tests, figures).
+  // Builds the model of a car from given gamma (tests, figures). lengthScale < 1 shortens the
+  // car along its axis and widthScale narrows it (a city car); the result's gamma then has
+  // count 0 (no ASM shape describes it: the ground truth leaves gamma unknown).
   std::shared_ptr<const VehicleModel> carFromGamma(shape::VehicleType type,
                                                    const shape::ShapeParams& gamma,
-                                                   const VehicleLook& look) const;
+                                                   const VehicleLook& look,
+                                                   double lengthScale = 1.0,
+                                                   double widthScale = 1.0) const;
   // Type drawn from the traffic mix (parked: no large vehicles).
   shape::VehicleType drawCarType(Rng& rng) const;
 
@@ -106,6 +123,7 @@ class VehicleFactory {
  private:
   const shape::ActiveShapeModel* asm_;
   double twoToneShare_ = 0.0;
+  double cityCarShare_ = 0.0;
 };
 
 VehicleLook drawLook(Rng& rng);
