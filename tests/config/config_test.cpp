@@ -149,6 +149,7 @@ perception:
   max_crops: 64
   apply_flip: false
   apply_refine: false
+  crop_refine_size: false
   crop_mirror_average: false
   crop_mirror_refine: false
   crop_large_vehicle_ends: false
@@ -805,6 +806,8 @@ const MalformedCase kMalformedCases[] = {
      "perception.crop_min_vehicle_probability", "must be in [0, 1], got 1.5"},
     {"apply_refine: false", "apply_refine: []", "perception.apply_refine",
      "expected true or false, got a sequence of 0 element(s)"},
+    {"crop_refine_size: false", "crop_refine_size: 0.5", "perception.crop_refine_size",
+     "expected true or false, got '0.5'"},
     {"fixed_gsd_m: 0.03", "fixed_gsd_m: -0.1", "perception.fixed_gsd_m",
      "must be in [0, 1], got -0.1"},
     {"nominal_car_length_m: 4.4", "nominal_car_length_m: 0", "perception.nominal_car_length_m",
@@ -1122,6 +1125,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "perception.max_crops",
                                                "perception.apply_flip",
                                                "perception.apply_refine",
+                                               "perception.crop_refine_size",
                                                "perception.crop_mirror_average",
                                                "perception.crop_mirror_refine",
                                                "perception.crop_large_vehicle_ends",
@@ -1648,6 +1652,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_EQ(det.maxCrops, 64);
   EXPECT_FALSE(det.secondStage.applyFlip);
   EXPECT_FALSE(det.secondStage.applyRefine);
+  EXPECT_FALSE(det.secondStage.refineSize);
   EXPECT_FALSE(det.secondStage.mirrorAverage);
   EXPECT_FALSE(det.secondStage.mirrorRefine);
   EXPECT_FALSE(det.secondStage.largeVehicleEnds);

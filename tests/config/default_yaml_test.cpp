@@ -72,6 +72,7 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   const detection::SecondStageOptions& secondCode = detCode.secondStage;
   EXPECT_EQ(second.applyFlip, secondCode.applyFlip);
   EXPECT_EQ(second.applyRefine, secondCode.applyRefine);
+  EXPECT_EQ(second.refineSize, secondCode.refineSize);
   EXPECT_EQ(second.shapeForLargeVehicles, secondCode.shapeForLargeVehicles);
   EXPECT_EQ(second.refineLargeVehicleLength, secondCode.refineLargeVehicleLength);
   EXPECT_EQ(second.mirrorAverage, secondCode.mirrorAverage);

@@ -277,6 +277,18 @@ TEST(VehicleCropper, LargeVehicleKeepsTheFirstStageLength) {
   ASSERT_EQ(applyCropOutputs(outputs, gsd, singleCrop(), &car), SecondStageStatus::Ok);
   EXPECT_NEAR(car.box.cx, 510.0, 1e-9);
   EXPECT_NEAR(car.box.length, 5.5 / gsd, 1e-4);
+
+  // Without the size refinement the centre and axis are refined, length and width kept.
+  SecondStageOptions noSize = singleCrop();
+  noSize.refineSize = false;
+  Detection kept;
+  kept.box = {500.0, 300.0, 90.0, 36.0, 0.0};
+  ASSERT_EQ(applyCropOutputs(outputs, gsd, noSize, &kept), SecondStageStatus::Ok);
+  EXPECT_NEAR(kept.box.cx, 510.0, 1e-9);
+  EXPECT_NEAR(kept.box.cy, 305.0, 1e-9);
+  EXPECT_NEAR(kept.box.angle, 0.02, 1e-6);
+  EXPECT_EQ(kept.box.length, 90.0);
+  EXPECT_EQ(kept.box.width, 36.0);
 }
 
 // A textured background for the crop network (uniform noise, blurred like a photo).

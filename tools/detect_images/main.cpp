@@ -64,6 +64,7 @@ options:
   --threads N           detector threads (default 1)
   --no-flip             keep the detector's front/back (the second stage's flip is not applied)
   --no-refine           keep the detector's box (the second stage's refinement is not applied)
+  --no-refine-size      refine centre and axis but keep the detector's length and width
   --no-mirror           one crop-network run per vehicle (default: also the mirrored crop, type
                         averaged, as the app's perception.crop_mirror_average)
   --no-mirror-refine    average only the type over the crop and its mirror image, not the box
@@ -151,6 +152,7 @@ Options parseArguments(int argc, char** argv) {
       bool value;
     } switches[] = {{"--no-flip", &second.applyFlip, false},
                     {"--no-refine", &second.applyRefine, false},
+                    {"--no-refine-size", &second.refineSize, false},
                     {"--no-mirror", &second.mirrorAverage, false},
                     {"--no-mirror-refine", &second.mirrorRefine, false},
                     {"--no-turn", &second.turnAverage, false},

@@ -144,6 +144,9 @@ def parse_args(argv=None):
     p.add_argument("--flip-head-only", action="store_true",
                    help="train only the front/back branch (needs --flip-branch, --init-from and "
                         "--crop-only): type, shape, refinement and verifier stay as they are")
+    p.add_argument("--refine-head-only", action="store_true",
+                   help="train only the box refinement head (needs --init-from and --crop-only): "
+                        "type, shape, front/back and verifier stay exactly as they are")
     p.add_argument("--shadow-share", type=float, default=0.0,
                    help="share of first-stage tiles given a cast shadow (augment.cast_shadow)")
     p.add_argument("--jpeg-share", type=float, default=0.0,
@@ -672,6 +675,11 @@ def train(args) -> dict:
             raise SystemExit("--flip-head-only needs --flip-branch, --init-from and --crop-only")
         for name, prm in crop_net.named_parameters():
             prm.requires_grad = name.startswith(("flip_fc.", "flip_logit."))
+    if args.refine_head_only:
+        if not (args.init_from and args.crop_only):
+            raise SystemExit("--refine-head-only needs --init-from and --crop-only")
+        for name, prm in crop_net.named_parameters():
+            prm.requires_grad = name.startswith("refine.")
     opt_c = torch.optim.AdamW([q for q in crop_net.parameters() if q.requires_grad], lr=args.lr,
                               weight_decay=1e-4) if crop_net else None
     shape_loss = make_shape_loss(args.shape_loss, asm)
@@ -717,7 +725,7 @@ def train(args) -> dict:
     if crop_net:
         # Head only: the frozen layers keep their batch-norm statistics (eval mode), so the
         # other outputs stay exactly what --init-from gave.
-        crop_net.train(not (args.verifier_head_only or args.flip_head_only))
+        crop_net.train(not (args.verifier_head_only or args.flip_head_only or args.refine_head_only))
     last_ckpt = time.monotonic()
     t_run = time.monotonic()
     elapsed0 = elapsed

@@ -155,6 +155,7 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
   const detection::SecondStageOptions& secondDefaults = d.detection.secondStage;
   second.applyFlip = section.boolean("apply_flip", secondDefaults.applyFlip);
   second.applyRefine = section.boolean("apply_refine", secondDefaults.applyRefine);
+  second.refineSize = section.boolean("crop_refine_size", secondDefaults.refineSize);
   second.mirrorAverage = section.boolean("crop_mirror_average", secondDefaults.mirrorAverage);
   second.turnAverage = section.boolean("crop_turn_average", secondDefaults.turnAverage);
   second.mirrorRefine = section.boolean("crop_mirror_refine", secondDefaults.mirrorRefine);

@@ -185,7 +185,7 @@ SecondStageStatus applyCropOutputs(const CropNetOutputs& outputs, double gsd_m,
     d.box.cx += (c * r[0] - s * r[1]) / gsd_m;
     d.box.cy += (s * r[0] + c * r[1]) / gsd_m;
     angle += r[2];
-    if (r[3] > 0.0 && r[4] > 0.0) {
+    if (options.refineSize && r[3] > 0.0 && r[4] > 0.0) {
       d.box.length = r[3] / gsd_m;
       d.box.width = r[4] / gsd_m;
     }

@@ -99,6 +99,7 @@ struct CropNetOutputs {
 struct SecondStageOptions {
   bool applyFlip = true;                  // turn the heading by 180 deg when flip prob > 0.5
   bool applyRefine = true;                // centre/axis/size refinement (see the contract)
+  bool refineSize = true;                 // ... including length and width (else the first stage's)
   bool shapeForLargeVehicles = false;     // keep gamma when the top type is Large
   bool refineLargeVehicleLength = false;  // apply length and du when the top type is Large
   bool mirrorAverage = true;              // type averaged with the mirrored crop's (see contract)
