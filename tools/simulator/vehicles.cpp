@@ -148,6 +148,18 @@ Eigen::Vector3f srgbToLinear(double r, double g, double b) {
   return {f(r), f(g), f(b)};
 }
 
+// FNV-1a over the bits of a car's first n shape parameters from the given basis: a seed that
+// belongs to the car itself, for draws that must leave the sequence stream untouched.
+std::uint64_t shapeHash(std::uint64_t basis, const shape::ShapeParams& gamma, int n) {
+  std::uint64_t h = basis;
+  for (int s = 0; s < n; ++s) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &gamma.gamma[static_cast<std::size_t>(s)], sizeof bits);
+    h = (h ^ bits) * 1099511628211ULL;
+  }
+  return h;
+}
+
 }  // namespace
 
 AxleGeometry axleGeometry(const shape::KeypointModel& keypoints) {
@@ -285,13 +297,7 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeCar(Rng& rng,
   if (twoToneShare_ > 0.0) {
     // Drawn from the car's own shape, not the sequence stream: the scene (every car, its place
     // and its motion) stays the one the seed gives without two-tone roofs; only roofs change.
-    std::uint64_t h = 1469598103934665603ULL ^ static_cast<std::uint64_t>(type);
-    for (int s = 0; s < n; ++s) {
-      std::uint32_t bits = 0;
-      std::memcpy(&bits, &gamma.gamma[static_cast<std::size_t>(s)], sizeof bits);
-      h = (h ^ bits) * 1099511628211ULL;
-    }
-    Rng own(h);
+    Rng own(shapeHash(1469598103934665603ULL ^ static_cast<std::uint64_t>(type), gamma, n));
     if (own.chance(twoToneShare_)) {
       makeTwoTone(look, own);
     }
@@ -301,13 +307,7 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeCar(Rng& rng,
   if (cityCarShare_ > 0.0 && type == shape::VehicleType::Compact) {
     // Its own stream from the car's shape too (another hash basis than the two-tone draw's):
     // which compact cars become city cars does not depend on the two-tone share.
-    std::uint64_t h = 0x84222325cbf29ce4ULL;
-    for (int s = 0; s < n; ++s) {
-      std::uint32_t bits = 0;
-      std::memcpy(&bits, &gamma.gamma[static_cast<std::size_t>(s)], sizeof bits);
-      h = (h ^ bits) * 1099511628211ULL;
-    }
-    Rng own(h);
+    Rng own(shapeHash(0x84222325cbf29ce4ULL, gamma, n));
     if (own.chance(cityCarShare_)) {
       const double length_m = shape::boundingBoxSize(asm_->shape(gamma)).x();
       lengthScale = own.uniform(kCityCarLength_m.min_m, kCityCarLength_m.max_m) / length_m;
