@@ -5,21 +5,14 @@
 
 #include <string>
 
+#include "default_asm.hpp"
 #include "shape/vehicle_model.hpp"
 #include "vehicles.hpp"
 
 namespace {
 
-vp::shape::ActiveShapeModel loadAsm() {
-  vp::shape::ActiveShapeModel asmModel;
-  std::string why;
-  EXPECT_TRUE(asmModel.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", &why))
-      << why;
-  return asmModel;
-}
-
 TEST(CityCar, CompactCarsAreShortenedAndOtherCarsStayTheSame) {
-  const vp::shape::ActiveShapeModel asmModel = loadAsm();
+  const vp::shape::ActiveShapeModel asmModel = vp::sim::test::loadDefaultAsm();
   const vp::sim::VehicleFactory plain(asmModel);
   const vp::sim::VehicleFactory city(asmModel, 0.0, 1.0);
   vp::sim::Rng rngPlain(7);
@@ -54,7 +47,7 @@ TEST(CityCar, CompactCarsAreShortenedAndOtherCarsStayTheSame) {
 }
 
 TEST(CityCar, AShareOfTheCompactCars) {
-  const vp::shape::ActiveShapeModel asmModel = loadAsm();
+  const vp::shape::ActiveShapeModel asmModel = vp::sim::test::loadDefaultAsm();
   const vp::sim::VehicleFactory half(asmModel, 0.0, 0.5);
   vp::sim::Rng rng(3);
   int compact = 0;

@@ -12,6 +12,7 @@
 
 #include <unistd.h>
 
+#include "default_asm.hpp"
 #include "shape/vehicle_model.hpp"
 #include "simulator.hpp"
 #include "vehicles.hpp"
@@ -24,14 +25,6 @@ float luminance(const Eigen::Vector3f& c) {
   return 0.2126F * c.x() + 0.7152F * c.y() + 0.0722F * c.z();
 }
 
-vp::shape::ActiveShapeModel loadAsm() {
-  vp::shape::ActiveShapeModel asmModel;
-  std::string why;
-  EXPECT_TRUE(asmModel.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", &why))
-      << why;
-  return asmModel;
-}
-
 int roofTriangles(const vp::sim::VehicleModel& m) {
   int n = 0;
   for (const auto& t : m.triangles) {
@@ -41,7 +34,7 @@ int roofTriangles(const vp::sim::VehicleModel& m) {
 }
 
 TEST(TwoTone, TheRoofPanelAloneTakesAContrastingColour) {
-  const vp::shape::ActiveShapeModel asmModel = loadAsm();
+  const vp::shape::ActiveShapeModel asmModel = vp::sim::test::loadDefaultAsm();
   const vp::sim::VehicleFactory plain(asmModel);
   const vp::sim::VehicleFactory twoTone(asmModel, 1.0);
   vp::sim::Rng rngPlain(11);
@@ -83,7 +76,7 @@ TEST(TwoTone, TheRoofPanelAloneTakesAContrastingColour) {
 }
 
 TEST(TwoTone, AShareOfCarsAndTheSameScene) {
-  const vp::shape::ActiveShapeModel asmModel = loadAsm();
+  const vp::shape::ActiveShapeModel asmModel = vp::sim::test::loadDefaultAsm();
   const vp::sim::VehicleFactory half(asmModel, 0.5);
   vp::sim::Rng rng(3);
   int twoTone = 0;
