@@ -28,10 +28,9 @@ void PeriodicReports::tick(std::int64_t now_ns, const FrameOutcome& frame) {
       publishStatus(now_ns + wiring_.monotonicToUtc_ns, frame);
       nextStatusNs_ = now_ns + static_cast<std::int64_t>(period_s * 1e9);
     }
-    // A grid is an observation: an idle tick (no frame, time 0) publishes none and leaves the
+    // A grid is an observation: an idle tick (no processed frame) publishes none and leaves the
     // period to the next frame, so a subscriber never gets an empty grid stamped at the epoch.
-    if (wiring_.dds->occupancyRate_hz > 0.0 && now_ns >= nextOccupancyNs_ &&
-        frame.timeUtc_ns != 0) {
+    if (wiring_.dds->occupancyRate_hz > 0.0 && now_ns >= nextOccupancyNs_ && frame.processed) {
       publishOccupancy(frame);
       nextOccupancyNs_ = now_ns + static_cast<std::int64_t>(1e9 / wiring_.dds->occupancyRate_hz);
     }

@@ -9,8 +9,8 @@
 // thread after each processed frame with that frame's outcome (its published states and the
 // ground footprint perception computed: nothing is lifted here) and sends what is due; it
 // never allocates (Cyclone's write path aside) and counts a failed write in publishErrors.
-// The loop's idle ticks (no frame for a while) pass an outcome of time 0: status, watchdog and
-// statistics go on, but the occupancy grid waits for the next frame.
+// The loop's idle ticks (no frame for a while) pass an outcome not processed: status, watchdog
+// and statistics go on, but the occupancy grid waits for the next frame.
 #pragma once
 
 #include <cstdint>
