@@ -329,13 +329,14 @@ TEST(DetectionStage, InitNamesModelProblems) {
 // where two types are nearly tied; two refined boxes of one long vehicle with equal scores
 // are ordered by a tie, and the duplicate suppression keeps the other one. So the test holds
 // the two runs to this: every confident detection (score >= kSolidScore) has its twin in the
-// other run - within kTwinDistance_px (2.5 % of a ~165 px car) and a score within 0.02 - and
+// other run - within kTwinDistance_px (3 % of a ~165 px car) and a score within 0.02 - and
 // most of them (kAgreeingShare) agree in full: centre within 2.5 px, length within 5.5 px
 // (four of the crop network's 1.35 px length steps on this frame), the same type. Measured
 // with detector v8: 76 confident detections over both runs, every one with a twin within
 // 3.5 px, 87 % in full agreement (the rest: three type flips, two lengths 5 and 8 steps
-// apart, one suppression tie). Every detection gets its crop: with a crop budget, which
-// detections are refined would depend on their score rank as well.
+// apart, one suppression tie); with v10: 78, every twin within 4.8 px, 97 % in full agreement.
+// Every detection gets its crop: with a crop budget, which detections are refined would depend on
+// their score rank as well.
 TEST(DetectionStage, OneDnnBackendDecodesTheSameDetectionsAsXnnpack) {
   if (!inference::dnnlInt8Available())
     GTEST_SKIP() << "this build has no oneDNN (libdnnl-dev absent at configure time)";
@@ -358,7 +359,7 @@ TEST(DetectionStage, OneDnnBackendDecodesTheSameDetectionsAsXnnpack) {
     ASSERT_EQ(stage.run(pre.output(), out[b], &count[b]), DetectionStatus::Ok);
   }
   constexpr float kSolidScore = 0.2F;
-  constexpr double kTwinDistance_px = 4.0;
+  constexpr double kTwinDistance_px = 5.0;
   constexpr double kAgreeingShare = 0.8;
   std::size_t solid = 0;
   std::size_t agreeing = 0;
@@ -409,7 +410,8 @@ TEST(DetectionStage, OneDnnBackendDecodesTheSameDetectionsAsXnnpack) {
 // gained beforehand through the same tables with the exposure off: the tiles are identical
 // (tests/preprocess/exposure_test.cpp), the crops differ only by where the rounding falls (gain
 // before or after the bilinear sampling), so every detection must have its twin: centre within
-// 1 px, the same type, score within 0.02. Without the crops' gain the types and boxes change.
+// 1.5 px, the same type but for near ties, score within 0.02. Without the crops' gain the types
+// and boxes change.
 TEST(DetectionStage, ADarkFrameIsDetectedAsTheSameFrameExposedRight) {
   cv::Mat dark;
   sceneFrame().convertTo(dark, CV_8UC3, 0.2);
@@ -445,6 +447,14 @@ TEST(DetectionStage, ADarkFrameIsDetectedAsTheSameFrameExposedRight) {
   ASSERT_EQ(stage.run(reference.output(), out[1], &count[1]), DetectionStatus::Ok);
   ASSERT_GE(count[1], 10U);
   EXPECT_EQ(count[0], count[1]);
+  // Centres within 1.5 px (1 % of a ~165 px car; v10's largest shift 1.32 px, from the crop
+  // network's refinement of a crop that differs by rounding).
+  constexpr double kTwinDistance_px = 1.5;
+  // The type may flip only where the reference's top two are a near tie (measured: v9 two flips
+  // at 0.018 and 0.038 apart, v10 one at 0.019, with the type averaged over four looks).
+  constexpr float kTypeTie = 0.05F;
+  constexpr std::size_t kMaxTypeFlips = 2;
+  std::size_t typeFlips = 0;
   for (std::size_t i = 0; i < count[1]; ++i) {
     const Detection& r = out[1][i];
     const Detection* twin = nullptr;
@@ -457,10 +467,20 @@ TEST(DetectionStage, ADarkFrameIsDetectedAsTheSameFrameExposedRight) {
       }
     }
     ASSERT_NE(twin, nullptr);
-    EXPECT_LE(best, 1.0) << "detection " << i;
-    EXPECT_EQ(topTwoTypes(*twin).first, topTwoTypes(r).first) << "detection " << i;
+    EXPECT_LE(best, kTwinDistance_px) << "detection " << i;
+    const TopTwoTypes types = topTwoTypes(r);
+    if (topTwoTypes(*twin).first != types.first) {
+      ++typeFlips;
+      std::printf("  detection %zu: type %d -> %d, reference top two %.3f / %.3f\n", i,
+                  static_cast<int>(types.first), static_cast<int>(topTwoTypes(*twin).first),
+                  static_cast<double>(types.firstProbability),
+                  static_cast<double>(types.secondProbability));
+      EXPECT_LE(types.firstProbability - types.secondProbability, kTypeTie)
+          << "detection " << i << ": a type flip that is no near tie";
+    }
     EXPECT_LE(std::abs(twin->score - r.score), 0.02F) << "detection " << i;
   }
+  EXPECT_LE(typeFlips, kMaxTypeFlips);
 }
 
 }  // namespace

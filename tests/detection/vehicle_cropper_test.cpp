@@ -26,6 +26,7 @@ SecondStageOptions singleCrop() {
   options.mirrorRefine = false;
   options.largeVehicleEnds = false;
   options.turnAverage = false;
+  options.turnTypeAverage = false;
   options.minVehicleProbability = 0.0F;
   return options;
 }
@@ -397,7 +398,8 @@ TEST(VehicleCropper, MirrorAverageCombinesTheCropAndItsMirrorImage) {
 // turnedFlipLogit() is half the difference of the flip logits classify() gives for a box and for
 // the box turned by 180 deg (1 crop px = 1 frame px, box centre on a pixel: the crop cut at
 // angle + pi is the turned crop); classify() with turnAverage takes its front/back from it, so a
-// box and the same box turned by 180 deg end with the same heading. Type stays the crop's.
+// box and the same box turned by 180 deg end with the same heading. Type stays the crop's unless
+// turnTypeAverage also averages the turned runs' type logits in.
 TEST(VehicleCropper, TurnAverageMakesFrontBackIndependentOfTheBoxDirection) {
   cv::Mat frame = blurredNoise(240, 320, 13);
   cv::rectangle(frame, cv::Rect(130, 110, 60, 20), cv::Scalar(40, 60, 200), cv::FILLED);
@@ -439,6 +441,30 @@ TEST(VehicleCropper, TurnAverageMakesFrontBackIndependentOfTheBoxDirection) {
   for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
     EXPECT_EQ(c.typeProbabilities[t], a.typeProbabilities[t]) << "type " << t;
   }
+
+  // turnTypeAverage: the type logits are the mean of the first look's and of the two turned
+  // runs' mean, i.e. probabilities proportional to p_a^(3/4) p_b^(1/4); front/back unchanged.
+  SecondStageOptions typed = turned;
+  typed.turnTypeAverage = true;
+  VehicleCropper withType;
+  ASSERT_TRUE(withType.init(model, {}, typed));
+  Detection e = box(0.0);
+  ASSERT_EQ(withType.classify(frame, kGsd, &e), SecondStageStatus::Ok);
+  EXPECT_EQ(e.flipProbability, c.flipProbability);
+  EXPECT_EQ(e.box.angle, c.box.angle);
+  std::array<double, shape::kVehicleTypeCount> expected{};
+  double total = 0.0;
+  double change = 0.0;
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    expected[t] = std::pow(static_cast<double>(a.typeProbabilities[t]), 0.75) *
+                  std::pow(static_cast<double>(b.typeProbabilities[t]), 0.25);
+    total += expected[t];
+  }
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    EXPECT_NEAR(e.typeProbabilities[t], expected[t] / total, 1e-4) << "type " << t;
+    change += std::abs(static_cast<double>(e.typeProbabilities[t] - a.typeProbabilities[t]));
+  }
+  EXPECT_GT(change, 1e-4) << "the turned runs agree with the first: the test would show nothing";
 }
 
 // largeVehicleEnds: a long vehicle's front/back from crops at its two ends. endsFlipLogit() is

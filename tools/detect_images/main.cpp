@@ -72,6 +72,9 @@ options:
   --no-turn             front/back from the crop as cut only (default: from a crop at the
                         refined box and its 180 deg turn, as the app's
                         perception.crop_turn_average)
+  --no-turn-type        type from the first look only (default: also from those two runs at
+                        the refined box, averaged with the first look's, as the app's
+                        perception.crop_turn_type_average)
   --min-vehicle-probability P
                         drop detections the crop network's verifier gives a lower vehicle
                         probability, [0, 1] (default 0.3, as the app's
@@ -156,6 +159,7 @@ Options parseArguments(int argc, char** argv) {
                     {"--no-mirror", &second.mirrorAverage, false},
                     {"--no-mirror-refine", &second.mirrorRefine, false},
                     {"--no-turn", &second.turnAverage, false},
+                    {"--no-turn-type", &second.turnTypeAverage, false},
                     {"--refine-large-length", &second.refineLargeVehicleLength, true},
                     {"--no-large-vehicle-ends", &second.largeVehicleEnds, false},
                     {"--no-exposure", &o.exposure, false}};

@@ -158,6 +158,8 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
   second.refineSize = section.boolean("crop_refine_size", secondDefaults.refineSize);
   second.mirrorAverage = section.boolean("crop_mirror_average", secondDefaults.mirrorAverage);
   second.turnAverage = section.boolean("crop_turn_average", secondDefaults.turnAverage);
+  second.turnTypeAverage =
+      section.boolean("crop_turn_type_average", secondDefaults.turnTypeAverage);
   second.mirrorRefine = section.boolean("crop_mirror_refine", secondDefaults.mirrorRefine);
   second.largeVehicleEnds =
       section.boolean("crop_large_vehicle_ends", secondDefaults.largeVehicleEnds);

@@ -41,6 +41,20 @@ bool allFinite(std::span<const float> values) {
   return std::all_of(values.begin(), values.end(), [](float v) { return std::isfinite(v); });
 }
 
+// Type: softmax of the logits (shifted by the largest for range).
+void setTypeProbabilities(std::span<const float> typeLogits, Detection* detection) {
+  const float largest = *std::max_element(typeLogits.begin(), typeLogits.end());
+  double total = 0.0;
+  std::array<double, shape::kVehicleTypeCount> e{};
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    e[t] = std::exp(static_cast<double>(typeLogits[t]) - static_cast<double>(largest));
+    total += e[t];
+  }
+  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+    detection->typeProbabilities[t] = static_cast<float>(e[t] / total);
+  }
+}
+
 }  // namespace
 
 const char* toString(SecondStageStatus status) {
@@ -146,18 +160,7 @@ SecondStageStatus applyCropOutputs(const CropNetOutputs& outputs, double gsd_m,
     return SecondStageStatus::BadOutputs;
   }
   Detection& d = *detection;
-
-  // Type: softmax of the logits (shifted by the largest for range).
-  const float largest = *std::max_element(outputs.typeLogits.begin(), outputs.typeLogits.end());
-  double total = 0.0;
-  std::array<double, shape::kVehicleTypeCount> e{};
-  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-    e[t] = std::exp(static_cast<double>(outputs.typeLogits[t]) - static_cast<double>(largest));
-    total += e[t];
-  }
-  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-    d.typeProbabilities[t] = static_cast<float>(e[t] / total);
-  }
+  setTypeProbabilities(outputs.typeLogits, &d);
 
   // Shape: the ASM describes cars; a vehicle most likely Large gets none.
   d.gamma = shape::ShapeParams{};
@@ -362,9 +365,18 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
     return refined;
   }
   float flipLogit = 0.0F;
-  const SecondStageStatus turned = turnedFlipLogit(frame, gsd_m, detection->box, &flipLogit);
+  std::array<float, shape::kVehicleTypeCount> turnedTypeLogits{};
+  const SecondStageStatus turned =
+      turnedFlipLogit(frame, gsd_m, detection->box, &flipLogit,
+                      options_.turnTypeAverage ? &turnedTypeLogits : nullptr);
   if (turned != SecondStageStatus::Ok) {
     return turned;
+  }
+  if (options_.turnTypeAverage) {
+    for (std::size_t t = 0; t < typeLogits_.size(); ++t) {
+      typeLogits_[t] = 0.5F * (typeLogits_[t] + turnedTypeLogits[t]);
+    }
+    setTypeProbabilities(typeLogits_, detection);
   }
   detection->flipProbability =
       static_cast<float>(1.0 / (1.0 + std::exp(-static_cast<double>(flipLogit))));
@@ -409,9 +421,9 @@ SecondStageStatus VehicleCropper::endsFlipLogit(const cv::Mat& frame, double gsd
   return SecondStageStatus::Ok;
 }
 
-SecondStageStatus VehicleCropper::turnedFlipLogit(const cv::Mat& frame, double gsd_m,
-                                                  const geometry::RotatedBox& box,
-                                                  float* flipLogit) {
+SecondStageStatus VehicleCropper::turnedFlipLogit(
+    const cv::Mat& frame, double gsd_m, const geometry::RotatedBox& box, float* flipLogit,
+    std::array<float, shape::kVehicleTypeCount>* typeLogits) {
   if (!initialised()) {
     return SecondStageStatus::NotInitialised;
   }
@@ -431,8 +443,15 @@ SecondStageStatus VehicleCropper::turnedFlipLogit(const cv::Mat& frame, double g
       return SecondStageStatus::EngineFailed;
     }
     flips[i] = engine_.output(flipIndex_).data[0];
+    if (typeLogits != nullptr) {
+      const std::span<const float> types = values(typeIndex_);
+      for (std::size_t t = 0; t < typeLogits->size(); ++t) {
+        (*typeLogits)[t] = (i == 0 ? 0.0F : (*typeLogits)[t]) + 0.5F * types[t];
+      }
+    }
   }
-  if (!std::isfinite(flips[0]) || !std::isfinite(flips[1])) {
+  if (!std::isfinite(flips[0]) || !std::isfinite(flips[1]) ||
+      (typeLogits != nullptr && !allFinite(std::span<const float>(*typeLogits)))) {
     return SecondStageStatus::BadOutputs;
   }
   *flipLogit = 0.5F * (flips[0] - flips[1]);

@@ -39,7 +39,11 @@
 //    (flip(crop) - flip(turned)) / 2. The turned crop shows the front where the first shows
 //    the rear, so the decision is equivariant by construction: turning the box by 180 deg
 //    negates the logit and never changes the heading the vehicle ends with. flipProbability
-//    is the sigmoid of that logit. Two more runs.
+//    is the sigmoid of that logit. Two more runs. With turnTypeAverage those two runs' type
+//    logits are averaged too and given the same weight as the first look's (mirror-averaged)
+//    logits, and typeProbabilities are the softmax of that mean: the refined box is centred and
+//    aligned on the vehicle, so it is a second, better-posed view of the type, at no extra run.
+//    The shape gamma and the Large rules keep the first look's decision.
 //  - With largeVehicleEnds, a vehicle whose most likely type (after mirror averaging) is Large
 //    gets its front/back from two more crops, one at each end of its box instead of its middle:
 //    the 5.76 m window on the middle of a 12 m bus shows neither end. endsFlipLogit() cuts crop F
@@ -106,6 +110,7 @@ struct SecondStageOptions {
   bool mirrorRefine = true;               // ... and the refinement (needs mirrorAverage)
   bool largeVehicleEnds = true;           // Large: front/back from crops at both ends (contract)
   bool turnAverage = true;                // front/back from the refined box and its turn (contract)
+  bool turnTypeAverage = true;            // ... and type from those runs too (needs turnAverage)
   // Detections whose verifier probability is below this are dropped after the second stage;
   // 0 keeps all, and so does a crop network without the verifier output. [0, 1]. 0.3: chosen
   // on the tuning seeds (docs/model_card.md, round 8).
@@ -146,9 +151,11 @@ class VehicleCropper {
   // the same statuses as classify().
   SecondStageStatus endsFlipLogit(const cv::Mat& frame, double gsd_m,
                                   const geometry::RotatedBox& box, float* flipLogit);
-  // Real-time: the front/back logit from a crop at box and its turned copy (contract).
-  SecondStageStatus turnedFlipLogit(const cv::Mat& frame, double gsd_m,
-                                    const geometry::RotatedBox& box, float* flipLogit);
+  // Real-time: the front/back logit from a crop at box and its turned copy (contract); with
+  // typeLogits (borrowed, may be null) also the mean of the two runs' type logits.
+  SecondStageStatus turnedFlipLogit(
+      const cv::Mat& frame, double gsd_m, const geometry::RotatedBox& box, float* flipLogit,
+      std::array<float, shape::kVehicleTypeCount>* typeLogits = nullptr);
 
   // Real-time: the gain the frame's pixels still need (the preprocessor's exposure gain when it
   // went into the working image only, preprocess::PreprocessedFrame::frameGain); every crop cut
