@@ -75,6 +75,8 @@ options:
   --no-turn-type        type from the first look only (default: also from those two runs at
                         the refined box, averaged with the first look's, as the app's
                         perception.crop_turn_type_average)
+  --no-large-merge      keep the parts of a bus or truck the first stage boxed twice (default:
+                        merged into one box, as the app's perception.large_vehicle_merge)
   --min-vehicle-probability P
                         drop detections the crop network's verifier gives a lower vehicle
                         probability, [0, 1] (default 0.3, as the app's
@@ -162,6 +164,7 @@ Options parseArguments(int argc, char** argv) {
                     {"--no-turn-type", &second.turnTypeAverage, false},
                     {"--refine-large-length", &second.refineLargeVehicleLength, true},
                     {"--no-large-vehicle-ends", &second.largeVehicleEnds, false},
+                    {"--no-large-merge", &stage.largeMerge.enabled, false},
                     {"--no-exposure", &o.exposure, false}};
     bool isSwitch = false;
     for (const auto& s : switches) {

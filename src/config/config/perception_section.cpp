@@ -25,6 +25,7 @@ const Range kMaxCropsRange = Range::closed(0.0, 512.0);
 const Range kCutMarginRange_px = Range::closed(0.0, 64.0);
 const Range kFixedGsdRange_m = Range::closed(0.0, 1.0);
 const Range kCarLengthRange_m = Range{0.0, 30.0, true};
+const Range kLargeVehicleLengthRange_m = Range{0.0, 60.0, true};
 const Range kWhiteBalanceGridRange = Range::closed(1.0, 8.0);  // rows x cols <= 64 regions
 const Range kSampleStrideRange_px = Range::closed(1.0, 64.0);
 const Range kMaxGainRange = Range::closed(1.0, 16.0);
@@ -165,6 +166,10 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
       section.boolean("crop_large_vehicle_ends", secondDefaults.largeVehicleEnds);
   second.minVehicleProbability = static_cast<float>(section.number(
       "crop_min_vehicle_probability", kProbabilityRange, secondDefaults.minVehicleProbability));
+  detection::LargeVehicleMergeOptions& merge = det.largeMerge;
+  merge.enabled = section.boolean("large_vehicle_merge", d.detection.largeMerge.enabled);
+  merge.maxLength_m = section.number("large_vehicle_max_length_m", kLargeVehicleLengthRange_m,
+                                     d.detection.largeMerge.maxLength_m);
   det.gsd.fixedGsd_m = section.number("fixed_gsd_m", kFixedGsdRange_m, d.detection.gsd.fixedGsd_m);
   det.gsd.nominalCarLength_m =
       section.number("nominal_car_length_m", kCarLengthRange_m, d.detection.gsd.nominalCarLength_m);

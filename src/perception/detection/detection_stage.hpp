@@ -8,7 +8,10 @@
 // per tile, decodes and suppresses (decoder.hpp), then for each kept detection - best first,
 // at most maxCrops - cuts the crop from the corrected full-resolution frame at a GSD from the
 // caller's GsdProvider, else the options' fixed GSD, else the frame's median box length
-// (ground_sample_distance.hpp), and applies the crop network's outputs. It writes at most
+// (ground_sample_distance.hpp), and applies the crop network's outputs; after the last
+// suppression, parts of one bus or truck are merged (large_vehicle_merge.hpp) and a merged
+// box takes its front/back from crops at its two ends (VehicleCropper::endsFlipLogit) when
+// secondStage.largeVehicleEnds. It writes at most
 // out.size() detections (kMaxDetectionsPerFrame is the intended capacity) and returns a
 // status, never throws and performs no heap allocation after init(). A detection whose
 // second stage could not run (no GSD, beyond maxCrops) keeps its first-stage values (uniform
@@ -29,6 +32,7 @@
 #include "detection/decoder.hpp"
 #include "detection/detection.hpp"
 #include "detection/ground_sample_distance.hpp"
+#include "detection/large_vehicle_merge.hpp"
 #include "detection/vehicle_cropper.hpp"
 #include "inference/engine.hpp"
 #include "preprocess/preprocessor.hpp"
@@ -47,6 +51,7 @@ struct DetectionStageOptions {
   std::optional<inference::Backend> cropBackend{};
   DecoderOptions decoder{};
   SecondStageOptions secondStage{};
+  LargeVehicleMergeOptions largeMerge{};  // after the second stage (large_vehicle_merge.hpp)
   GsdOptions gsd{};
   int maxCrops = kMaxDetectionsPerFrame;  // second-stage runs per frame, [0, 512]
 };
@@ -72,6 +77,7 @@ struct DetectionStats {
   int crops = 0;               // second-stage runs that succeeded
   int refinedDuplicates = 0;   // detections that became duplicates after refinement, removed
   int rejectedByVerifier = 0;  // below SecondStageOptions::minVehicleProbability, removed
+  int largeVehicleParts = 0;   // parts of a bus or truck merged into another detection
   int cropFailures = 0;        // second stage skipped or failed (no GSD, engine error, ...)
   double frameGsd_m = 0.0;     // the frame-level GSD estimate used (0: provider or none)
   double detector_ms = 0.0;    // detector engine, all tiles
@@ -134,7 +140,8 @@ class DetectionStage {
   inference::Engine detector_;
   VehicleCropper cropper_;
   DetectionDecoder decoder_;
-  std::array<std::size_t, 4> headIndex_{};  // heatmap, offset, size, direction
+  std::array<bool, kMaxDetectionsPerFrame> merged_{};  // mergeLargeVehicleParts()'s marks
+  std::array<std::size_t, 4> headIndex_{};             // heatmap, offset, size, direction
   int inputWidth_ = 0;
   int inputHeight_ = 0;
   int gridWidth_ = 0;
