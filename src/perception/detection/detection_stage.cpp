@@ -258,33 +258,15 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
   const std::size_t suppressed =
       secondStage ? suppressRefinedDuplicates(out.first(verified)) : verified;
   stats_.refinedDuplicates = static_cast<int>(verified - suppressed);
-  // Parts of one bus or truck become one box, which looks at its two ends for its front.
+  // Parts of one bus or truck become one box; it keeps the better part's front/back (a look at
+  // the merged box's ends was tried: the union can reach past the vehicle's end, and the end
+  // crop then sees road).
   std::size_t refinedKept = suppressed;
   if (secondStage && options_.largeMerge.enabled) {
     const std::size_t n = std::min(suppressed, merged_.size());
     refinedKept =
         mergeLargeVehicleParts(out.first(n), stats_.frameGsd_m, options_.largeMerge, merged_);
     stats_.largeVehicleParts = static_cast<int>(n - refinedKept);
-    for (std::size_t i = 0; i < refinedKept; ++i) {
-      if (!merged_[i] || !options_.secondStage.largeVehicleEnds) {
-        continue;
-      }
-      double gsd = gsdProvider != nullptr ? gsdProvider->groundSampleDistance_m(out[i]) : 0.0;
-      if (!(gsd > 0.0) || !std::isfinite(gsd)) {
-        gsd = stats_.frameGsd_m;
-      }
-      float flipLogit = 0.0F;
-      if (cropper_.endsFlipLogit(correctedFrame, gsd, out[i].box, &flipLogit) !=
-          SecondStageStatus::Ok) {
-        ++stats_.cropFailures;
-        continue;
-      }
-      out[i].flipProbability =
-          static_cast<float>(1.0 / (1.0 + std::exp(-static_cast<double>(flipLogit))));
-      if (options_.secondStage.applyFlip && flipLogit > 0.0F) {
-        out[i].box.angle = geometry::wrapTwoPi(out[i].box.angle + geometry::kPi);
-      }
-    }
   }
   markFrameEdge(geometry, out.first(refinedKept));
   stats_.crops_ms = millisecondsBetween(secondStart, Clock::now());

@@ -9,9 +9,7 @@
 // at most maxCrops - cuts the crop from the corrected full-resolution frame at a GSD from the
 // caller's GsdProvider, else the options' fixed GSD, else the frame's median box length
 // (ground_sample_distance.hpp), and applies the crop network's outputs; after the last
-// suppression, parts of one bus or truck are merged (large_vehicle_merge.hpp) and a merged
-// box takes its front/back from crops at its two ends (VehicleCropper::endsFlipLogit) when
-// secondStage.largeVehicleEnds. It writes at most
+// suppression, parts of one bus or truck are merged (large_vehicle_merge.hpp). It writes at most
 // out.size() detections (kMaxDetectionsPerFrame is the intended capacity) and returns a
 // status, never throws and performs no heap allocation after init(). A detection whose
 // second stage could not run (no GSD, beyond maxCrops) keeps its first-stage values (uniform

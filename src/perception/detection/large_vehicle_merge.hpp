@@ -11,8 +11,7 @@
 // to the middle), with the larger width and score; type, shape and heading stay k's. A merge
 // whose length would pass maxLength_m (at gsd_m; no limit when gsd_m is not positive) is not
 // made. Chains of parts merge one after the other. Order is kept; merged[k] is set for every
-// detection that absorbed a part (the caller may then look at its ends again: the heading of
-// a part is a guess). No heap allocation.
+// detection that absorbed a part. No heap allocation.
 #pragma once
 
 #include <cstddef>
