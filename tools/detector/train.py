@@ -136,6 +136,13 @@ def parse_args(argv=None):
     p.add_argument("--heading-samples", nargs="+", default=[], metavar="CSV",
                    help="real vehicles labelled with their driving direction only "
                         "(real_headings.py lists): crops that train the front/back output")
+    p.add_argument("--large-crop-share", type=float, default=0.0,
+                   help="share of the ground-truth crops drawn from the large vehicles (buses, "
+                        "trucks) alone")
+    p.add_argument("--large-end-share", type=float, default=0.0,
+                   help="share of a large vehicle's crops cut at one of its ends (the window's "
+                        "edge on the vehicle's end), as the app's crop_large_vehicle_ends looks: "
+                        "they train the front/back output only")
     p.add_argument("--heading-batch", type=int, default=16,
                    help="heading crops added to every crop batch (with --heading-samples)")
     p.add_argument("--flip-branch", action="store_true",
@@ -318,6 +325,7 @@ class Data:
         self.crop_pool = [(i, j) for i, s in enumerate(self.seq) for j in range(len(s))
                           if not s.ignore[j] and s.types[j] >= 0 and not s.aa_only[j]
                           and s.direction_known[j] and math.isfinite(s.gsd_m[j])]
+        self.large_pool = [(i, j) for i, j in self.crop_pool if self.seq[i].types[j] == LARGE]
         self.cache = FrameCache(args.cache_frames)
         self.negatives = (read_hard_negatives(args.hard_negatives, self.seq, self.real)
                           if args.hard_negatives else {})
@@ -409,11 +417,24 @@ class Data:
         """One batch of jittered ground-truth crops and their targets (None: no typed objects)."""
         if not self.crop_pool:
             return None
-        imgs, types, gammas, flips, refines = [], [], [], [], []
+        imgs, types, gammas, flips, refines, full = [], [], [], [], [], []
         for _ in range(self.args.crop_batch):
-            i, j = self.crop_pool[int(rng.integers(0, len(self.crop_pool)))]
+            pool = self.crop_pool
+            if self.large_pool and rng.random() < self.args.large_crop_share:
+                pool = self.large_pool
+            i, j = pool[int(rng.integers(0, len(pool)))]
             s = self._load("seq", i)
             box, gsd = s.boxes[j], float(s.gsd_m[j])
+            end_crop = (s.types[j] == LARGE and rng.random() < self.args.large_end_share
+                        and box[2] * gsd > crops.CROP_W * crops.CROP_GSD_M)
+            if end_crop:
+                # The app looks at a bus's two ends for its front (crop_large_vehicle_ends): a
+                # window at one end, which only the front/back output learns from.
+                offset = (0.5 * box[2] - 0.5 * crops.CROP_W * crops.CROP_GSD_M / gsd) * (
+                    1.0 if rng.random() < 0.5 else -1.0)
+                box = box.copy()
+                box[0] += offset * math.cos(box[4])
+                box[1] += offset * math.sin(box[4])
             cen, ang, gsd_used, flip, refine = crops.jittered_crop_target(box, gsd, rng)
             patch = crops.extract_crop(s.image, cen, ang, gsd_used)
             if rng.random() < 0.5:  # mirror about the length axis: left/right swap
@@ -424,11 +445,11 @@ class Data:
             tmp = Sample(image_path=None, image=patch, **{k: v for k, v in _empty(self.n_s).items()})
             patch = augment.photometric(tmp, rng).image
             imgs.append(patch)
-            types.append(s.types[j])
-            gammas.append(s.gammas[j])
+            types.append(-1 if end_crop else s.types[j])
+            gammas.append(np.full(self.n_s, np.nan, np.float32) if end_crop else s.gammas[j])
             flips.append(flip)
-            refines.append(refine)
-        full = [True] * len(imgs)
+            refines.append(np.zeros(5, np.float32) if end_crop else refine)
+            full.append(not end_crop)
         flip_known = [True] * len(imgs)
         vehicle = [1.0] * len(imgs)
         for _ in range(self.args.heading_batch if self.headings else 0):

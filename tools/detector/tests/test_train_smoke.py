@@ -123,3 +123,44 @@ class SmokeTraining(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class LargeVehicleEndCrops(unittest.TestCase):
+    """--large-crop-share draws crops from the buses and trucks; --large-end-share cuts them at
+    one end of the vehicle, and such a crop trains the front/back output only."""
+
+    def setUp(self):
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        self.seq = os.path.join(tmp.name, "seq")
+        write_synthetic_sequence(self.seq, frames=1)
+        path = os.path.join(self.seq, "ground_truth", "objects.csv")
+        with open(path) as f:
+            rows = f.read().splitlines()
+        head = rows[0].split(",")
+        first = rows[1].split(",")
+        first[head.index("type")] = "large"
+        first[head.index("length_m")] = "12.0"  # 24 px at 0.5 m/px: longer than the 5.76 m window
+        rows[1] = ",".join(first)
+        with open(path, "w") as f:
+            f.write("\n".join(rows) + "\n")
+        self.run = os.path.join(tmp.name, "run")
+
+    def batch(self, end_share):
+        args = train.parse_args(["--data", self.seq, "--out", self.run, "--crop-batch", "16",
+                                 "--large-crop-share", "1", "--large-end-share", str(end_share)])
+        return train.Data(args, 3, log=lambda *_: None).crop_arrays(np.random.default_rng(5))
+
+    def test_end_crops_train_only_front_back(self):
+        from detector.datasets import LARGE
+        whole = self.batch(0.0)
+        self.assertTrue(whole["full"].all())
+        self.assertTrue((whole["type"] == LARGE).all())
+        ends = self.batch(1.0)
+        self.assertFalse(ends["full"].any())
+        self.assertTrue(ends["flip_known"].all())
+        self.assertTrue((ends["type"] == -1).all() and np.isnan(ends["gamma"]).all())
+        self.assertTrue((ends["refine"] == 0).all())
+        self.assertEqual(set(np.unique(ends["flip"])), {0.0, 1.0})
+        # Cut at the ends, not the middle: the crops differ from the whole vehicle's.
+        self.assertGreater(np.abs(ends["image"].astype(float) - whole["image"].astype(float)).mean(), 1.0)
