@@ -29,11 +29,8 @@ TEST(LargeVehicleMerge, TwoOverlappingPartsBecomeTheWholeTruck) {
       vehicle(1228.4, 1144.3, 272.0, 84.9, 1.553, 0.43F),
       vehicle(1146.4, 970.2, 141.0, 61.6, 1.540, 0.82F, shape::VehicleType::Compact),
       vehicle(1230.5, 1320.6, 296.8, 78.8, 4.705, 0.42F)};
-  std::array<bool, 3> merged{};
-  const std::size_t kept = mergeLargeVehicleParts(d, 0.036, LargeVehicleMergeOptions{}, merged);
+  const std::size_t kept = mergeLargeVehicleParts(d, 0.036, LargeVehicleMergeOptions{});
   ASSERT_EQ(kept, 2U);
-  EXPECT_TRUE(merged[0]);
-  EXPECT_FALSE(merged[1]);
   const geometry::RotatedBox& b = d[0].box;
   // Extent along the first part's axis: from its rear (-136 px) to the second's far end.
   const double c = std::cos(1.553);
@@ -54,19 +51,16 @@ TEST(LargeVehicleMerge, ThreePartsInAChainBecomeOne) {
   std::array<Detection, 3> d{vehicle(100.0, 50.0, 100.0, 40.0, 0.0, 0.9F),
                              vehicle(190.0, 52.0, 100.0, 40.0, 0.02, 0.8F),
                              vehicle(280.0, 50.0, 100.0, 40.0, geometry::kPi, 0.7F)};
-  std::array<bool, 3> merged{};
-  ASSERT_EQ(mergeLargeVehicleParts(d, 0.0, LargeVehicleMergeOptions{}, merged), 1U);
-  EXPECT_TRUE(merged[0]);
+  ASSERT_EQ(mergeLargeVehicleParts(d, 0.0, LargeVehicleMergeOptions{}), 1U);
   EXPECT_NEAR(d[0].box.length, 280.0, 0.1);
   EXPECT_NEAR(d[0].box.cx, 190.0, 0.1);
 }
 
 TEST(LargeVehicleMerge, WhatIsNotOneVehicleStaysApart) {
   const LargeVehicleMergeOptions options;
-  std::array<bool, 2> merged{};
   auto count = [&](Detection a, Detection b, double gsd_m = 0.05) {
     std::array<Detection, 2> d{a, b};
-    return mergeLargeVehicleParts(d, gsd_m, options, merged);
+    return mergeLargeVehicleParts(d, gsd_m, options);
   };
   const Detection bus = vehicle(100.0, 50.0, 240.0, 50.0, 0.0, 0.9F);
   // Two buses queued with a gap of 10 px.
@@ -85,8 +79,7 @@ TEST(LargeVehicleMerge, WhatIsNotOneVehicleStaysApart) {
   LargeVehicleMergeOptions off;
   off.enabled = false;
   std::array<Detection, 2> d{bus, vehicle(200.0, 50.0, 240.0, 50.0, 0.0, 0.8F)};
-  EXPECT_EQ(mergeLargeVehicleParts(d, 0.05, off, merged), 2U);
-  EXPECT_FALSE(merged[0]);
+  EXPECT_EQ(mergeLargeVehicleParts(d, 0.05, off), 2U);
   EXPECT_DOUBLE_EQ(d[0].box.length, 240.0);
 }
 

@@ -262,11 +262,10 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
   // the merged box's ends was tried: the union can reach past the vehicle's end, and the end
   // crop then sees road).
   std::size_t refinedKept = suppressed;
-  if (secondStage && options_.largeMerge.enabled) {
-    const std::size_t n = std::min(suppressed, merged_.size());
+  if (secondStage) {
     refinedKept =
-        mergeLargeVehicleParts(out.first(n), stats_.frameGsd_m, options_.largeMerge, merged_);
-    stats_.largeVehicleParts = static_cast<int>(n - refinedKept);
+        mergeLargeVehicleParts(out.first(suppressed), stats_.frameGsd_m, options_.largeMerge);
+    stats_.largeVehicleParts = static_cast<int>(suppressed - refinedKept);
   }
   markFrameEdge(geometry, out.first(refinedKept));
   stats_.crops_ms = millisecondsBetween(secondStart, Clock::now());

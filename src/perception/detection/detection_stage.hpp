@@ -138,8 +138,7 @@ class DetectionStage {
   inference::Engine detector_;
   VehicleCropper cropper_;
   DetectionDecoder decoder_;
-  std::array<bool, kMaxDetectionsPerFrame> merged_{};  // mergeLargeVehicleParts()'s marks
-  std::array<std::size_t, 4> headIndex_{};             // heatmap, offset, size, direction
+  std::array<std::size_t, 4> headIndex_{};  // heatmap, offset, size, direction
   int inputWidth_ = 0;
   int inputHeight_ = 0;
   int gridWidth_ = 0;

@@ -55,27 +55,20 @@ bool tryMerge(Detection& into, const Detection& part, double gsd_m,
 }  // namespace
 
 std::size_t mergeLargeVehicleParts(std::span<Detection> detections, double gsd_m,
-                                   const LargeVehicleMergeOptions& options,
-                                   std::span<bool> merged) {
-  const std::size_t n = std::min(detections.size(), merged.size());
-  std::fill(merged.begin(), merged.begin() + static_cast<std::ptrdiff_t>(n), false);
+                                   const LargeVehicleMergeOptions& options) {
   if (!options.enabled) {
     return detections.size();
   }
   std::size_t kept = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < detections.size(); ++i) {
     bool absorbed = false;
     if (mostLikelyLarge(detections[i])) {
       for (std::size_t k = 0; k < kept && !absorbed; ++k) {
-        if (mostLikelyLarge(detections[k]) &&
-            tryMerge(detections[k], detections[i], gsd_m, options)) {
-          merged[k] = true;
-          absorbed = true;
-        }
+        absorbed = mostLikelyLarge(detections[k]) &&
+                   tryMerge(detections[k], detections[i], gsd_m, options);
       }
     }
     if (!absorbed) {
-      merged[kept] = false;
       detections[kept++] = detections[i];
     }
   }

@@ -10,8 +10,7 @@
 // a gap). The merged box is k's, stretched along its own axis over both extents (centre moved
 // to the middle), with the larger width and score; type, shape and heading stay k's. A merge
 // whose length would pass maxLength_m (at gsd_m; no limit when gsd_m is not positive) is not
-// made. Chains of parts merge one after the other. Order is kept; merged[k] is set for every
-// detection that absorbed a part. No heap allocation.
+// made. Chains of parts merge one after the other. Order is kept. No heap allocation.
 #pragma once
 
 #include <cstddef>
@@ -30,8 +29,8 @@ struct LargeVehicleMergeOptions {
 };
 
 // Merges the parts in place (see contract); returns the number of detections kept (the first
-// ones of detections). merged must be at least as long as detections.
+// ones of detections).
 std::size_t mergeLargeVehicleParts(std::span<Detection> detections, double gsd_m,
-                                   const LargeVehicleMergeOptions& options, std::span<bool> merged);
+                                   const LargeVehicleMergeOptions& options);
 
 }  // namespace vp::detection

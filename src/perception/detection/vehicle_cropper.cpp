@@ -434,6 +434,9 @@ SecondStageStatus VehicleCropper::turnedFlipLogit(
     return SecondStageStatus::CropFailed;
   }
   cv::flip(crop_, mirrored_, -1);  // both axes: the crop cut at angle + pi, pixel for pixel
+  if (typeLogits != nullptr) {
+    typeLogits->fill(0.0F);
+  }
   std::array<float, 2> flips{};
   const std::array<const cv::Mat*, 2> crops{&crop_, &mirrored_};
   for (std::size_t i = 0; i < crops.size(); ++i) {
@@ -446,7 +449,7 @@ SecondStageStatus VehicleCropper::turnedFlipLogit(
     if (typeLogits != nullptr) {
       const std::span<const float> types = values(typeIndex_);
       for (std::size_t t = 0; t < typeLogits->size(); ++t) {
-        (*typeLogits)[t] = (i == 0 ? 0.0F : (*typeLogits)[t]) + 0.5F * types[t];
+        (*typeLogits)[t] += 0.5F * types[t];  // the mean of the two runs
       }
     }
   }
