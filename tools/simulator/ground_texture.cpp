@@ -260,7 +260,13 @@ float GroundTexture::roadMarkings(const Road& road, double along, double lateral
   // Centre line.
   switch (road.centreLine) {
     case CentreLine::DoubleYellow: {
-      const double c = std::max(0.5 * m + 0.02, 0.085);
+      // A median widened for islands keeps its lines beside the lanes (and may be hatched).
+      const double c = m > 0.3 ? m - 0.12 : std::max(0.5 * m + 0.02, 0.085);
+      if (m > 0.3 && road.medianHatch && std::fabs(lateral) < c - 0.1 &&
+          periodicDistance(along + lateral, 2.0) < 0.18) {
+        *yellow = true;
+        return 1.0F;
+      }
       if (band(lateral, c, 0.05) > 0 || band(lateral, -c, 0.05) > 0) {
         *yellow = true;
         return 1.0F;
@@ -421,9 +427,16 @@ Eigen::Vector3f GroundTexture::verge(const Eigen::Vector2d& p, Fields& fields,
 template <typename Fields>
 Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields,
                                         const Nearby& nearby, GroundClass* cls) const {
-  const double d = scene_->roadDistance(p);
+  double d = scene_->roadDistance(p);
   const GroundStyle& s = scene_->style;
   if (d < 0.0) {
+    for (const Island& island : scene_->islands) {
+      const double e = island.distance(p);
+      if (e < 0.0) {
+        return islandAlbedo(island, p, -e, fields, nearby, cls);
+      }
+      d = std::max(d, -e);  // the island's kerb gathers dirt like the road's
+    }
     // Inside the drivable area: road surface or parking lot.
     const ParkingLot* lot = nullptr;
     for (const ParkingLot& l : scene_->lots) {
@@ -488,14 +501,7 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
     if (cls != nullptr) {
       *cls = GroundClass::Kerb;
     }
-    const auto x = static_cast<float>(p.x());
-    const auto y = static_cast<float>(p.y());
-    float t = 0.9F + 0.2F * latticeValue(static_cast<int>(std::floor(x / 0.02F)),
-                                         static_cast<int>(std::floor(y / 0.02F)), s.seed + 50U);
-    if (d < 0.025) {
-      t *= 0.55F;  // the kerb face / gutter joint reads as a dark line from above
-    }
-    return s.kerbAlbedo * t;
+    return kerb(p, d);
   }
   if (d < scene_->kerbWidth_m + scene_->sidewalkWidth_m) {
     if (cls != nullptr) {
@@ -513,6 +519,67 @@ Eigen::Vector3f GroundTexture::albedoAt(const Eigen::Vector2d& p, Fields& fields
     c = c * 0.6F + s.soilAlbedo * 0.4F;
   }
   return c;
+}
+
+Eigen::Vector3f GroundTexture::kerb(const Eigen::Vector2d& p, double kerbDistance) const {
+  const GroundStyle& s = scene_->style;
+  const auto x = static_cast<float>(p.x());
+  const auto y = static_cast<float>(p.y());
+  float t = 0.9F + 0.2F * latticeValue(static_cast<int>(std::floor(x / 0.02F)),
+                                       static_cast<int>(std::floor(y / 0.02F)), s.seed + 50U);
+  if (kerbDistance < 0.025) {
+    t *= 0.55F;  // the kerb face / gutter joint reads as a dark line from above
+  }
+  return s.kerbAlbedo * t;
+}
+
+template <typename Fields>
+Eigen::Vector3f GroundTexture::islandAlbedo(const Island& island, const Eigen::Vector2d& p,
+                                            double depth_m, Fields& fields, const Nearby& nearby,
+                                            GroundClass* cls) const {
+  const GroundStyle& s = scene_->style;
+  if (depth_m < scene_->kerbWidth_m) {
+    if (cls != nullptr) {
+      *cls = GroundClass::Kerb;
+    }
+    return kerb(p, depth_m);
+  }
+  const auto x = static_cast<float>(p.x());
+  const auto y = static_cast<float>(p.y());
+  if (!island.planted) {
+    // Setts: small stones with dark joints.
+    if (cls != nullptr) {
+      *cls = GroundClass::Sidewalk;
+    }
+    const auto ix = static_cast<int>(std::floor(x / 0.14F));
+    const auto iy = static_cast<int>(std::floor(y / 0.14F));
+    float t = 0.8F + 0.35F * latticeValue(ix, iy, s.seed + 60U);
+    if (periodicDistance(p.x(), 0.14) < 0.015 || periodicDistance(p.y(), 0.14) < 0.015) {
+      t *= 0.6F;
+    }
+    return s.sidewalkAlbedo * t;
+  }
+  if (cls != nullptr) {
+    *cls = GroundClass::Verge;
+  }
+  // Weeds left to grow: clumps of lush green on bare soil and dry, straw-coloured patches,
+  // far rougher than the mown verges.
+  Eigen::Vector3f c = verge(p, fields, nearby);
+  const float clumps = 0.6F * valueNoise(x / 0.35F, y / 0.35F, s.seed + 61U) +
+                       0.4F * valueNoise(x / 0.12F, y / 0.12F, s.seed + 63U);
+  const float dry = valueNoise(x / 0.9F, y / 0.9F, s.seed + 62U);
+  const float grain =
+      0.8F + 0.4F * latticeValue(static_cast<int>(std::floor(x / 0.03F)),
+                                 static_cast<int>(std::floor(y / 0.03F)), s.seed + 64U);
+  const float green = smoothstep(0.45F, 0.62F, clumps);
+  const Eigen::Vector3f lush = c * 1.4F + Eigen::Vector3f(0.0F, 0.03F, 0.0F);
+  c = s.soilAlbedo * (1.0F - green) + lush * green;
+  if (dry > 0.62F) {
+    const Eigen::Vector3f straw(0.3F, 0.27F, 0.16F);
+    const float w = std::min(1.0F, (dry - 0.62F) * 3.0F) * (1.0F - 0.5F * green);
+    c = c * (1.0F - w) + straw * w;
+  }
+  return c * grain;
 }
 
 GroundTexture::GroundTexture(const SceneSpec& scene) : scene_(&scene) {

@@ -55,6 +55,11 @@ class GroundTexture {
   float lotMarkings(const ParkingLot& lot, const Eigen::Vector2d& p) const;
   template <typename Fields>
   Eigen::Vector3f sidewalk(const Eigen::Vector2d& p, double kerbDistance, Fields& fields) const;
+  Eigen::Vector3f kerb(const Eigen::Vector2d& p, double kerbDistance) const;
+  // Inside a traffic island, depth_m from its kerb line.
+  template <typename Fields>
+  Eigen::Vector3f islandAlbedo(const Island& island, const Eigen::Vector2d& p, double depth_m,
+                               Fields& fields, const Nearby& nearby, GroundClass* cls) const;
   template <typename Fields>
   Eigen::Vector3f verge(const Eigen::Vector2d& p, Fields& fields, const Nearby& nearby) const;
 

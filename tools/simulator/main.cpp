@@ -17,7 +17,8 @@ void usage(std::ostream& out) {
          "0..35]\n"
          "                   [--jpeg-quality Q | --png] [--threads N] [--supersampling 1..4]\n"
          "                   [--asm PATH] [--telemetry-noise] [--static-hover] [--instance-masks]\n"
-         "                   [--two-tone-share 0..1] [--city-car-share 0..1] [--poles] [--help]\n"
+         "                   [--two-tone-share 0..1] [--city-car-share 0..1] [--poles]\n"
+         "                   [--islands] [--help]\n"
          "Renders N frames at 10 Hz of a scene drawn from the seed (same seed: byte-identical\n"
          "output) into DIR as a recorded sequence with ground truth. See docs/simulator.md.\n";
 }
@@ -109,6 +110,8 @@ int main(int argc, char** argv) {
       options.cityCarShare = number("--city-car-share", 0, 1);
     } else if (arg == "--poles") {
       options.poles = true;
+    } else if (arg == "--islands") {
+      options.islands = true;
     } else {
       std::cerr << "vp_simulate: unknown argument '" << arg << "'\n";
       usage(std::cerr);

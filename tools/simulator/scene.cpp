@@ -336,9 +336,15 @@ double SceneSpec::roadDistance(const Eigen::Vector2d& p) const {
   return d;
 }
 
-SceneSpec generateScene(SceneKind kind, Rng& rng) {
+SceneSpec generateScene(SceneKind kind, Rng& rng, bool islands) {
   SceneSpec scene;
   scene.kind = kind;
+  // The islands' own Rng, seeded from a copy of the sequence's: it takes no draw from rng.
+  std::optional<Rng> islandRng;
+  if (islands) {
+    Rng copy = rng;
+    islandRng.emplace(copy.next() ^ 0x1514'7d5eULL);
+  }
   scene.junction = Eigen::Vector2d(rng.uniform(-20.0, 20.0), rng.uniform(-20.0, 20.0));
   const double seasonDraw = rng.uniform();
   scene.season = seasonDraw < 0.55 ? "summer" : (seasonDraw < 0.75 ? "autumn" : "winter");
@@ -351,6 +357,9 @@ SceneSpec generateScene(SceneKind kind, Rng& rng) {
     scene.roads.push_back(makeRoad(rng, scene.junction, angleA, true, 0.35));
     const double cross = rng.chance(0.6) ? kPi / 2 + rng.normal(0.0, 0.03) : rng.uniform(1.1, 2.0);
     scene.roads.push_back(makeRoad(rng, scene.junction, angleA + cross, true, 0.35));
+    if (islandRng) {
+      widenMedians(scene, *islandRng);  // before the stop lines, which depend on the widths
+    }
     const bool crosswalks = rng.chance(0.8);
     for (int i = 0; i < 2; ++i) {
       Road& r = scene.roads[static_cast<std::size_t>(i)];
@@ -370,6 +379,9 @@ SceneSpec generateScene(SceneKind kind, Rng& rng) {
   } else {
     scene.roads.push_back(
         makeRoad(rng, scene.junction, angleA, true, kind == SceneKind::Straight ? 0.6 : 0.35));
+    if (islandRng) {
+      widenMedians(scene, *islandRng);  // before the parking lot beside the road
+    }
     Road& r = scene.roads[0];
     if (kind == SceneKind::Straight && rng.chance(0.3)) {
       r.crosswalkCentre_m = rng.uniform(-20.0, 20.0);  // mid-block crossing (signed along)
@@ -455,6 +467,9 @@ SceneSpec generateScene(SceneKind kind, Rng& rng) {
   addBuildings(scene, rng, buildingCount);
   addTrees(scene, rng);
   addStreetFurniture(scene);  // own Rng: takes no draw from rng
+  if (islandRng) {
+    addIslands(scene, *islandRng);
+  }
 
   // Light: sun direction and colours (overcast days have weak, soft shadows).
   Lighting& l = scene.light;

@@ -46,6 +46,10 @@ struct Road {
   double crosswalkCentre_m = 1e9;  // |along| of the crosswalk centres (1e9: none)
   double crosswalkWidth_m = 3.0;
   bool zebra = true;  // zebra stripes, else two transverse lines
+  // > 0: the median is widened to hold raised traffic islands of this half width (addIslands);
+  // outside the islands it is a painted median, hatched when medianHatch.
+  double islandHalfWidth_m = 0.0;
+  bool medianHatch = false;
 
   Eigen::Vector2d leftNormal() const { return {-dir.y(), dir.x()}; }
   double rightHalf_m() const { return medianHalf_m + lanesForward * laneWidth_m + parkingRight_m; }
@@ -141,6 +145,22 @@ struct StreetFurniture {
   Eigen::Vector2d axis() const { return {std::cos(heading_rad), std::sin(heading_rad)}; }
 };
 
+// A raised traffic island in a road's median: a divider on a junction's approach or a
+// pedestrian refuge at a crossing. Kerbed, planted (grass, weeds, bushes) or paved, pointed at
+// both ends; a sign post at a nose. Real footage shows the detector boxing planted islands of a
+// car's size; the simulator draws them so that training sees them as background.
+struct Island {
+  Eigen::Vector2d centre{0, 0};
+  Eigen::Vector2d dir{1, 0};  // unit, along the road
+  double halfLength_m = 5.0;  // centre to tip
+  double halfWidth_m = 0.8;
+  double noseLength_m = 2.0;      // length of the tapered end towards -dir
+  double noseHighLength_m = 2.0;  // ... and towards +dir (0: a blunt end, a wedge-shaped island)
+  bool planted = true;            // grass and weeds, else paving
+  // Signed distance (m) from the island's kerb line: < 0 inside.
+  double distance(const Eigen::Vector2d& p) const;
+};
+
 struct Patch {  // repaired rectangle of road surface
   Eigen::Vector2d centre{0, 0};
   Eigen::Vector2d dir{1, 0};
@@ -211,6 +231,7 @@ struct SceneSpec {
   std::vector<Building> buildings;
   std::vector<Tree> trees;
   std::vector<StreetFurniture> furniture;
+  std::vector<Island> islands;  // vp_simulate --islands
   std::vector<Patch> patches;
   std::vector<Manhole> manholes;
   GroundStyle style{};
@@ -225,7 +246,9 @@ struct SceneSpec {
   double roadDistance(const Eigen::Vector2d& p) const;
 };
 
-SceneSpec generateScene(SceneKind kind, Rng& rng);
+// islands: raised traffic islands in the medians (islands.cpp), drawn from an Rng of their own;
+// the road they stand in is widened, so the scene differs from the seed's scene without them.
+SceneSpec generateScene(SceneKind kind, Rng& rng, bool islands = false);
 
 // Oriented rectangle on the ground plane (overlap tests of furniture, buildings, vehicles).
 struct Footprint {
@@ -249,5 +272,11 @@ void addRoofFixtures(Building& building);
 // scene.furniture: opt-in (vp_simulate --poles), from an Rng of its own, so that a seed's scene
 // is otherwise the one it is without them.
 void addPoles(SceneSpec& scene);
+// Traffic islands (islands.cpp), in two steps of generateScene: widenMedians chooses the roads
+// that get islands and widens their medians before anything is placed beside the roads;
+// addIslands places the islands, their planting and their sign posts once the stop lines,
+// crosswalks and trees are known. Both draw only from rng (the islands' own).
+void widenMedians(SceneSpec& scene, Rng& rng);
+void addIslands(SceneSpec& scene, Rng& rng);
 
 }  // namespace vp::sim

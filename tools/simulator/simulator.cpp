@@ -172,7 +172,7 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   Rng& rng = *rng_;
   origin_ = drawOrigin(rng);
   terrainSpec_ = drawTerrain(rng);
-  scene_ = generateScene(options.scene, rng);
+  scene_ = generateScene(options.scene, rng, options.islands);
   if (options.poles) {
     addPoles(scene_);
   }
@@ -350,6 +350,9 @@ std::string Simulator::summary() const {
   }
   if (options_.poles) {
     s << ", sign posts and street lamps";
+  }
+  if (options_.islands) {
+    s << ", " << scene_.islands.size() << " traffic islands";
   }
   return s.str();
 }

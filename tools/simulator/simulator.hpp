@@ -62,6 +62,9 @@ struct SimOptions {
   // Sign posts and street lamps along the kerbs (addPoles); the rest of a seed's scene is the
   // same with or without them.
   bool poles = false;
+  // Raised traffic islands in the medians (islands.cpp): their roads are widened, so the scene
+  // differs from the seed's scene without them.
+  bool islands = false;
 };
 
 struct RigSpec {

@@ -71,6 +71,39 @@ std::vector<Eigen::Vector2d> rectangle(const Eigen::Vector2d& centre, const Eige
   return {centre - a - c, centre + a - c, centre + a + c, centre - a + c};
 }
 
+// A traffic island's outline, counter-clockwise: a tip at each pointed end, two corners at a
+// blunt one.
+std::vector<Eigen::Vector2d> outline(const Island& island) {
+  const Eigen::Vector2d left(-island.dir.y(), island.dir.x());
+  const auto at = [&](double along, double across) {
+    return Eigen::Vector2d(island.centre + along * island.dir + across * left);
+  };
+  const double l = island.halfLength_m;
+  const double w = island.halfWidth_m;
+  std::vector<Eigen::Vector2d> ring;
+  if (island.noseLength_m > 0.0) {
+    ring.push_back(at(-l, 0.0));
+    ring.push_back(at(-l + island.noseLength_m, -w));
+  } else {
+    ring.push_back(at(-l, w));
+    ring.push_back(at(-l, -w));
+  }
+  if (island.noseHighLength_m > 0.0) {
+    ring.push_back(at(l - island.noseHighLength_m, -w));
+    ring.push_back(at(l, 0.0));
+  } else {
+    ring.push_back(at(l, -w));
+    ring.push_back(at(l, w));
+  }
+  if (island.noseHighLength_m > 0.0) {
+    ring.push_back(at(l - island.noseHighLength_m, w));
+  }
+  if (island.noseLength_m > 0.0) {
+    ring.push_back(at(-l + island.noseLength_m, w));
+  }
+  return ring;
+}
+
 }  // namespace
 
 std::string siteGeoJson(const SceneSpec& scene, const geodesy::LocalFrame& frame) {
@@ -189,6 +222,10 @@ std::string siteGeoJson(const SceneSpec& scene, const geodesy::LocalFrame& frame
     out.polygon("exclusion", "building-" + std::to_string(i + 1),
                 "building " + std::to_string(i + 1),
                 rectangle(b.centre, dir, b.length_m / 2.0, b.width_m / 2.0));
+  }
+  for (std::size_t i = 0; i < scene.islands.size(); ++i) {
+    out.polygon("exclusion", "island-" + std::to_string(i + 1),
+                "traffic island " + std::to_string(i + 1), outline(scene.islands[i]));
   }
   return out.text();
 }
