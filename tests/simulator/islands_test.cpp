@@ -10,9 +10,7 @@
 
 #include "ground_texture.hpp"
 #include "scene.hpp"
-#include "shape/vehicle_model.hpp"
-#include "traffic.hpp"
-#include "vehicles.hpp"
+#include "traffic_walk.hpp"
 
 namespace {
 
@@ -122,39 +120,25 @@ TEST(Islands, GroundTextureDrawsKerbAndGrassOrSetts) {
 }
 
 TEST(Islands, NoVehicleEverDrivesOverAnIsland) {
-  vp::shape::ActiveShapeModel asmModel;
-  std::string why;
-  ASSERT_TRUE(asmModel.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", &why))
-      << why;
-  const vp::sim::VehicleFactory factory(asmModel);
   long checked = 0;
   long near = 0;  // vehicle-island pairs within 3 m: the test sees close calls
   for (const SceneKind kind : kKinds) {
     for (std::uint64_t seed = 1; seed <= 4; ++seed) {
       vp::sim::Rng rng(seed);
       const SceneSpec scene = vp::sim::generateScene(kind, rng, true);
-      vp::sim::Traffic traffic;
-      traffic.init(scene, factory, 120.0, 30.0, 0.1, rng);
-      for (int step = 0; step < 300; ++step) {  // 30 s of traffic after the warm-up
-        for (const auto& v : traffic.vehicles()) {
-          const Eigen::Vector2d f(std::cos(v.rear.psi), std::sin(v.rear.psi));
-          const vp::sim::Footprint fv{v.centre() + 0.5 * (v.model->frontXM + v.model->rearXM) * f,
-                                      f, 0.5 * (v.model->frontXM - v.model->rearXM),
-                                      v.model->halfWidth_m};
-          for (const Island& island : scene.islands) {
-            // The island's enclosing rectangle is larger than the island: a stricter test.
-            const vp::sim::Footprint fi{island.centre, island.dir, island.halfLength_m,
-                                        island.halfWidth_m};
-            ++checked;
-            EXPECT_FALSE(vp::sim::footprintsOverlap(fv, fi, 0.0))
-                << "vehicle " << v.trackId << (v.parked ? " (parked)" : "")
-                << " drives over an island, " << toString(kind) << " seed " << seed << " step "
-                << step;
-            near += vp::sim::footprintsOverlap(fv, fi, 1.5) ? 1 : 0;
-          }
+      vp::sim::testing::walkTraffic(scene, rng, [&](const auto& v, const auto& fv, int step) {
+        for (const Island& island : scene.islands) {
+          // The island's enclosing rectangle is larger than the island: a stricter test.
+          const vp::sim::Footprint fi{island.centre, island.dir, island.halfLength_m,
+                                      island.halfWidth_m};
+          ++checked;
+          EXPECT_FALSE(vp::sim::footprintsOverlap(fv, fi, 0.0))
+              << "vehicle " << v.trackId << (v.parked ? " (parked)" : "")
+              << " drives over an island, " << toString(kind) << " seed " << seed << " step "
+              << step;
+          near += vp::sim::footprintsOverlap(fv, fi, 1.5) ? 1 : 0;
         }
-        traffic.step(rng);
-      }
+      });
     }
   }
   EXPECT_GT(checked, 10000);

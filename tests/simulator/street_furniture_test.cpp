@@ -11,9 +11,7 @@
 #include <string>
 
 #include "scene.hpp"
-#include "shape/vehicle_model.hpp"
-#include "traffic.hpp"
-#include "vehicles.hpp"
+#include "traffic_walk.hpp"
 
 namespace {
 
@@ -142,11 +140,6 @@ TEST(StreetFurniture, OffTheLanesClearOfBuildingsWithRealSizes) {
 }
 
 TEST(StreetFurniture, NoVehicleEverOverlapsFurniture) {
-  vp::shape::ActiveShapeModel asmModel;
-  std::string why;
-  ASSERT_TRUE(asmModel.load(std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml", &why))
-      << why;
-  const vp::sim::VehicleFactory factory(asmModel);
   long checked = 0;
   long near = 0;  // vehicle-furniture pairs within 3 m: the test sees close calls
   for (const SceneKind kind : kKinds) {
@@ -154,26 +147,17 @@ TEST(StreetFurniture, NoVehicleEverOverlapsFurniture) {
       vp::sim::Rng rng(seed);
       SceneSpec scene = vp::sim::generateScene(kind, rng);
       vp::sim::addPoles(scene);
-      vp::sim::Traffic traffic;
-      traffic.init(scene, factory, 120.0, 30.0, 0.1, rng);
-      for (int step = 0; step < 300; ++step) {  // 30 s of traffic after the warm-up
-        for (const auto& v : traffic.vehicles()) {
-          const Eigen::Vector2d f(std::cos(v.rear.psi), std::sin(v.rear.psi));
-          const vp::sim::Footprint fv{v.centre() + 0.5 * (v.model->frontXM + v.model->rearXM) * f,
-                                      f, 0.5 * (v.model->frontXM - v.model->rearXM),
-                                      v.model->halfWidth_m};
-          for (const auto& item : scene.furniture) {
-            const vp::sim::Footprint fi = vp::sim::footprintOf(item);
-            ++checked;
-            EXPECT_FALSE(vp::sim::footprintsOverlap(fv, fi, 0.0))
-                << "vehicle " << v.trackId << (v.parked ? " (parked)" : "") << " overlaps a "
-                << toString(item.kind) << ", " << toString(kind) << " seed " << seed << " step "
-                << step;
-            near += vp::sim::footprintsOverlap(fv, fi, 1.5) ? 1 : 0;
-          }
+      vp::sim::testing::walkTraffic(scene, rng, [&](const auto& v, const auto& fv, int step) {
+        for (const auto& item : scene.furniture) {
+          const vp::sim::Footprint fi = vp::sim::footprintOf(item);
+          ++checked;
+          EXPECT_FALSE(vp::sim::footprintsOverlap(fv, fi, 0.0))
+              << "vehicle " << v.trackId << (v.parked ? " (parked)" : "") << " overlaps a "
+              << toString(item.kind) << ", " << toString(kind) << " seed " << seed << " step "
+              << step;
+          near += vp::sim::footprintsOverlap(fv, fi, 1.5) ? 1 : 0;
         }
-        traffic.step(rng);
-      }
+      });
     }
   }
   EXPECT_GT(checked, 100000);
