@@ -1,7 +1,7 @@
 // tests/simulator/site_map_test: the site file vp_simulate writes for a scene loads, and at an
 // intersection carries what the traffic analysis needs: each travel lane ending at its approach's
 // gate (the stop line) with a queue zone before it that names it, the lanes' widths, and a box
-// junction over the junction's centre.
+// junction over the junction's centre; traffic islands are exclusion areas.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -99,6 +99,34 @@ TEST(SimulatorSiteMap, AStraightRoadHasWholeLanesAndNoQueueZones) {
   EXPECT_EQ(site.count(site::FeatureKind::Zone), 0U);
   EXPECT_EQ(site.count(site::FeatureKind::Lane),
             static_cast<std::size_t>(scene.roads[0].lanesForward + scene.roads[0].lanesBackward));
+}
+
+TEST(SimulatorSiteMap, TrafficIslandsAreExclusionAreasInsideTheRoad) {
+  int islands = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    for (const SceneKind kind : {SceneKind::Intersection, SceneKind::Straight}) {
+      Rng rng(seed);
+      const SceneSpec scene = generateScene(kind, rng, true);
+      const site::Site site = load(scene);
+      for (std::size_t i = 0; i < scene.islands.size(); ++i) {
+        const Island& island = scene.islands[i];
+        const std::string id = "island-" + std::to_string(i + 1);
+        const auto features = site.features();
+        const auto f = std::find_if(features.begin(), features.end(),
+                                    [&](const site::Feature& x) { return x.id == id; });
+        ASSERT_NE(f, features.end()) << id << " seed " << seed;
+        EXPECT_EQ(f->kind, site::FeatureKind::Exclusion) << id;
+        // The middle of its part at full width is excluded; the lane beside it is on the road.
+        const Eigen::Vector2d middle =
+            island.centre + 0.5 * (island.noseLength_m - island.noseHighLength_m) * island.dir;
+        EXPECT_EQ(site.classify(middle), site::Placement::Excluded) << id << " seed " << seed;
+        const Eigen::Vector2d across(-island.dir.y(), island.dir.x());
+        EXPECT_FALSE(site.contains(*f, middle + (island.halfWidth_m + 0.2) * across)) << id;
+        ++islands;
+      }
+    }
+  }
+  EXPECT_GT(islands, 10);
 }
 
 }  // namespace
