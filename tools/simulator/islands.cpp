@@ -20,11 +20,6 @@ constexpr double kPi = 3.14159265358979323846;
 // drawn one by one).
 constexpr double kIslandRoadShare = 0.6;
 
-Eigen::Vector3f tone(Rng& rng, Eigen::Vector3f c, double amount) {
-  c *= static_cast<float>(std::max(0.3, 1.0 + rng.normal(0.0, amount)));
-  return c.cwiseMin(0.92F).cwiseMax(0.01F);
-}
-
 // A bush (or a small tree) on a planted island: a low canopy on a thin stem.
 Tree makeBush(const SceneSpec& scene, Rng& rng, const Eigen::Vector2d& position, double radius,
               bool smallTree) {
@@ -41,13 +36,13 @@ Tree makeBush(const SceneSpec& scene, Rng& rng, const Eigen::Vector2d& position,
     t.trunkRadius_m = 0.03;
   }
   if (scene.season == "winter") {
-    t.leafAlbedo = tone(rng, Eigen::Vector3f(0.13F, 0.11F, 0.08F), 0.15);
+    t.leafAlbedo = toneColour(rng, Eigen::Vector3f(0.13F, 0.11F, 0.08F), 0.15);
     t.gapFraction = static_cast<float>(rng.uniform(0.4, 0.7));
   } else if (scene.season == "autumn") {
-    t.leafAlbedo = tone(rng, Eigen::Vector3f(0.25F, 0.18F, 0.05F), 0.25);
+    t.leafAlbedo = toneColour(rng, Eigen::Vector3f(0.25F, 0.18F, 0.05F), 0.25);
     t.gapFraction = static_cast<float>(rng.uniform(0.05, 0.3));
   } else {
-    t.leafAlbedo = tone(rng, Eigen::Vector3f(0.07F, 0.14F, 0.04F), 0.25);
+    t.leafAlbedo = toneColour(rng, Eigen::Vector3f(0.07F, 0.14F, 0.04F), 0.25);
     t.gapFraction = static_cast<float>(rng.uniform(0.0, 0.15));
   }
   t.seed = rng.nextU32();
@@ -66,8 +61,8 @@ StreetFurniture keepRightSign(Rng& rng, const Island& island, double noseAlong_m
   static const std::array<Eigen::Vector3f, 3> kPlates = {Eigen::Vector3f(0.05F, 0.15F, 0.5F),
                                                          Eigen::Vector3f(0.75F, 0.75F, 0.72F),
                                                          Eigen::Vector3f(0.6F, 0.1F, 0.08F)};
-  sign.roofAlbedo = tone(rng, kPlates[static_cast<std::size_t>(rng.uniformInt(0, 2))], 0.1);
-  sign.albedo = tone(rng, Eigen::Vector3f(0.45F, 0.46F, 0.47F), 0.15);  // the pole
+  sign.roofAlbedo = toneColour(rng, kPlates[static_cast<std::size_t>(rng.uniformInt(0, 2))], 0.1);
+  sign.albedo = toneColour(rng, Eigen::Vector3f(0.45F, 0.46F, 0.47F), 0.15);  // the pole
   // The plate's front faces +left normal of its length axis; traffic driving along +dir meets
   // the nose at the island's low-along end, so that plate faces -dir.
   const double roadHeading = std::atan2(island.dir.y(), island.dir.x());

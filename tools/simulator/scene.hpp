@@ -267,6 +267,9 @@ Footprint footprintOf(const StreetFurniture& item);
 // seed): they take nothing from the sequence's Rng, so every other draw of a seed stays as it
 // was without them.
 void addStreetFurniture(SceneSpec& scene);
+// A colour of the street furniture and the islands' planting scaled by a random factor
+// N(1, amount) (at least 0.3), kept within reflectances [0.01, 0.92] (street_furniture.cpp).
+Eigen::Vector3f toneColour(Rng& rng, Eigen::Vector3f c, double amount);
 void addRoofFixtures(Building& building);
 // Sign posts and street lamps along the kerbs (street_furniture.cpp), appended to
 // scene.furniture: opt-in (vp_simulate --poles), from an Rng of its own, so that a seed's scene

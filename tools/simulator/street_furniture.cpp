@@ -23,11 +23,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kKerbClearance_m = 0.6;
 constexpr double kObjectClearance_m = 0.8;
 
-Eigen::Vector3f tone(Rng& rng, Eigen::Vector3f c, double amount) {
-  c *= static_cast<float>(std::max(0.3, 1.0 + rng.normal(0.0, amount)));
-  return c.cwiseMin(0.92F).cwiseMax(0.01F);
-}
-
 StreetFurniture makeItem(FurnitureKind kind, Rng& rng) {
   StreetFurniture item;
   item.kind = kind;
@@ -40,11 +35,11 @@ StreetFurniture makeItem(FurnitureKind kind, Rng& rng) {
       // White (painted or concrete) 35 %, grey metal 25 %, wood 40 %.
       const int colour = rng.weighted(std::array<double, 3>{0.35, 0.25, 0.4});
       if (colour == 0) {
-        item.albedo = tone(rng, Eigen::Vector3f(0.8F, 0.8F, 0.78F), 0.05);
+        item.albedo = toneColour(rng, Eigen::Vector3f(0.8F, 0.8F, 0.78F), 0.05);
       } else if (colour == 1) {
-        item.albedo = tone(rng, Eigen::Vector3f(0.38F, 0.39F, 0.4F), 0.2);
+        item.albedo = toneColour(rng, Eigen::Vector3f(0.38F, 0.39F, 0.4F), 0.2);
       } else {
-        item.albedo = tone(rng, Eigen::Vector3f(0.36F, 0.23F, 0.13F), 0.2);
+        item.albedo = toneColour(rng, Eigen::Vector3f(0.36F, 0.23F, 0.13F), 0.2);
       }
       break;
     }
@@ -55,8 +50,8 @@ StreetFurniture makeItem(FurnitureKind kind, Rng& rng) {
       static const std::array<Eigen::Vector3f, 3> kFrames = {Eigen::Vector3f(0.55F, 0.56F, 0.57F),
                                                              Eigen::Vector3f(0.06F, 0.07F, 0.07F),
                                                              Eigen::Vector3f(0.08F, 0.18F, 0.12F)};
-      item.albedo = tone(rng, kFrames[static_cast<std::size_t>(rng.uniformInt(0, 2))], 0.1);
-      item.roofAlbedo = tone(rng, Eigen::Vector3f(0.12F, 0.14F, 0.15F), 0.3);  // glass tint
+      item.albedo = toneColour(rng, kFrames[static_cast<std::size_t>(rng.uniformInt(0, 2))], 0.1);
+      item.roofAlbedo = toneColour(rng, Eigen::Vector3f(0.12F, 0.14F, 0.15F), 0.3);  // glass tint
       break;
     }
     case FurnitureKind::Kiosk: {
@@ -66,16 +61,16 @@ StreetFurniture makeItem(FurnitureKind kind, Rng& rng) {
       static const std::array<Eigen::Vector3f, 4> kWalls = {
           Eigen::Vector3f(0.7F, 0.68F, 0.62F), Eigen::Vector3f(0.15F, 0.3F, 0.18F),
           Eigen::Vector3f(0.5F, 0.12F, 0.08F), Eigen::Vector3f(0.35F, 0.36F, 0.38F)};
-      item.albedo = tone(rng, kWalls[static_cast<std::size_t>(rng.uniformInt(0, 3))], 0.1);
-      item.roofAlbedo = tone(rng, Eigen::Vector3f(0.3F, 0.3F, 0.31F), 0.4);
+      item.albedo = toneColour(rng, kWalls[static_cast<std::size_t>(rng.uniformInt(0, 3))], 0.1);
+      item.roofAlbedo = toneColour(rng, Eigen::Vector3f(0.3F, 0.3F, 0.31F), 0.4);
       break;
     }
     case FurnitureKind::StairEntrance: {
       item.length_m = rng.uniform(4.0, 8.0);  // along the stairs
       item.width_m = rng.uniform(1.8, 3.5);
-      item.height_m = rng.uniform(0.95, 1.1);                                // railing top
-      item.albedo = tone(rng, Eigen::Vector3f(0.5F, 0.49F, 0.46F), 0.15);    // concrete parapet
-      item.roofAlbedo = tone(rng, Eigen::Vector3f(0.2F, 0.2F, 0.21F), 0.3);  // railing
+      item.height_m = rng.uniform(0.95, 1.1);                                    // railing top
+      item.albedo = toneColour(rng, Eigen::Vector3f(0.5F, 0.49F, 0.46F), 0.15);  // concrete parapet
+      item.roofAlbedo = toneColour(rng, Eigen::Vector3f(0.2F, 0.2F, 0.21F), 0.3);  // railing
       break;
     }
     case FurnitureKind::SignPost: {
@@ -84,15 +79,15 @@ StreetFurniture makeItem(FurnitureKind kind, Rng& rng) {
       item.length_m = rng.uniform(0.6, 0.9);
       item.width_m = 0.12;
       item.height_m = rng.uniform(2.0, 2.7) + item.length_m;
-      item.albedo = tone(rng, Eigen::Vector3f(0.5F, 0.5F, 0.5F), 0.15);  // galvanised pole
+      item.albedo = toneColour(rng, Eigen::Vector3f(0.5F, 0.5F, 0.5F), 0.15);  // galvanised pole
       // White, blue, red, yellow plates (their faces; the back is the pole's grey).
       static const std::array<Eigen::Vector3f, 4> kPlates = {
           Eigen::Vector3f(0.78F, 0.78F, 0.76F), Eigen::Vector3f(0.04F, 0.12F, 0.42F),
           Eigen::Vector3f(0.55F, 0.05F, 0.05F), Eigen::Vector3f(0.75F, 0.58F, 0.05F)};
-      item.roofAlbedo = tone(rng,
-                             kPlates[static_cast<std::size_t>(
-                                 rng.weighted(std::array<double, 4>{0.35, 0.35, 0.2, 0.1}))],
-                             0.08);
+      item.roofAlbedo = toneColour(rng,
+                                   kPlates[static_cast<std::size_t>(
+                                       rng.weighted(std::array<double, 4>{0.35, 0.35, 0.2, 0.1}))],
+                                   0.08);
       break;
     }
     case FurnitureKind::StreetLamp: {
@@ -101,9 +96,9 @@ StreetFurniture makeItem(FurnitureKind kind, Rng& rng) {
       item.height_m = rng.uniform(6.0, 10.0);
       item.reach_m = rng.uniform(0.8, 2.5);
       // Galvanised grey 60 %, painted dark grey or green 40 %.
-      item.albedo = rng.chance(0.6) ? tone(rng, Eigen::Vector3f(0.5F, 0.5F, 0.5F), 0.15)
-                                    : tone(rng, Eigen::Vector3f(0.07F, 0.09F, 0.08F), 0.3);
-      item.roofAlbedo = tone(rng, Eigen::Vector3f(0.25F, 0.25F, 0.26F), 0.3);  // lamp head
+      item.albedo = rng.chance(0.6) ? toneColour(rng, Eigen::Vector3f(0.5F, 0.5F, 0.5F), 0.15)
+                                    : toneColour(rng, Eigen::Vector3f(0.07F, 0.09F, 0.08F), 0.3);
+      item.roofAlbedo = toneColour(rng, Eigen::Vector3f(0.25F, 0.25F, 0.26F), 0.3);  // lamp head
       break;
     }
   }
@@ -315,6 +310,11 @@ bool footprintsOverlap(const Footprint& a, const Footprint& b, double margin_m) 
 
 Footprint footprintOf(const StreetFurniture& item) {
   return {item.centre, item.axis(), 0.5 * item.length_m, 0.5 * item.width_m};
+}
+
+Eigen::Vector3f toneColour(Rng& rng, Eigen::Vector3f c, double amount) {
+  c *= static_cast<float>(std::max(0.3, 1.0 + rng.normal(0.0, amount)));
+  return c.cwiseMin(0.92F).cwiseMax(0.01F);
 }
 
 void addStreetFurniture(SceneSpec& scene) {
