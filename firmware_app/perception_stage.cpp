@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "inference/engine.hpp"
+#include "loop_log.hpp"
 
 namespace vp::app {
 
@@ -58,11 +59,22 @@ bool PipelinePerception::init(const perception::PipelineOptions& options,
                               const geodesy::LocalFrame& frame,
                               const shape::ActiveShapeModel& shapeModel,
                               const georef::GroundView* groundView, std::string* why) {
-  // The model's file name and backend identify it in the drone status.
+  // The model's file name and the backend that runs it (auto resolved) identify it in the
+  // drone status and the start-up log.
   const detection::DetectionStageOptions& detection = options.detection;
+  const inference::Backend configured = detection.engine.backend;
+  const inference::Backend runs =
+      configured == inference::Backend::Auto ? inference::resolveAutoBackend() : configured;
   modelId_ = std::filesystem::path(detection.detectorModelPath).stem().string() + " (" +
-             inference::toString(detection.engine.backend) + ")";
-  return pipeline_.init(options, rawCamera, mount, terrain, frame, shapeModel, groundView, why);
+             inference::toString(runs) + ")";
+  if (!pipeline_.init(options, rawCamera, mount, terrain, frame, shapeModel, groundView, why)) {
+    return false;
+  }
+  logLine("inference: backend %s%s, %d detector thread(s), %d crop thread(s)",
+          inference::toString(runs),
+          configured == inference::Backend::Auto ? " (auto: chosen by the CPU's features)" : "",
+          detection.engine.threads, detection.cropEngineThreads);
+  return true;
 }
 
 }  // namespace vp::app

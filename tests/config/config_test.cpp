@@ -403,7 +403,7 @@ TEST(ConfigDefaultFile, ParsesWithoutWarningsToTheDocumentedValues) {
             (models / "detector/crop_int8.onnx").lexically_normal().string());
   EXPECT_EQ(config.asmPath, (models / "asm/default_asm.yaml").lexically_normal().string());
   EXPECT_TRUE(fs::is_regular_file(config.asmPath));
-  EXPECT_EQ(config.perception.detection.engine.backend, inference::Backend::XnnpackInt8);
+  EXPECT_EQ(config.perception.detection.engine.backend, inference::Backend::Auto);
   EXPECT_EQ(config.perception.preprocess.whiteBalanceOptions.regionRows, 3);
   EXPECT_EQ(config.perception.preprocess.whiteBalanceOptions.regionCols, 4);
   EXPECT_EQ(config.source.kind, FrameSourceKind::Replay);
@@ -1766,7 +1766,7 @@ TEST(ConfigLoop, AbsentSectionsGiveTheDocumentedDefaults) {
   EXPECT_EQ(det.detectorModelPath, "/data/models/detector/detector_int8.onnx");
   EXPECT_EQ(det.cropModelPath, "/data/models/detector/crop_int8.onnx");
   EXPECT_EQ(config.asmPath, "/data/models/asm/default_asm.yaml");
-  EXPECT_EQ(det.engine.backend, inference::Backend::XnnpackInt8);
+  EXPECT_EQ(det.engine.backend, inference::Backend::Auto);
   EXPECT_EQ(det.engine.threads, 1);
   EXPECT_FALSE(pre.undistort);
   EXPECT_FALSE(pre.whiteBalance);

@@ -24,6 +24,8 @@
 #include "alloc_counter.hpp"
 #include "app.hpp"
 #include "app_test_support.hpp"
+#include "core/transient_arena.hpp"
+#include "inference/dnnl_int8.hpp"
 #include "output_files/detections_file.hpp"
 #include "output_files/trajectory_file.hpp"
 
@@ -60,12 +62,15 @@ std::unique_ptr<test::TruthPerception> truth(const std::string& sequenceDir) {
 
 // The shipped pipeline over every frame with the CSV outputs on: no heap allocation on the
 // processing thread over frames 6..kFrames, and, pipelined, none on the detector thread either.
-void expectZeroAllocationsWithThePipeline(config::PipelineMode mode) {
+void expectZeroAllocationsWithThePipeline(
+    config::PipelineMode mode, inference::Backend backend = inference::Backend::XnnpackInt8) {
   const std::string dir = sequence();
   ASSERT_FALSE(dir.empty());
-  const std::string out = test::scratchDir(std::string("alloc_pipeline_") + config::toString(mode));
+  const std::string out = test::scratchDir(std::string("alloc_pipeline_") + config::toString(mode) +
+                                           "_" + toString(backend));
   config::AppConfig config = loopConfig(dir);
   config.app.pipeline = mode;
+  config.perception.detection.engine.backend = backend;
   config.app.trajectoryCsv = out + "/tracks.csv";
   config.app.detectionsCsv = out + "/detections.csv";
   test::AllocationWindow window(5, kFrames);
@@ -105,6 +110,18 @@ TEST(AppLoop, ZeroAllocationsPerFrameOnTheProcessingThreadWithThePipeline) {
 
 TEST(AppLoop, ZeroAllocationsPerFrameOnBothThreadsOfThePipelinedLoop) {
   expectZeroAllocationsWithThePipeline(config::PipelineMode::On);
+}
+
+// The oneDNN backend (int8-dnnl, what `auto` picks on VNNI CPUs): its convolutions' per-call
+// heap blocks come from an arena reserved at load (inference/dnnl_int8.hpp), so the loop
+// allocates nothing with it either, serial and pipelined.
+TEST(AppLoop, ZeroAllocationsPerFrameWithTheOneDnnBackend) {
+  if (!inference::dnnlInt8Available() || !inference::cpuHasVnni())
+    GTEST_SKIP() << "int8-dnnl is not what this build and CPU would use (no oneDNN or no VNNI)";
+  if (!core::TransientArena::redirects())
+    GTEST_SKIP() << "AddressSanitizer build: the arena does not redirect operator new";
+  expectZeroAllocationsWithThePipeline(config::PipelineMode::Off, inference::Backend::DnnlInt8);
+  expectZeroAllocationsWithThePipeline(config::PipelineMode::On, inference::Backend::DnnlInt8);
 }
 
 TEST(AppLoop, ZeroAllocationsWithInjectedVehiclesAndTracksAndTheFigureWithDds) {

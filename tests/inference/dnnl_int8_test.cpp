@@ -1,5 +1,5 @@
 // The DnnlInt8 backend (inference/dnnl_int8.hpp) against XnnpackInt8 on the shipped models,
-// the load-time choice of Backend::Auto, and what run() allocates.
+// the load-time choice of Backend::Auto, and that run() allocates nothing.
 //
 // Tolerance: both backends compute every convolution from the same int8 inputs, weights and
 // int32 biases; only the requantization rounding differs, so a convolution output may be one
@@ -19,6 +19,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "alloc_counter.hpp"
+#include "core/transient_arena.hpp"
 #include "inference/dnnl_int8.hpp"
 #include "inference/engine.hpp"
 #include "synthetic_frame.hpp"
@@ -161,13 +162,13 @@ TEST(DnnlInt8, CropModelMatchesXnnpackInt8WithinRounding) {
   expectMatchesXnnpack(kCropModel, 2);
 }
 
-// Known limit: oneDNN 2.6's dnnl_primitive_execute() builds its argument map and execution
-// context on the heap on every call (inside libdnnl, not avoidable through its API), so this
-// backend's run() is NOT allocation-free: a few small blocks per convolution. What the test
-// holds it to: the count is the same on every run (nothing grows or leaks), and it is not
-// XNNPACK's part (XnnpackInt8 on the same model allocates nothing). This is why `auto` is not
-// the shipped default (docs/inference.md).
-TEST(DnnlInt8, RunAllocatesOnlyOneDnnsFixedPerCallBlocks) {
+// oneDNN 2.6's dnnl_primitive_execute() builds its argument map and execution context on the
+// heap on every call (inside libdnnl, not avoidable through its API); the backend serves those
+// blocks from an arena reserved at load (core/transient_arena.hpp), so run() allocates nothing,
+// on any thread (the OpenMP team's included), run after run, like XnnpackInt8. Under
+// AddressSanitizer the arena does not redirect operator new: there the count is only held to
+// being the same on every run (nothing grows or leaks).
+TEST(DnnlInt8, RunAllocatesNothingItsOneDnnBlocksComeFromTheArena) {
   if (const auto reason = dnnlSkipReason(); !reason.empty())
     GTEST_SKIP() << reason;
   for (const std::string& path : {kDetectorModel, kCropModel}) {
@@ -183,10 +184,11 @@ TEST(DnnlInt8, RunAllocatesOnlyOneDnnsFixedPerCallBlocks) {
       std::size_t convs = 0;
       for (const auto& layer : engine.layers())
         convs += layer.backendKernel.rfind("dnnl ", 0) == 0 ? 1U : 0U;
+      ASSERT_GT(convs, 0U);
       std::vector<std::size_t> perRun;
-      for (int i = 0; i < 3; ++i) {
+      for (int i = 0; i < 5; ++i) {
         test::AllocationCounter counter;
-        engine.run(viewOf(frame));
+        ASSERT_EQ(engine.run(viewOf(frame)), RunStatus::Ok);
         counter.stop();
         perRun.push_back(counter.count());
       }
@@ -195,9 +197,12 @@ TEST(DnnlInt8, RunAllocatesOnlyOneDnnsFixedPerCallBlocks) {
       xnnCounter.stop();
       std::printf("  %s threads %d: %zu allocations per run over %zu oneDNN convolutions\n",
                   path.substr(path.find_last_of('/') + 1).c_str(), threads, perRun[0], convs);
-      EXPECT_EQ(perRun[1], perRun[0]) << path << " threads " << threads;
-      EXPECT_EQ(perRun[2], perRun[0]) << path << " threads " << threads;
-      EXPECT_LE(perRun[0], 16 * convs) << path << " threads " << threads;
+      for (const std::size_t count : perRun) {
+        if (core::TransientArena::redirects())
+          EXPECT_EQ(count, 0U) << path << " threads " << threads;
+        else
+          EXPECT_EQ(count, perRun[0]) << path << " threads " << threads;
+      }
       EXPECT_EQ(xnnCounter.count(), 0U) << path << " threads " << threads;
     }
   }

@@ -12,11 +12,13 @@
 // oneDNN would not make them faster. Everything (primitives, reordered weights, zero-point
 // and scratchpad memory: user-mode scratchpad, one buffer sized for the largest convolution)
 // is created at load. oneDNN runs on its OpenMP team; run() sets the calling thread's team
-// size to `threads` first. run() is NOT allocation-free: oneDNN 2.6 builds its argument map
-// and execution context on the heap inside every dnnl_primitive_execute() (a fixed number of
-// small blocks per convolution and run); nothing else allocates. When the build has no oneDNN
-// (VP_HAVE_DNNL undefined: ARM, or libdnnl-dev absent) the create function fails with a message
-// saying so.
+// size to `threads` first. The XNNPACK part runs on the calling thread alone (no pthreadpool):
+// two pools that spin after their work (XNNPACK's workers and the OpenMP team) on the same cores
+// made two threads several times slower than one (docs/performance.md). run() is NOT
+// allocation-free: oneDNN 2.6 builds its argument map and execution context on the heap inside
+// every dnnl_primitive_execute() (a fixed number of small blocks per convolution and run); nothing
+// else allocates. When the build has no oneDNN (VP_HAVE_DNNL undefined: ARM, or libdnnl-dev absent)
+// the create function fails with a message saying so.
 //
 // dnnlInt8Available() says whether this build has oneDNN; cpuHasVnni() whether the CPU has
 // the int8 dot-product instructions (AVX512-VNNI or AVX-VNNI), the condition for

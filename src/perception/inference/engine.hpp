@@ -55,7 +55,7 @@ struct InputNormalization {
 };
 
 struct EngineOptions {
-  Backend backend = Backend::XnnpackInt8;
+  Backend backend = Backend::Auto;                  // int8-dnnl on VNNI CPUs with oneDNN, else int8
   int threads = 1;                                  // pthreadpool workers (1 = calling thread)
   ChannelOrder imageOrder = ChannelOrder::Bgr;      // layout of the images given to run()
   std::optional<InputNormalization> normalization;  // overrides the model's metadata
