@@ -7,7 +7,8 @@
 #      peak RSS (/usr/bin/time -v);
 #   2. a source faster than the loop (--fast, drop-oldest), 2 cores: drops counted, latency
 #      bounded.
-# BACKENDS="int8 int8-dnnl" (default "int8") repeats the runs per inference backend
+# BACKENDS="int8 int8-dnnl" (default "auto", the app's default: int8-dnnl on VNNI CPUs with
+# oneDNN, else int8; the app's log says which) repeats the runs per inference backend
 # (--backend; int8-dnnl needs an x86 build with oneDNN, docs/inference.md), one after the
 # other, so their fps sit side by side.
 # PIPELINES="off on" (default "off") repeats every run per loop mode (--pipeline; app.pipeline,
@@ -110,7 +111,7 @@ run() {  # run NAME CPUS THREADS ARGS...
 
 echo "ms median/p99 per stage; e2e = capture -> published; queue = capture -> processing start"
 runs="${RUNS:-1}"
-for backend in ${BACKENDS:-int8}; do
+for backend in ${BACKENDS:-auto}; do
   # The modes in turn within each repetition (off on off on ...): a drifting load hits both.
   for r in $(seq 1 "$runs"); do
     for pipeline in ${PIPELINES:-off}; do

@@ -106,7 +106,13 @@ class DnnlConvolution final : public ExternalStep {
 class DnnlInt8Backend final : public XnnpackInt8Backend {
  public:
   explicit DnnlInt8Backend(int threads)
-      : threads_(threads), engine_(dnnl::engine::kind::cpu, 0), stream_(engine_) {}
+      : threads_(threads), engine_(dnnl::engine::kind::cpu, 0), stream_(engine_) {
+    // oneDNN plans a primitive's work split for the OpenMP team size it sees when the primitive
+    // is created (dnnl_get_max_threads()) and forks that many at execution whatever the team
+    // size is then: the primitives must be created with the engine's own thread count, not
+    // the process default (every core), or a one-thread engine forks a team on every call.
+    omp_set_num_threads(threads_);
+  }
 
   bool run() override {
     // oneDNN parallelises on the calling thread's OpenMP team: size it to this engine's.
