@@ -9,7 +9,7 @@
 #   --build DIR          build folder with the binaries (default build/release, else build/ci)
 #   --detector FILE      first-stage ONNX (default models/detector/detector_int8.onnx)
 #   --crop FILE          crop network ONNX (default models/detector/crop_int8.onnx)
-#   --backend B          int8 | fp32 (default int8)
+#   --backend B          int8 | fp32 | int8-dnnl | auto (default int8, the model card's reference)
 #   --real DIR           also the real images of this YOLO folder ...
 #   --split FILE         ... those listed as val_stems in this split (scripts/make_eval_data.sh
 #                        writes it: DATA_ROOT/real_split.json); required with --real
@@ -38,7 +38,7 @@ while [[ $# -gt 0 ]]; do
     --build) build=$(realpath "${2:?--build needs a folder}"); shift 2 ;;
     --detector) detector=$(realpath "${2:?--detector needs a file}"); shift 2 ;;
     --crop) crop=$(realpath "${2:?--crop needs a file}"); shift 2 ;;
-    --backend) backend="${2:?--backend needs int8 or fp32}"; shift 2 ;;
+    --backend) backend="${2:?--backend needs int8, fp32, int8-dnnl or auto}"; shift 2 ;;
     --real) real=$(realpath "${2:?--real needs a folder}"); shift 2 ;;
     --split) split=$(realpath "${2:?--split needs a file}"); shift 2 ;;
     --gsd-m) gsd="${2:?--gsd-m needs a number}"; shift 2 ;;

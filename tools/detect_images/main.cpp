@@ -50,7 +50,8 @@ options:
                         the split.json of tools/detector/split_real.py (its "val_stems")
   --detector PATH       detector ONNX (default: models/detector/detector_int8.onnx)
   --crop PATH           second-stage ONNX (default: models/detector/crop_int8.onnx; "" = none)
-  --backend B           int8 | fp32 | opencv (default int8)
+  --backend B           int8 | fp32 | opencv | int8-dnnl | auto (default int8, the reference
+                        of the model card; the app's default is auto)
   --crop-backend B      the second stage's backend when it should differ from --backend
                         (e.g. int8 detector + fp32 crops: which stage carries the int8 error)
   --working-scale S     working px per image px, (0, 1] (default for images: G / 0.12 with
