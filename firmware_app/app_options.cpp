@@ -56,7 +56,8 @@ Usage: vp_firmware_app --config FILE [options]
   --no-dds               publish nothing over DDS (dds.enabled false)
   --threads N            perception threads, 1..16 (perception.threads)
   --backend NAME         inference backend of both networks: int8, fp32, opencv, int8-dnnl,
-                         auto (perception.backend; docs/inference.md)
+                         auto (perception.backend, default auto: int8-dnnl on CPUs with
+                         VNNI, else int8; docs/inference.md)
   --pipeline off|on      off: one processing thread; on: the next frame's preprocess and
                          detector overlap this frame's crops, tracker and outputs on a second
                          processing thread, the same outputs (app.pipeline)
