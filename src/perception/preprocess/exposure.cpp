@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace vp::preprocess {
 
@@ -58,7 +59,10 @@ ExposureGain estimateExposure(const cv::Mat& bgrFrame, const ExposureOptions& op
     return {};
   }
   const int stride = options.sampleStride_px;
-  double sum = 0.0;
+  // BT.601 luma in thousandths, summed in integers: exact, so a frame at the dark threshold is
+  // judged the same on every CPU (in floating point, FMA contraction on aarch64 put a grey 40
+  // frame a rounding below 40).
+  std::int64_t sum_milli = 0;
   long count = 0;
   for (int v = stride / 2; v < bgrFrame.rows; v += stride) {
     const std::uint8_t* row = bgrFrame.ptr<std::uint8_t>(v);
@@ -67,11 +71,11 @@ ExposureGain estimateExposure(const cv::Mat& bgrFrame, const ExposureOptions& op
       if ((p[0] | p[1] | p[2]) == 0) {
         continue;  // blank (e.g. outside the undistorted image)
       }
-      sum += 0.114 * p[0] + 0.587 * p[1] + 0.299 * p[2];
+      sum_milli += 114 * p[0] + 587 * p[1] + 299 * p[2];
       ++count;
     }
   }
-  return gainFor(sum, count, options);
+  return gainFor(static_cast<double>(sum_milli) / 1000.0, count, options);
 }
 
 ExposureGain estimateExposureYuv(const std::uint8_t* luma, std::size_t strideBytes, int width_px,
@@ -81,19 +85,19 @@ ExposureGain estimateExposureYuv(const std::uint8_t* luma, std::size_t strideByt
     return {};
   }
   const int stride = options.sampleStride_px;
-  double sum = 0.0;
+  std::int64_t sum = 0;  // integers, exact on every CPU (as the BGR estimate)
   long count = 0;
   for (int v = stride / 2; v < height_px; v += stride) {
     const std::uint8_t* row = luma + static_cast<std::size_t>(v) * strideBytes;
     for (int u = stride / 2; u < width_px; u += stride) {
-      // Limited range (Y 16..235, as the camera path converts it: yuv_rows.hpp) to the
-      // full-range luminance the BGR estimate sees.
       const int y = row[static_cast<std::ptrdiff_t>(u) * pixelStride];
-      sum += std::max(0.0, kLimitedRangeScale * (y - 16));
+      sum += std::max(0, y - 16);
       ++count;
     }
   }
-  return gainFor(sum, count, options);
+  // Limited range (Y 16..235, as the camera path converts it: yuv_rows.hpp) to the full-range
+  // luminance the BGR estimate sees, once on the sum.
+  return gainFor(kLimitedRangeScale * static_cast<double>(sum), count, options);
 }
 
 }  // namespace vp::preprocess
