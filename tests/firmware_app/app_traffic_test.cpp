@@ -59,9 +59,35 @@ std::vector<std::vector<std::string>> readRows(const std::string& dir, TrafficFi
   return rows.rows;
 }
 
-// 8 s of the simulated intersection (small frames: the truth is what counts here).
+// 8 s of the simulated intersection (small frames: the truth is what counts here) in which at
+// least three vehicles cross the gates. Seed 7 has them on x86-64; the simulator draws other
+// scenes from a seed on CPUs whose math rounds differently (docs/simulator.md "Determinism":
+// aarch64), so the next seeds are taken, each probed by a quick run without DDS, until one does.
 std::string trafficSequence() {
-  return test::simulatedSequence("traffic", 80, test::kLoopWidth_px, test::kLoopHeight_px, 7);
+  for (const int seed : {7, 8, 9, 10, 11, 12}) {
+    const std::string dir =
+        test::simulatedSequence("traffic_" + std::to_string(seed), 80, test::kLoopWidth_px,
+                                test::kLoopHeight_px, static_cast<std::uint64_t>(seed));
+    if (dir.empty())
+      return dir;
+    config::AppConfig config = test::defaultConfigFor(dir);
+    config.dds.enabled = false;
+    config.source.paced = false;
+    config.app.statsPeriod_s = 3600.0;
+    config.app.trafficDir = test::scratchDir("traffic_probe_" + std::to_string(seed));
+    App app;
+    AppSeams seams;
+    auto truth = std::make_unique<test::TruthPerception>();
+    std::string why;
+    if (!truth->init(dir, &why))
+      return {};
+    seams.perception = std::move(truth);
+    if (!app.init(config, test::everyFrame(), std::move(seams), &why) || !app.run(&why))
+      return {};
+    if (app.counters().gateCrossings >= 3U)
+      return dir;
+  }
+  return {};
 }
 
 TEST(AppTraffic, StatisticsAndEventsOverDdsAgreeWithTheTrafficFiles) {
