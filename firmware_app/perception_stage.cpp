@@ -59,20 +59,20 @@ bool PipelinePerception::init(const perception::PipelineOptions& options,
                               const geodesy::LocalFrame& frame,
                               const shape::ActiveShapeModel& shapeModel,
                               const georef::GroundView* groundView, std::string* why) {
-  // The model's file name and the backend that runs it (auto resolved) identify it in the
-  // drone status and the start-up log.
-  const detection::DetectionStageOptions& detection = options.detection;
-  const inference::Backend configured = detection.engine.backend;
-  const inference::Backend runs =
-      configured == inference::Backend::Auto ? inference::resolveAutoBackend() : configured;
-  modelId_ = std::filesystem::path(detection.detectorModelPath).stem().string() + " (" +
-             inference::toString(runs) + ")";
   if (!pipeline_.init(options, rawCamera, mount, terrain, frame, shapeModel, groundView, why)) {
     return false;
   }
+  // The model's file name and the backend its engine runs on (auto resolved at load) identify
+  // it in the drone status and the start-up log.
+  const detection::DetectionStageOptions& detection = options.detection;
+  const inference::Backend runs = pipeline_.detectorBackend();
+  modelId_ = std::filesystem::path(detection.detectorModelPath).stem().string() + " (" +
+             inference::toString(runs) + ")";
   logLine("inference: backend %s%s, %d detector thread(s), %d crop thread(s)",
           inference::toString(runs),
-          configured == inference::Backend::Auto ? " (auto: chosen by the CPU's features)" : "",
+          detection.engine.backend == inference::Backend::Auto
+              ? " (auto: chosen by the CPU's features)"
+              : "",
           detection.engine.threads, detection.cropEngineThreads);
   return true;
 }

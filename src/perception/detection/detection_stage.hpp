@@ -124,6 +124,8 @@ class DetectionStage {
   int detectorInputWidth() const { return inputWidth_; }
   int detectorInputHeight() const { return inputHeight_; }
   int stride_px() const { return stridePx_; }
+  // The backend the detector network runs on (Auto resolved at load).
+  inference::Backend detectorBackend() const { return detector_.backend(); }
 
  private:
   // Removes detections that overlap a better one after the second stage; returns the count kept.

@@ -14,10 +14,11 @@
 // is created at load. oneDNN runs on its OpenMP team; run() sets the calling thread's team
 // size to `threads` first. The XNNPACK part runs on the calling thread alone (no pthreadpool):
 // two pools that spin after their work (XNNPACK's workers and the OpenMP team) on the same cores
-// made two threads several times slower than one (docs/performance.md). run() is NOT
-// allocation-free: oneDNN 2.6 builds its argument map and execution context on the heap inside
-// every dnnl_primitive_execute() (a fixed number of small blocks per convolution and run); nothing
-// else allocates. When the build has no oneDNN (VP_HAVE_DNNL undefined: ARM, or libdnnl-dev absent)
+// made two threads several times slower than one (docs/performance.md); its primitives are
+// created for that team size. run() allocates nothing: oneDNN 2.6 builds its argument map and
+// execution context on the heap inside every dnnl_primitive_execute(), and each convolution's
+// call runs in a scope of the backend's core::TransientArena (reserved at load), which serves
+// those blocks. When the build has no oneDNN (VP_HAVE_DNNL undefined: ARM, or libdnnl-dev absent)
 // the create function fails with a message saying so.
 //
 // dnnlInt8Available() says whether this build has oneDNN; cpuHasVnni() whether the CPU has

@@ -173,6 +173,8 @@ class FramePipeline {
   const PipelineTimings& timings() const { return timings_; }
   // Working px per frame px of the last frame (preprocess options: fixed, or from the GSD).
   double workingScale() const { return workingScale_; }
+  // The backend the detector network runs on (Auto resolved at load).
+  inference::Backend detectorBackend() const { return detection_.detectorBackend(); }
   // GSD at the image centre of the last frame with a camera pose (0 before the first), and how
   // often the working scale changed since init().
   double frameGsd_m() const { return frameGsd_m_; }
