@@ -154,6 +154,8 @@ perception:
   crop_mirror_refine: false
   crop_large_vehicle_ends: false
   crop_min_vehicle_probability: 0.25
+  crop_frame_edge_keep_box: false
+  crop_frame_edge_min_vehicle_probability: 0.15
   fixed_gsd_m: 0.03
   nominal_car_length_m: 4.4
   lift_height_share: 0.4
@@ -804,6 +806,11 @@ const MalformedCase kMalformedCases[] = {
      "perception.crop_large_vehicle_ends", "expected true or false, got '2'"},
     {"crop_min_vehicle_probability: 0.25", "crop_min_vehicle_probability: 1.5",
      "perception.crop_min_vehicle_probability", "must be in [0, 1], got 1.5"},
+    {"crop_frame_edge_keep_box: false", "crop_frame_edge_keep_box: maybe",
+     "perception.crop_frame_edge_keep_box", "expected true or false, got 'maybe'"},
+    {"crop_frame_edge_min_vehicle_probability: 0.15",
+     "crop_frame_edge_min_vehicle_probability: -0.2",
+     "perception.crop_frame_edge_min_vehicle_probability", "must be in [0, 1], got -0.2"},
     {"apply_refine: false", "apply_refine: []", "perception.apply_refine",
      "expected true or false, got a sequence of 0 element(s)"},
     {"crop_refine_size: false", "crop_refine_size: 0.5", "perception.crop_refine_size",
@@ -1130,6 +1137,8 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "perception.crop_mirror_refine",
                                                "perception.crop_large_vehicle_ends",
                                                "perception.crop_min_vehicle_probability",
+                                               "perception.crop_frame_edge_keep_box",
+                                               "perception.crop_frame_edge_min_vehicle_probability",
                                                "perception.fixed_gsd_m",
                                                "perception.nominal_car_length_m",
                                                "perception.lift_height_share",
@@ -1657,6 +1666,8 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_FALSE(det.secondStage.mirrorRefine);
   EXPECT_FALSE(det.secondStage.largeVehicleEnds);
   EXPECT_FLOAT_EQ(det.secondStage.minVehicleProbability, 0.25F);
+  EXPECT_FALSE(det.secondStage.frameEdgeKeepBox);
+  EXPECT_FLOAT_EQ(det.secondStage.frameEdgeMinVehicleProbability, 0.15F);
   EXPECT_DOUBLE_EQ(det.gsd.fixedGsd_m, 0.03);
   EXPECT_DOUBLE_EQ(det.gsd.nominalCarLength_m, 4.4);
   EXPECT_DOUBLE_EQ(config.perception.lift.boxHeightShare, 0.4);

@@ -213,6 +213,96 @@ TEST(DetectionStage, CropBackendSwitchesOnlyTheSecondStage) {
   EXPECT_GT(typesDiffer, 0);
 }
 
+// A vehicle cut by the frame's border keeps the first stage's box (the crop network learnt whole
+// vehicles: its refinement would stretch the box past the border); the others are refined as
+// before; the verifier's threshold at the border is its own.
+TEST(DetectionStage, AVehicleCutByTheFrameBorderKeepsTheDetectorsBox) {
+  preprocess::Preprocessor pre;
+  std::string why;
+  ASSERT_TRUE(pre.init(undistorting(), camera2592(), {2592, 2048}, &why)) << why;
+  cv::Mat frame = sceneFrame();
+  // Two bright cars cut by the left and the bottom border.
+  cv::rectangle(frame, cv::Rect(0, 900, 90, 70), cv::Scalar(230, 230, 235), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(1500, 1990, 70, 58), cv::Scalar(30, 30, 200), cv::FILLED);
+  ASSERT_EQ(pre.process(frame), preprocess::PreprocessStatus::Ok);
+  using Out = std::array<Detection, kMaxDetectionsPerFrame>;
+  auto runWith = [&](const SecondStageOptions& second, Out& out) {
+    DetectionStageOptions options = stageOptions(1);
+    options.maxCrops = kMaxDetectionsPerFrame;  // every detection gets its crop run
+    options.secondStage = second;
+    DetectionStage stage;
+    std::string error;
+    EXPECT_TRUE(stage.init(options, static_cast<int>(pre.tileCount()), &error)) << error;
+    std::size_t count = 0;
+    EXPECT_EQ(stage.run(pre.output(), out, &count), DetectionStatus::Ok);
+    return count;
+  };
+  const SecondStageOptions base = stageOptions(1).secondStage;
+  SecondStageOptions keep = base;
+  keep.frameEdgeKeepBox = true;
+  SecondStageOptions refineAll = base;
+  refineAll.frameEdgeKeepBox = false;
+  SecondStageOptions firstStageBoxes = base;
+  firstStageBoxes.applyRefine = false;
+  Out kept{}, refined{}, unrefined{};
+  const std::size_t keptCount = runWith(keep, kept);
+  const std::size_t refinedCount = runWith(refineAll, refined);
+  const std::size_t unrefinedCount = runWith(firstStageBoxes, unrefined);
+  const auto find = [](const Out& out, std::size_t count, const Detection& d) -> const Detection* {
+    for (std::size_t i = 0; i < count; ++i) {
+      if (out[i].box.cx == d.box.cx && out[i].box.cy == d.box.cy &&
+          out[i].box.length == d.box.length && out[i].box.width == d.box.width) {
+        return &out[i];
+      }
+    }
+    return nullptr;
+  };
+  // Each box is either the first stage's, kept because it reaches the border, or refined as
+  // without the switch (a refined box may end at the border too).
+  int edge = 0;
+  int inner = 0;
+  int innerRefinedAlike = 0;
+  for (std::size_t i = 0; i < keptCount; ++i) {
+    const Detection& d = kept[i];
+    const Detection* first = find(unrefined, unrefinedCount, d);
+    if (first != nullptr) {
+      ++edge;
+      EXPECT_TRUE(d.atFrameEdge) << "detection " << i << " kept its first-stage box inside "
+                                 << d.box.cx << " " << d.box.cy << " " << d.box.length << " "
+                                 << d.box.width << " " << d.box.angle << " first "
+                                 << first->box.length << " " << first->box.angle << " "
+                                 << first->atFrameEdge;
+      EXPECT_EQ(first->typeProbabilities, d.typeProbabilities);  // the crops still ran
+    } else {
+      ++inner;
+      const Detection* other = find(refined, refinedCount, d);
+      innerRefinedAlike += other != nullptr ? 1 : 0;
+    }
+  }
+  // Without the switch, some edge box is refined (moved or resized).
+  int refinedEdge = 0;
+  for (std::size_t i = 0; i < refinedCount; ++i) {
+    refinedEdge += find(unrefined, unrefinedCount, refined[i]) == nullptr ? 1 : 0;
+  }
+  EXPECT_GT(refinedEdge, 0);
+
+  // The verifier's two thresholds: everything at the border stays, the rest needs 0.99.
+  SecondStageOptions verified = keep;
+  verified.minVehicleProbability = 0.99F;
+  verified.frameEdgeMinVehicleProbability = 0.0F;
+  Out out{};
+  const std::size_t count = runWith(verified, out);
+  int edgeVerified = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (find(unrefined, unrefinedCount, out[i]) != nullptr) {
+      ++edgeVerified;
+    } else {
+      EXPECT_GE(out[i].vehicleProbability, 0.99F) << "detection " << i;
+    }
+  }
+  EXPECT_EQ(edgeVerified, edge);
+}
+
 class FixedGsd : public GsdProvider {
  public:
   double groundSampleDistance_m(const Detection& detection) const override {

@@ -83,6 +83,14 @@ options:
                         probability, [0, 1] (default 0.3, as the app's
                         perception.crop_min_vehicle_probability; 0 keeps all; no effect
                         without a verifier)
+  --no-edge-keep-box    refine the box of a vehicle cut by the frame's border too (default: it
+                        keeps the detector's box, as the app's
+                        perception.crop_frame_edge_keep_box)
+  --edge-min-vehicle-probability P
+                        the verifier's threshold for vehicles cut by the frame's border, [0, 1]
+                        (default 0.3, as the app's
+                        perception.crop_frame_edge_min_vehicle_probability; used with the
+                        kept box only)
   --refine-large-length apply the second stage's length to vehicles most likely large too
                         (default: they keep the first stage's length; the crop shows a part)
   --no-large-vehicle-ends
@@ -159,6 +167,7 @@ Options parseArguments(int argc, char** argv) {
     } switches[] = {{"--no-flip", &second.applyFlip, false},
                     {"--no-refine", &second.applyRefine, false},
                     {"--no-refine-size", &second.refineSize, false},
+                    {"--no-edge-keep-box", &second.frameEdgeKeepBox, false},
                     {"--no-mirror", &second.mirrorAverage, false},
                     {"--no-mirror-refine", &second.mirrorRefine, false},
                     {"--no-turn", &second.turnAverage, false},
@@ -205,6 +214,8 @@ Options parseArguments(int argc, char** argv) {
       stage.decoder.scoreThreshold = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
     else if (arg == "--min-vehicle-probability")
       second.minVehicleProbability = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
+    else if (arg == "--edge-min-vehicle-probability")
+      second.frameEdgeMinVehicleProbability = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
     else if (arg == "--threads")
       stage.engine.threads = static_cast<int>(parseDouble(arg, value, 1, 64));
     else

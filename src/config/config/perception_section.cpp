@@ -166,6 +166,11 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
       section.boolean("crop_large_vehicle_ends", secondDefaults.largeVehicleEnds);
   second.minVehicleProbability = static_cast<float>(section.number(
       "crop_min_vehicle_probability", kProbabilityRange, secondDefaults.minVehicleProbability));
+  second.frameEdgeKeepBox =
+      section.boolean("crop_frame_edge_keep_box", secondDefaults.frameEdgeKeepBox);
+  second.frameEdgeMinVehicleProbability = static_cast<float>(
+      section.number("crop_frame_edge_min_vehicle_probability", kProbabilityRange,
+                     secondDefaults.frameEdgeMinVehicleProbability));
   detection::LargeVehicleMergeOptions& merge = det.largeMerge;
   merge.enabled = section.boolean("large_vehicle_merge", d.detection.largeMerge.enabled);
   merge.maxLength_m = section.number("large_vehicle_max_length_m", kLargeVehicleLengthRange_m,

@@ -225,12 +225,17 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
     }
     stats_.frameGsd_m = frameGsd;
     const std::size_t crops = std::min(kept, static_cast<std::size_t>(options_.maxCrops));
+    // Which first-stage boxes reach the border (the vehicle is cut): set again below for the
+    // final boxes.
+    markFrameEdge(geometry, out.first(kept));
+    const bool edgeKeepBox = options_.secondStage.frameEdgeKeepBox;
     for (std::size_t i = 0; i < crops; ++i) {
       double gsd = gsdProvider != nullptr ? gsdProvider->groundSampleDistance_m(out[i]) : 0.0;
       if (!(gsd > 0.0) || !std::isfinite(gsd)) {
         gsd = frameGsd;
       }
-      if (cropper_.classify(correctedFrame, gsd, &out[i]) == SecondStageStatus::Ok) {
+      if (cropper_.classify(correctedFrame, gsd, &out[i], edgeKeepBox && out[i].atFrameEdge) ==
+          SecondStageStatus::Ok) {
         ++stats_.crops;
       } else {
         ++stats_.cropFailures;
@@ -242,10 +247,16 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
   // without a verifier probability stays).
   std::size_t verified = kept;
   const float minVehicle = options_.secondStage.minVehicleProbability;
-  if (secondStage && minVehicle > 0.0F && cropper_.hasVerifier()) {
+  // The border's own threshold can only lower the bar (0 everywhere still keeps all).
+  const float minVehicleAtEdge =
+      options_.secondStage.frameEdgeKeepBox
+          ? std::min(minVehicle, options_.secondStage.frameEdgeMinVehicleProbability)
+          : minVehicle;
+  if (secondStage && (minVehicle > 0.0F || minVehicleAtEdge > 0.0F) && cropper_.hasVerifier()) {
     verified = 0;
     for (std::size_t i = 0; i < kept; ++i) {
-      if (!(out[i].vehicleProbability < minVehicle)) {
+      const float threshold = out[i].atFrameEdge ? minVehicleAtEdge : minVehicle;
+      if (!(out[i].vehicleProbability < threshold)) {
         out[verified++] = out[i];
       }
     }

@@ -306,8 +306,8 @@ bool VehicleCropper::cut(const cv::Mat& frame, const CropMap& map, cv::Mat& crop
   return true;
 }
 
-SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
-                                           Detection* detection) {
+SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m, Detection* detection,
+                                           bool keepBox) {
   if (!initialised()) {
     return SecondStageStatus::NotInitialised;
   }
@@ -343,6 +343,8 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
       return status;
     }
   }
+  SecondStageOptions applied = options_;
+  applied.applyRefine = options_.applyRefine && !keepBox;
   const auto top = std::max_element(typeLogits_.begin(), typeLogits_.end()) - typeLogits_.begin();
   if (options_.largeVehicleEnds && top == static_cast<std::ptrdiff_t>(shape::VehicleType::Large)) {
     // The box is still the first stage's: applyCropOutputs() below refines it.
@@ -351,14 +353,14 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m,
     if (status != SecondStageStatus::Ok) {
       return status;
     }
-    return applyCropOutputs(outputs, gsd_m, options_, detection);
+    return applyCropOutputs(outputs, gsd_m, applied, detection);
   }
   if (!options_.turnAverage) {
-    return applyCropOutputs(outputs, gsd_m, options_, detection);
+    return applyCropOutputs(outputs, gsd_m, applied, detection);
   }
   // Type, shape and refinement as usual, the heading kept on the first stage's side; then the
   // front/back from a crop at the refined box and its turned copy (see the contract).
-  SecondStageOptions refineOnly = options_;
+  SecondStageOptions refineOnly = applied;
   refineOnly.applyFlip = false;
   const SecondStageStatus refined = applyCropOutputs(outputs, gsd_m, refineOnly, detection);
   if (refined != SecondStageStatus::Ok) {
