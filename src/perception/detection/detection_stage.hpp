@@ -8,7 +8,9 @@
 // per tile, decodes and suppresses (decoder.hpp), then for each kept detection - best first,
 // at most maxCrops - cuts the crop from the corrected full-resolution frame at a GSD from the
 // caller's GsdProvider, else the options' fixed GSD, else the frame's median box length
-// (ground_sample_distance.hpp), and applies the crop network's outputs; after the last
+// (ground_sample_distance.hpp), and applies the crop network's outputs (a detection whose
+// first-stage box reaches the frame's border keeps that box with secondStage.frameEdgeKeepBox,
+// and meets the verifier's border threshold); after the last
 // suppression, parts of one bus or truck are merged (large_vehicle_merge.hpp). It writes at most
 // out.size() detections (kMaxDetectionsPerFrame is the intended capacity) and returns a
 // status, never throws and performs no heap allocation after init(). A detection whose
