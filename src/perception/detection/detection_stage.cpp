@@ -225,10 +225,16 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
     }
     stats_.frameGsd_m = frameGsd;
     const std::size_t crops = std::min(kept, static_cast<std::size_t>(options_.maxCrops));
-    // Which first-stage boxes reach the border (the vehicle is cut): set again below for the
+    // With frameEdgeKeepBox: which first-stage boxes reach the border (the vehicle is cut), for
+    // the crops and the verifier; markFrameEdge() below sets the flag and insideShare of the
     // final boxes.
-    markFrameEdge(geometry, out.first(kept));
     const bool edgeKeepBox = options_.secondStage.frameEdgeKeepBox;
+    if (edgeKeepBox) {
+      const FrameEdgeBounds bounds = frameEdgeBounds(geometry);
+      for (Detection& d : out.first(kept)) {
+        d.atFrameEdge = reachesFrameEdge(bounds, d.box);
+      }
+    }
     for (std::size_t i = 0; i < crops; ++i) {
       double gsd = gsdProvider != nullptr ? gsdProvider->groundSampleDistance_m(out[i]) : 0.0;
       if (!(gsd > 0.0) || !std::isfinite(gsd)) {
@@ -252,7 +258,7 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
       options_.secondStage.frameEdgeKeepBox
           ? std::min(minVehicle, options_.secondStage.frameEdgeMinVehicleProbability)
           : minVehicle;
-  if (secondStage && (minVehicle > 0.0F || minVehicleAtEdge > 0.0F) && cropper_.hasVerifier()) {
+  if (secondStage && minVehicle > 0.0F && cropper_.hasVerifier()) {
     verified = 0;
     for (std::size_t i = 0; i < kept; ++i) {
       const float threshold = out[i].atFrameEdge ? minVehicleAtEdge : minVehicle;
@@ -285,23 +291,33 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
   return DetectionStatus::Ok;
 }
 
-void DetectionStage::markFrameEdge(const preprocess::FrameGeometry& geometry,
-                                   std::span<Detection> detections) const {
+DetectionStage::FrameEdgeBounds DetectionStage::frameEdgeBounds(
+    const preprocess::FrameGeometry& geometry) const {
   // The decoder's cut margin (working px) in frame px; frame pixel edges at -0.5, size - 0.5.
   const double margin =
       options_.decoder.cutEdgeMargin_px / std::min(geometry.scaleX, geometry.scaleY);
-  const double right = geometry.frameWidth_px - 0.5 - margin;
-  const double bottom = geometry.frameHeight_px - 0.5 - margin;
+  return {-0.5 + margin, geometry.frameWidth_px - 0.5 - margin,
+          geometry.frameHeight_px - 0.5 - margin};
+}
+
+bool DetectionStage::reachesFrameEdge(const FrameEdgeBounds& bounds,
+                                      const geometry::RotatedBox& box) {
+  double halfU = 0.0;
+  double halfV = 0.0;
+  geometry::axisAlignedHalfExtents(box, &halfU, &halfV);
+  return box.cx - halfU < bounds.low || box.cy - halfV < bounds.low ||
+         box.cx + halfU > bounds.right || box.cy + halfV > bounds.bottom;
+}
+
+void DetectionStage::markFrameEdge(const preprocess::FrameGeometry& geometry,
+                                   std::span<Detection> detections) const {
+  const FrameEdgeBounds bounds = frameEdgeBounds(geometry);
   const geometry::RotatedBox frame{0.5 * geometry.frameWidth_px - 0.5,
                                    0.5 * geometry.frameHeight_px - 0.5,
                                    static_cast<double>(geometry.frameWidth_px),
                                    static_cast<double>(geometry.frameHeight_px), 0.0};
   for (Detection& d : detections) {
-    double halfU = 0.0;
-    double halfV = 0.0;
-    geometry::axisAlignedHalfExtents(d.box, &halfU, &halfV);
-    d.atFrameEdge = d.box.cx - halfU < -0.5 + margin || d.box.cy - halfV < -0.5 + margin ||
-                    d.box.cx + halfU > right || d.box.cy + halfV > bottom;
+    d.atFrameEdge = reachesFrameEdge(bounds, d.box);
     const double boxArea = geometry::area(d.box);
     d.insideShare = !d.atFrameEdge || !(boxArea > 0.0)
                         ? 1.0F

@@ -132,6 +132,15 @@ class DetectionStage {
  private:
   // Removes detections that overlap a better one after the second stage; returns the count kept.
   std::size_t suppressRefinedDuplicates(std::span<Detection> detections) const;
+  // The lines a box must stay within (frame px) not to count as reaching the frame's border:
+  // the decoder's cut margin inside the frame's edges.
+  struct FrameEdgeBounds {
+    double low = 0.0;  // left and top
+    double right = 0.0;
+    double bottom = 0.0;
+  };
+  FrameEdgeBounds frameEdgeBounds(const preprocess::FrameGeometry& geometry) const;
+  static bool reachesFrameEdge(const FrameEdgeBounds& bounds, const geometry::RotatedBox& box);
   // Sets Detection::atFrameEdge: the box's bounds come within the decoder's cut margin of the
   // frame's border; and Detection::insideShare, the share of its area inside the frame.
   void markFrameEdge(const preprocess::FrameGeometry& geometry,
