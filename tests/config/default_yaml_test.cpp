@@ -78,6 +78,7 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(second.mirrorAverage, secondCode.mirrorAverage);
   EXPECT_EQ(second.turnAverage, secondCode.turnAverage);
   EXPECT_EQ(second.turnTypeAverage, secondCode.turnTypeAverage);
+  EXPECT_EQ(second.turnTypeWeight, secondCode.turnTypeWeight);
   EXPECT_EQ(second.mirrorRefine, secondCode.mirrorRefine);
   EXPECT_EQ(second.largeVehicleEnds, secondCode.largeVehicleEnds);
   EXPECT_EQ(second.minVehicleProbability, secondCode.minVehicleProbability);

@@ -442,10 +442,12 @@ TEST(VehicleCropper, TurnAverageMakesFrontBackIndependentOfTheBoxDirection) {
     EXPECT_EQ(c.typeProbabilities[t], a.typeProbabilities[t]) << "type " << t;
   }
 
-  // turnTypeAverage: the type logits are the mean of the first look's and of the two turned
-  // runs' mean, i.e. probabilities proportional to p_a^(3/4) p_b^(1/4); front/back unchanged.
+  // turnTypeAverage at weight 1/2: the type logits are the mean of the first look's and of the
+  // two turned runs' mean, i.e. probabilities proportional to p_a^(3/4) p_b^(1/4); front/back
+  // unchanged.
   SecondStageOptions typed = turned;
   typed.turnTypeAverage = true;
+  typed.turnTypeWeight = 0.5F;
   VehicleCropper withType;
   ASSERT_TRUE(withType.init(model, {}, typed));
   Detection e = box(0.0);
@@ -465,6 +467,30 @@ TEST(VehicleCropper, TurnAverageMakesFrontBackIndependentOfTheBoxDirection) {
     change += std::abs(static_cast<double>(e.typeProbabilities[t] - a.typeProbabilities[t]));
   }
   EXPECT_GT(change, 1e-4) << "the turned runs agree with the first: the test would show nothing";
+
+  // turnTypeWeight 1: the second look alone, the mean of the two turned runs' logits (here a's
+  // crop and b's), i.e. probabilities proportional to (p_a p_b)^(1/2); 0: the first look alone.
+  for (const float weight : {1.0F, 0.0F}) {
+    SecondStageOptions weighted = typed;
+    weighted.turnTypeWeight = weight;
+    VehicleCropper withWeight;
+    ASSERT_TRUE(withWeight.init(model, {}, weighted));
+    Detection f = box(0.0);
+    ASSERT_EQ(withWeight.classify(frame, kGsd, &f), SecondStageStatus::Ok);
+    EXPECT_EQ(f.flipProbability, c.flipProbability);
+    double sum = 0.0;
+    std::array<double, shape::kVehicleTypeCount> want{};
+    for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+      const double pa = static_cast<double>(a.typeProbabilities[t]);
+      const double pb = static_cast<double>(b.typeProbabilities[t]);
+      want[t] = weight == 1.0F ? std::sqrt(pa * pb) : pa;
+      sum += want[t];
+    }
+    for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
+      EXPECT_NEAR(f.typeProbabilities[t], want[t] / sum, 1e-4)
+          << "weight " << weight << " type " << t;
+    }
+  }
 }
 
 // largeVehicleEnds: a long vehicle's front/back from crops at its two ends. endsFlipLogit() is

@@ -76,6 +76,8 @@ options:
   --no-turn-type        type from the first look only (default: also from those two runs at
                         the refined box, averaged with the first look's, as the app's
                         perception.crop_turn_type_average)
+  --turn-type-weight W  the second look's weight in that type average, [0, 1] (default 0.8,
+                        as the app's perception.crop_turn_type_weight)
   --no-large-merge      keep the parts of a bus or truck the first stage boxed twice (default:
                         merged into one box, as the app's perception.large_vehicle_merge)
   --min-vehicle-probability P
@@ -214,6 +216,8 @@ Options parseArguments(int argc, char** argv) {
       stage.decoder.scoreThreshold = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
     else if (arg == "--min-vehicle-probability")
       second.minVehicleProbability = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
+    else if (arg == "--turn-type-weight")
+      second.turnTypeWeight = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
     else if (arg == "--edge-min-vehicle-probability")
       second.frameEdgeMinVehicleProbability = static_cast<float>(parseDouble(arg, value, 0.0, 1.0));
     else if (arg == "--threads")

@@ -161,6 +161,8 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
   second.turnAverage = section.boolean("crop_turn_average", secondDefaults.turnAverage);
   second.turnTypeAverage =
       section.boolean("crop_turn_type_average", secondDefaults.turnTypeAverage);
+  second.turnTypeWeight = static_cast<float>(
+      section.number("crop_turn_type_weight", kProbabilityRange, secondDefaults.turnTypeWeight));
   second.mirrorRefine = section.boolean("crop_mirror_refine", secondDefaults.mirrorRefine);
   second.largeVehicleEnds =
       section.boolean("crop_large_vehicle_ends", secondDefaults.largeVehicleEnds);

@@ -375,8 +375,9 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m, D
     return turned;
   }
   if (options_.turnTypeAverage) {
+    const float w = options_.turnTypeWeight;
     for (std::size_t t = 0; t < typeLogits_.size(); ++t) {
-      typeLogits_[t] = 0.5F * (typeLogits_[t] + turnedTypeLogits[t]);
+      typeLogits_[t] = (1.0F - w) * typeLogits_[t] + w * turnedTypeLogits[t];
     }
     setTypeProbabilities(typeLogits_, detection);
   }
