@@ -153,6 +153,7 @@ perception:
   crop_mirror_average: false
   crop_mirror_refine: false
   crop_large_vehicle_ends: false
+  crop_turn_type_weight: 0.65
   crop_min_vehicle_probability: 0.25
   crop_frame_edge_keep_box: false
   crop_frame_edge_min_vehicle_probability: 0.15
@@ -804,6 +805,8 @@ const MalformedCase kMalformedCases[] = {
      "expected true or false, got 'yes please'"},
     {"crop_large_vehicle_ends: false", "crop_large_vehicle_ends: 2",
      "perception.crop_large_vehicle_ends", "expected true or false, got '2'"},
+    {"crop_turn_type_weight: 0.65", "crop_turn_type_weight: 1.2",
+     "perception.crop_turn_type_weight", "must be in [0, 1], got 1.2"},
     {"crop_min_vehicle_probability: 0.25", "crop_min_vehicle_probability: 1.5",
      "perception.crop_min_vehicle_probability", "must be in [0, 1], got 1.5"},
     {"crop_frame_edge_keep_box: false", "crop_frame_edge_keep_box: maybe",
@@ -1136,6 +1139,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "perception.crop_mirror_average",
                                                "perception.crop_mirror_refine",
                                                "perception.crop_large_vehicle_ends",
+                                               "perception.crop_turn_type_weight",
                                                "perception.crop_min_vehicle_probability",
                                                "perception.crop_frame_edge_keep_box",
                                                "perception.crop_frame_edge_min_vehicle_probability",
@@ -1665,6 +1669,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_FALSE(det.secondStage.mirrorAverage);
   EXPECT_FALSE(det.secondStage.mirrorRefine);
   EXPECT_FALSE(det.secondStage.largeVehicleEnds);
+  EXPECT_FLOAT_EQ(det.secondStage.turnTypeWeight, 0.65F);
   EXPECT_FLOAT_EQ(det.secondStage.minVehicleProbability, 0.25F);
   EXPECT_FALSE(det.secondStage.frameEdgeKeepBox);
   EXPECT_FLOAT_EQ(det.secondStage.frameEdgeMinVehicleProbability, 0.15F);
