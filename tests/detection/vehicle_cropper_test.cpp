@@ -442,53 +442,37 @@ TEST(VehicleCropper, TurnAverageMakesFrontBackIndependentOfTheBoxDirection) {
     EXPECT_EQ(c.typeProbabilities[t], a.typeProbabilities[t]) << "type " << t;
   }
 
-  // turnTypeAverage at weight 1/2: the type logits are the mean of the first look's and of the
-  // two turned runs' mean, i.e. probabilities proportional to p_a^(3/4) p_b^(1/4); front/back
-  // unchanged.
-  SecondStageOptions typed = turned;
-  typed.turnTypeAverage = true;
-  typed.turnTypeWeight = 0.5F;
-  VehicleCropper withType;
-  ASSERT_TRUE(withType.init(model, {}, typed));
-  Detection e = box(0.0);
-  ASSERT_EQ(withType.classify(frame, kGsd, &e), SecondStageStatus::Ok);
-  EXPECT_EQ(e.flipProbability, c.flipProbability);
-  EXPECT_EQ(e.box.angle, c.box.angle);
-  std::array<double, shape::kVehicleTypeCount> expected{};
-  double total = 0.0;
-  double change = 0.0;
-  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-    expected[t] = std::pow(static_cast<double>(a.typeProbabilities[t]), 0.75) *
-                  std::pow(static_cast<double>(b.typeProbabilities[t]), 0.25);
-    total += expected[t];
-  }
-  for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-    EXPECT_NEAR(e.typeProbabilities[t], expected[t] / total, 1e-4) << "type " << t;
-    change += std::abs(static_cast<double>(e.typeProbabilities[t] - a.typeProbabilities[t]));
-  }
-  EXPECT_GT(change, 1e-4) << "the turned runs agree with the first: the test would show nothing";
-
-  // turnTypeWeight 1: the second look alone, the mean of the two turned runs' logits (here a's
-  // crop and b's), i.e. probabilities proportional to (p_a p_b)^(1/2); 0: the first look alone.
-  for (const float weight : {1.0F, 0.0F}) {
-    SecondStageOptions weighted = typed;
-    weighted.turnTypeWeight = weight;
-    VehicleCropper withWeight;
-    ASSERT_TRUE(withWeight.init(model, {}, weighted));
-    Detection f = box(0.0);
-    ASSERT_EQ(withWeight.classify(frame, kGsd, &f), SecondStageStatus::Ok);
-    EXPECT_EQ(f.flipProbability, c.flipProbability);
-    double sum = 0.0;
-    std::array<double, shape::kVehicleTypeCount> want{};
+  // turnTypeAverage with the weight w: the type logits are (1 - w) times the first look's plus w
+  // times the mean of the two turned runs' (here a's crop and b's), i.e. probabilities
+  // proportional to p_a^(1 - w/2) p_b^(w/2): w 1/2 gives p_a^(3/4) p_b^(1/4), 1 (p_a p_b)^(1/2),
+  // 0 the first look alone. Front/back unchanged.
+  for (const float weight : {0.5F, 1.0F, 0.0F}) {
+    SecondStageOptions typed = turned;
+    typed.turnTypeAverage = true;
+    typed.turnTypeWeight = weight;
+    VehicleCropper withType;
+    ASSERT_TRUE(withType.init(model, {}, typed));
+    Detection e = box(0.0);
+    ASSERT_EQ(withType.classify(frame, kGsd, &e), SecondStageStatus::Ok);
+    EXPECT_EQ(e.flipProbability, c.flipProbability);
+    EXPECT_EQ(e.box.angle, c.box.angle);
+    const double w = static_cast<double>(weight);
+    std::array<double, shape::kVehicleTypeCount> expected{};
+    double total = 0.0;
+    double change = 0.0;
     for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-      const double pa = static_cast<double>(a.typeProbabilities[t]);
-      const double pb = static_cast<double>(b.typeProbabilities[t]);
-      want[t] = weight == 1.0F ? std::sqrt(pa * pb) : pa;
-      sum += want[t];
+      expected[t] = std::pow(static_cast<double>(a.typeProbabilities[t]), 1.0 - 0.5 * w) *
+                    std::pow(static_cast<double>(b.typeProbabilities[t]), 0.5 * w);
+      total += expected[t];
     }
     for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-      EXPECT_NEAR(f.typeProbabilities[t], want[t] / sum, 1e-4)
+      EXPECT_NEAR(e.typeProbabilities[t], expected[t] / total, 1e-4)
           << "weight " << weight << " type " << t;
+      change += std::abs(static_cast<double>(e.typeProbabilities[t] - a.typeProbabilities[t]));
+    }
+    if (weight > 0.0F) {
+      EXPECT_GT(change, 1e-4)
+          << "the turned runs agree with the first: the test would show nothing";
     }
   }
 }
