@@ -412,6 +412,7 @@ struct BandedBody {
   std::vector<double> frontX;
   std::vector<double> rearX;
   double halfWidth = 1.0;
+  double centreY = 0.0;  // the body spans centreY +- halfWidth (a bed's side wall: off the axis)
   std::vector<SurfacePart> side;   // per band
   std::vector<SurfacePart> front;  // per band
   std::vector<SurfacePart> rear;   // per band
@@ -422,13 +423,13 @@ struct BandedBody {
   double lightWidth = 0.35;
 };
 
-void addBody(LargeVehicleMesh* m, const BandedBody& b) {
+void addBody(BodyMesh* m, const BandedBody& b) {
   const int levels = static_cast<int>(b.z.size());
   const int first = static_cast<int>(m->vertices.size());
-  const auto addPair = [m](double x, double y, double z) {
+  const auto addPair = [m, &b](double x, double y, double z) {
     const int left = static_cast<int>(m->vertices.size());
-    m->vertices.emplace_back(x, y, z);
-    m->vertices.emplace_back(x, -y, z);
+    m->vertices.emplace_back(x, b.centreY + y, z);
+    m->vertices.emplace_back(x, b.centreY - y, z);
     return detail::Pair{left, left + 1};
   };
   // Profile order (counter-clockwise in x-z): up the front edge, then down the rear edge.
@@ -484,7 +485,7 @@ BandedBody box(double xFront, double xRear, double zBottom, double zTop, double 
   return b;
 }
 
-void addAxle(LargeVehicleMesh* m, double x) {
+void addAxle(BodyMesh* m, double x) {
   const double y = 0.5 * m->width_m - 0.03;
   m->wheelCentres.emplace_back(x, y, m->wheelRadius_m);
   m->wheelCentres.emplace_back(x, -y, m->wheelRadius_m);
@@ -592,7 +593,80 @@ void buildTruck(LargeVehicleMesh* m, std::mt19937_64& rng) {
   }
 }
 
+void buildPickup(PickupMesh* m, std::mt19937_64& rng) {
+  const double half = 0.5 * m->length_m;
+  const double clearance = uniform(rng, {0.30, 0.40});
+  const double bumperTop = clearance + uniform(rng, {0.35, 0.45});
+  const double bonnet = uniform(rng, {1.05, 1.25});  // bonnet height at the grille
+  const double belt = bonnet + uniform(rng, {0.04, 0.10});
+  const double windowTop = m->height_m - uniform(rng, {0.08, 0.14});
+  const double bonnetLength = uniform(rng, {1.45, 1.80});
+  // Regular to crew cab, windscreen included, leaving a bed of at least 1.4 m.
+  const double cabLength =
+      std::min(uniform(rng, {1.70, 2.60}), m->length_m - bonnetLength - uniform(rng, {1.40, 1.70}));
+  const double cabRear = half - bonnetLength - cabLength;
+  BandedBody cab;
+  cab.z = {clearance, bumperTop, bonnet, belt, windowTop, m->height_m};
+  cab.frontX = {half,
+                half - 0.02,
+                half - uniform(rng, {0.06, 0.12}),
+                half - bonnetLength,
+                half - bonnetLength - uniform(rng, {0.65, 0.85}),
+                half - bonnetLength - uniform(rng, {0.90, 1.00})};
+  cab.rearX.assign(cab.z.size(), cabRear);
+  cab.halfWidth = 0.5 * m->width_m;
+  using P = SurfacePart;
+  cab.side = {P::Paint, P::Paint, P::Paint, P::SideWindow, P::Paint};
+  cab.front = {P::Paint, P::Paint, P::Paint, P::Windscreen, P::Paint};
+  cab.rear = {P::Paint, P::Paint, P::Paint, P::RearWindow, P::Paint};
+  cab.headLightBand = 1;
+  cab.lightWidth = uniform(rng, {0.25, 0.35});
+  addBody(m, cab);
+  // The bed: a floor sunk below the rim (a dark liner, or bare paint) closed by two side walls,
+  // the bulkhead behind the cab and the tailgate; the tail lights sit in the floor box's upper
+  // band. From above it reads as a shaded tray behind the cab.
+  const double bedTop = belt + uniform(rng, {-0.05, 0.05});
+  const double floor = bedTop - uniform(rng, {0.42, 0.55});
+  const double bedFront = cabRear - uniform(rng, {0.02, 0.08});
+  const double wall = uniform(rng, {0.06, 0.10});
+  const double halfWidth = 0.5 * m->width_m;
+  const SurfacePart floorPart = uniform01(rng) < 0.6 ? P::Underbody : P::Paint;
+  BandedBody tub = box(bedFront, -half, clearance, floor, halfWidth, P::Paint);
+  tub.z = {clearance, bumperTop, floor};
+  tub.frontX = {bedFront, bedFront, bedFront};
+  tub.rearX = {-half, -half, -half};
+  tub.side = tub.front = tub.rear = {P::Paint, P::Paint};
+  tub.roof = floorPart;
+  tub.tailLightBand = 1;
+  tub.lightWidth = uniform(rng, {0.15, 0.25});
+  addBody(m, tub);
+  for (const double side : {1.0, -1.0}) {
+    BandedBody w = box(bedFront, -half, floor, bedTop, 0.5 * wall, P::Paint);
+    w.centreY = side * (halfWidth - 0.5 * wall);
+    addBody(m, w);
+  }
+  const double innerHalf = halfWidth - wall;
+  addBody(m, box(bedFront, bedFront - wall, floor, bedTop, innerHalf, P::Paint));  // bulkhead
+  addBody(m, box(-half + wall, -half, floor, bedTop, innerHalf, P::Paint));        // tailgate
+  m->bedFrontX_m = bedFront;
+  m->bedTopZ_m = bedTop;
+  m->bedFloorZ_m = floor;
+  addAxle(m, half - uniform(rng, {0.85, 1.05}));
+  addAxle(m, -half + uniform(rng, {1.15, 1.45}));
+}
+
 }  // namespace
+
+PickupMesh generatePickup(std::mt19937_64& rng) {
+  PickupMesh m;
+  m.length_m = uniform(rng, kPickupSpec.length_m);
+  m.width_m = uniform(rng, kPickupSpec.width_m);
+  m.height_m = uniform(rng, kPickupSpec.height_m);
+  m.wheelRadius_m = uniform(rng, kPickupSpec.wheelRadius_m);
+  m.wheelWidth_m = 0.27;
+  buildPickup(&m, rng);
+  return m;
+}
 
 const char* toString(LargeVehicleKind kind) {
   switch (kind) {

@@ -148,8 +148,7 @@ const LargeVehicleSpec& largeVehicleSpec(LargeVehicleKind kind);
 // A closed triangle mesh (one or more closed boxes: body, cab, cargo box, chassis), outward
 // counter-clockwise winding, labelled like the car mesh; wheels as for cars: cylinders of
 // wheelRadius_m whose outer faces are centred on wheelCentres and extend wheelWidth_m inwards.
-struct LargeVehicleMesh {
-  LargeVehicleKind kind = LargeVehicleKind::CityBus;
+struct BodyMesh {
   double length_m = 0.0;
   double width_m = 0.0;
   double height_m = 0.0;
@@ -160,7 +159,33 @@ struct LargeVehicleMesh {
   double wheelWidth_m = 0.0;
 };
 
+struct LargeVehicleMesh : BodyMesh {
+  LargeVehicleKind kind = LargeVehicleKind::CityBus;
+};
+
 LargeVehicleMesh generateLargeVehicle(LargeVehicleKind kind, std::mt19937_64& rng);
+
+// --- Pickup trucks (light vehicles with an open load bed; no ASM) -------------------------
+//
+// A bonnet, a cab with windscreen and rear window, and behind it an open bed: a floor sunk
+// below a painted rim (a dark liner on most), tail lights at the rear. Seen from above the dark bed
+// lies at the back, where a car's dark glass is at its front: the real front/back failures this
+// shape is for.
+struct PickupSpec {
+  DimensionRange length_m{5.0, 5.9};  // mid-size to full-size crew cabs
+  DimensionRange width_m{1.85, 2.05};
+  DimensionRange height_m{1.75, 1.95};
+  DimensionRange wheelRadius_m{0.37, 0.42};
+};
+inline constexpr PickupSpec kPickupSpec{};
+
+struct PickupMesh : BodyMesh {
+  double bedFrontX_m = 0.0;  // x of the bed's front edge (behind the cab); the bed reaches the rear
+  double bedTopZ_m = 0.0;    // height of the bed's rim
+  double bedFloorZ_m = 0.0;  // height of its floor (dark liner or paint), 0.42-0.55 m below the rim
+};
+
+PickupMesh generatePickup(std::mt19937_64& rng);
 
 // Signed enclosed volume (m^3) of a triangle mesh: > 0 for outward winding.
 double meshVolume(std::span<const Eigen::Vector3d> vertices, std::span<const Triangle> triangles);

@@ -204,7 +204,8 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   if (!asm_.load(asmPath, why)) {
     return false;
   }
-  factory_ = std::make_unique<VehicleFactory>(asm_, options.twoToneShare, options.cityCarShare);
+  factory_ = std::make_unique<VehicleFactory>(asm_, options.twoToneShare, options.cityCarShare,
+                                              options.pickupShare);
   traffic_.init(scene_, *factory_, pathHalf, options.warmUpS, kFrameIntervalS, rng);
   sensor_.init(camera_, canvas_, sensorSpec_);
   renderer_.init(scene_, world_, lo, hi, rig_.altitude_m / rig_.intrinsics.fx_px,
@@ -347,6 +348,9 @@ std::string Simulator::summary() const {
   }
   if (options_.cityCarShare > 0.0) {
     s << ", city-car share " << num(options_.cityCarShare);
+  }
+  if (options_.pickupShare > 0.0) {
+    s << ", pickup share " << num(options_.pickupShare);
   }
   if (options_.poles) {
     s << ", sign posts and street lamps";

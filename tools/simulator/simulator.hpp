@@ -59,6 +59,9 @@ struct SimOptions {
   // Share of compact cars shortened to city cars (2.5-3.6 m, vehicles.hpp), 0..1; drawn from
   // each car's own shape like the two-tone share. Their ground truth has no gamma.
   double cityCarShare = 0.0;
+  // Share of SUVs drawn as pickup trucks with an open bed (car_generator.hpp), 0..1; drawn from
+  // each car's own shape like the two shares above. Their ground truth has no gamma or keypoints.
+  double pickupShare = 0.0;
   // Sign posts and street lamps along the kerbs (addPoles); the rest of a seed's scene is the
   // same with or without them.
   bool poles = false;

@@ -314,16 +314,24 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeCar(Rng& rng,
       widthScale = own.uniform(kCityCarWidthScaleMin, 1.0);
     }
   }
+  if (pickupShare_ > 0.0 && type == shape::VehicleType::Suv) {
+    // Its own stream from the car's shape again (a third hash basis), so that the scene and
+    // every other car stay those of the seed; the pickup keeps the SUV's look.
+    Rng own(shapeHash(0x9e3779b97f4a7c15ULL, gamma, n));
+    if (own.chance(pickupShare_)) {
+      return makePickup(own, look);
+    }
+  }
   return carFromGamma(type, gamma, look, lengthScale, widthScale);
 }
 
-std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {
-  static const std::array<double, shape::kLargeVehicleKindCount> kShares = {0.35, 0.1, 0.1, 0.3,
-                                                                            0.15};
-  const auto kind = static_cast<shape::LargeVehicleKind>(rng.weighted(kShares));
-  const shape::LargeVehicleMesh mesh = shape::generateLargeVehicle(kind, rng.engine());
+namespace {
+
+// A vehicle without ASM keypoints (bus, truck, pickup) from the car generator's mesh: its
+// wheels, axles (the front-most one steers, the mean of the others is the rear axle) and box.
+std::shared_ptr<VehicleModel> modelFromBody(const shape::BodyMesh& mesh, shape::VehicleType type) {
   auto m = std::make_shared<VehicleModel>();
-  m->type = shape::VehicleType::Large;
+  m->type = type;
   m->hasKeypoints = false;
   m->vertices = mesh.vertices;
   for (const shape::Triangle& t : mesh.triangles) {
@@ -345,6 +353,17 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {
   m->rearAxleXM = rearCount > 0 ? rearSum / rearCount : -0.3 * mesh.length_m;
   m->wheelbase_m = frontAxle - m->rearAxleXM;
   m->dimensions_m = Eigen::Vector3d(mesh.length_m, mesh.width_m, mesh.height_m);
+  return m;
+}
+
+}  // namespace
+
+std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {
+  static const std::array<double, shape::kLargeVehicleKindCount> kShares = {0.35, 0.1, 0.1, 0.3,
+                                                                            0.15};
+  const auto kind = static_cast<shape::LargeVehicleKind>(rng.weighted(kShares));
+  const shape::LargeVehicleMesh mesh = shape::generateLargeVehicle(kind, rng.engine());
+  std::shared_ptr<VehicleModel> m = modelFromBody(mesh, shape::VehicleType::Large);
   const bool bus = kind == shape::LargeVehicleKind::CityBus ||
                    kind == shape::LargeVehicleKind::ArticulatedBus ||
                    kind == shape::LargeVehicleKind::Coach;
@@ -356,6 +375,16 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {
     look.paint = srgbToLinear(220, 170, 20);
     look.colourName = "yellow";
   }
+  m->look = look;
+  computeNormals(*m);
+  finishExtents(*m);
+  return m;
+}
+
+std::shared_ptr<const VehicleModel> VehicleFactory::makePickup(Rng& rng,
+                                                               const VehicleLook& look) const {
+  std::shared_ptr<VehicleModel> m =
+      modelFromBody(shape::generatePickup(rng.engine()), shape::VehicleType::Suv);
   m->look = look;
   computeNormals(*m);
   finishExtents(*m);

@@ -6,7 +6,8 @@
 // prior, so their ground-truth gamma and keypoints are exact: vertices [0, kKeypointCount)
 // are the ASM keypoints in keypointNames() order; further vertices are the wheels (dark
 // cylinders whose outer face is centred on the wheel-centre keypoints, as vehicle_model.hpp
-// prescribes). Large vehicles (buses, trucks) are the car generator's meshes (no keypoints). Paint
+// prescribes). Large vehicles (buses, trucks) and pickups are the car generator's meshes (no
+// keypoints). Paint
 // colours follow the real traffic distribution (white, black, grey and silver dominate).
 // VehicleFactory draws everything from the sequence Rng.
 #pragma once
@@ -99,14 +100,21 @@ class VehicleFactory {
   // apart from the sequence stream: the same seed gives the same scene, only roofs repainted.
   // cityCarShare: share of compact cars shortened to a city car (kCityCarLength_m), drawn the
   // same way: every other car, and the scene's draws, stay those of the seed.
+  // pickupShare: share of SUVs drawn as pickup trucks with an open bed
+  // (shape::generatePickup; type SUV, no keypoints, gamma unknown), drawn the same way.
   explicit VehicleFactory(const shape::ActiveShapeModel& asmModel, double twoToneShare = 0.0,
-                          double cityCarShare = 0.0)
-      : asm_(&asmModel), twoToneShare_(twoToneShare), cityCarShare_(cityCarShare) {}
+                          double cityCarShare = 0.0, double pickupShare = 0.0)
+      : asm_(&asmModel),
+        twoToneShare_(twoToneShare),
+        cityCarShare_(cityCarShare),
+        pickupShare_(pickupShare) {}
 
   // A car of the given type (one of the six ASM types) with gamma drawn from its prior.
   std::shared_ptr<const VehicleModel> makeCar(Rng& rng, shape::VehicleType type) const;
   // A bus or truck.
   std::shared_ptr<const VehicleModel> makeLarge(Rng& rng) const;
+  // A pickup truck with the given look, its dimensions drawn from rng (type SUV, no keypoints).
+  std::shared_ptr<const VehicleModel> makePickup(Rng& rng, const VehicleLook& look) const;
   // Builds the model of a car from given gamma (tests, figures). lengthScale < 1 shortens the
   // car along its axis and widthScale narrows it (a city car); the result's gamma then has
   // count 0 (no ASM shape describes it: the ground truth leaves gamma unknown).
@@ -124,6 +132,7 @@ class VehicleFactory {
   const shape::ActiveShapeModel* asm_;
   double twoToneShare_ = 0.0;
   double cityCarShare_ = 0.0;
+  double pickupShare_ = 0.0;
 };
 
 VehicleLook drawLook(Rng& rng);
