@@ -26,7 +26,15 @@ trk_val2      9200 6  60  1296x1024  tracker held-out, second set (used for diag
 trk_val3      9300 6  60  1296x1024  tracker held-out, third set
 sim_tune_full 5000 36 4  2592x2048  detector tuning at the camera's resolution (the seeds of sim_tune + sim_tune_b)
 sim_val_full  9000 13 4  2592x2048  detector held-out at the camera's resolution (the seeds of sim_val)
-sim_val2_full 9400 40 4  2592x2048  detector held-out, a second and larger set"
+sim_val2_full 9400 40 4  2592x2048  detector held-out, a second and larger set
+sim_val_pk    9500 13 4  2592x2048  detector held-out with every SUV drawn as a pickup (front/back of pickups)"
+
+# vp_simulate options of a set beyond the defaults (make_sim_data.sh's SIM_ARGS).
+set_args() {
+  case "$1" in
+    sim_val_pk) echo "--pickup-share 1" ;;
+  esac
+}
 
 usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
 case "${1:-}" in
@@ -51,7 +59,8 @@ mkdir -p "$out"
 while read -r name first count frames size use; do
   want "$name" || continue
   echo "make_eval_data.sh: $name (seeds $first-$((first + count - 1)), $frames frames, $size): $use"
-  "$root/tools/detector/make_sim_data.sh" "$out/$name" "$first" "$count" "$frames" "$size"
+  SIM_ARGS="$(set_args "$name")" \
+    "$root/tools/detector/make_sim_data.sh" "$out/$name" "$first" "$count" "$frames" "$size"
 done <<< "$sets"
 if want real_split; then
   real=${REAL:-$root/../shared/data/real/cats-madison}

@@ -27,6 +27,12 @@ boxes themselves, to measure how often this tool's labels agree with known headi
 labelled headings are then the votes, and --flip-votes P reverses a random share P of them
 first (as a detector that reverses P of the vehicles would vote).
 
+``--judge CSV...`` scores other runs against the labels made here: detections of the same images
+whose boxes are those of ``--detections`` (another crop network behind the same first stage, whose
+front/back alone differs); each prints how many labelled vehicles it shows reversed. Labels made
+from one run's boxes and votes and judged on another's front/back keep the comparison on one fixed
+set of labels (that run's own reversals are ``det_reversed``).
+
 Writes a CSV with the columns of mine_negatives.py's lists (image, cx_px, cy_px, score,
 length_px, width_px, angle_rad, gsd_m, label = 1), where angle_rad is the box axis turned to
 the label's direction — what ``train.py --heading-samples FILE`` trains the crop network's
@@ -232,6 +238,29 @@ def label_lanes(frames: List[dict], gsd_m: float, opts) -> List[dict]:
     return out
 
 
+JUDGE_MATCH_PX = 3.0
+
+
+def judge(rows: List[dict], path: str) -> Tuple[int, int, int]:
+    """(matched, reversed, unmatched) of the labelled vehicles in another detections file: the
+    detection of the same image whose centre is nearest the label's box centre, within
+    JUDGE_MATCH_PX, counts as reversed when its angle is more than 90 degrees from the label."""
+    dets = read_detections(path, key="image")
+    matched = reversed_ = unmatched = 0
+    for r in rows:
+        best = None
+        for _, box in dets.get(r["stem"], []):
+            d = math.hypot(box[0] - r["box"][0], box[1] - r["box"][1])
+            if d <= JUDGE_MATCH_PX and (best is None or d < best[0]):
+                best = (d, box[4])
+        if best is None:
+            unmatched += 1
+            continue
+        matched += 1
+        reversed_ += int(math.cos(best[1] - r["angle"]) < 0)
+    return matched, reversed_, unmatched
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -261,6 +290,11 @@ def main(argv=None) -> int:
     p.add_argument("--max-step-m", type=float, default=16.0, help="motion: most per index step")
     p.add_argument("--min-step-m", type=float, default=0.6, help="motion: less per step is standing")
     p.add_argument("--out", default=None, help="CSV of the labelled vehicles")
+    p.add_argument("--judge", nargs="+", default=[], metavar="CSV",
+                   help="detections of other runs on the same images whose boxes are those of "
+                        "--detections (another crop network behind the same first stage): each "
+                        "is scored against the labels made here, box centre within "
+                        f"{JUDGE_MATCH_PX:g} px")
     a = p.parse_args(argv)
     if not a.gsd_m > 0:
         p.error("--gsd-m must be > 0")
@@ -313,6 +347,14 @@ def main(argv=None) -> int:
         wrong = sum(r["against_box"] for r in rows)  # the box angle is the labelled heading
         print(f"check: the label made disagrees with the labelled heading on {wrong} of "
               f"{len(rows)} ({100 * wrong / max(1, len(rows)):.1f} %)")
+    for path in a.judge:
+        try:
+            matched, rev_j, unmatched = judge(rows, path)
+        except (DatasetError, OSError) as e:
+            print(f"real_headings.py: {e}", file=sys.stderr)
+            return 1
+        print(f"{path}: reversed on {rev_j} of {matched} labelled vehicles matched "
+              f"({100 * rev_j / max(1, matched):.1f} %), {unmatched} not matched")
     if a.out:
         with open(a.out, "w", newline="") as f:
             w = csv.writer(f)

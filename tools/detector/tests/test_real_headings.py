@@ -61,6 +61,28 @@ class LaneVotes(unittest.TestCase):
             self.assertAlmostEqual(math.cos(r["angle"] - expect), 1.0)
         self.assertEqual(sum(r["det_reversed"] for r in rows), 1)
 
+    def test_judge_counts_another_runs_reversals_against_the_labels(self):
+        frames = [lane_frame("c_0", 0, self.image, [True] * 8),
+                  lane_frame("c_1", 1, self.image, [True] * 8)]
+        rows = real_headings.label_lanes(frames, 0.05, LANE_OPTS)
+        self.assertEqual(len(rows), 16)
+        # Another run: the same boxes, one turned by pi, one moved 10 px (not matched), and
+        # one 2 px off its box with the lane's direction (matched).
+        path = os.path.join(os.path.dirname(self.image), "other.csv")
+        with open(path, "w") as f:
+            f.write("# format_version: 1\nimage,det_id,score,box_cx_px,box_cy_px,box_length_px,"
+                    "box_width_px,box_angle_rad\n")
+            for k, r in enumerate(rows):
+                cx, cy, angle = r["box"][0], r["box"][1], r["angle"]
+                if k == 0:
+                    angle += math.pi
+                elif k == 1:
+                    cx += 10.0
+                elif k == 2:
+                    cy += 2.0
+                f.write(f"{r['stem']},{k},0.9,{cx},{cy},40,16,{angle % (2 * math.pi)}\n")
+        self.assertEqual(real_headings.judge(rows, path), (15, 1, 1))
+
     def test_a_split_lane_gives_no_label(self):
         frames = [lane_frame("c_1", 1, self.image, [True, True, False, True, True, True, False, True])]
         opts = SimpleNamespace(**{**vars(LANE_OPTS), "min_votes": 2})
