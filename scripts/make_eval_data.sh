@@ -27,7 +27,8 @@ trk_val3      9300 6  60  1296x1024  tracker held-out, third set
 sim_tune_full 5000 36 4  2592x2048  detector tuning at the camera's resolution (the seeds of sim_tune + sim_tune_b)
 sim_val_full  9000 13 4  2592x2048  detector held-out at the camera's resolution (the seeds of sim_val)
 sim_val2_full 9400 40 4  2592x2048  detector held-out, a second and larger set
-sim_val_pk    9500 13 4  2592x2048  detector held-out with every SUV drawn as a pickup (front/back of pickups)"
+sim_val_pk    9500 13 4  2592x2048  detector held-out with every SUV drawn as a pickup (front/back of pickups)
+sim_val3_full 9600 40 4  2592x2048  detector held-out, a third set of the second's size (confirmatory tests)"
 
 # vp_simulate options of a set beyond the defaults (make_sim_data.sh's SIM_ARGS).
 set_args() {

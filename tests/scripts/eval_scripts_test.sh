@@ -69,7 +69,7 @@ set +e
 "$root/scripts/make_eval_data.sh" "$work/sets" no_such_set 2> "$work/err"; rc=$?
 set -e
 [[ $rc -eq 2 ]] && grep -q "no set 'no_such_set'" "$work/err" || fail "unknown set: rc $rc"
-[[ $("$root/scripts/make_eval_data.sh" --list | tail -n +2 | wc -l) -eq 13 ]] || fail "--list"
+[[ $("$root/scripts/make_eval_data.sh" --list | tail -n +2 | wc -l) -eq 14 ]] || fail "--list"
 # The list is read whole first: `grep -q` on a pipe closes it at the first match, and under
 # pipefail the writer's SIGPIPE would fail the check now and then.
 sets=$("$root/scripts/make_eval_data.sh" --list)
