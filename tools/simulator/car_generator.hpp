@@ -168,9 +168,9 @@ LargeVehicleMesh generateLargeVehicle(LargeVehicleKind kind, std::mt19937_64& rn
 // --- Pickup trucks (light vehicles with an open load bed; no ASM) -------------------------
 //
 // A bonnet, a cab with windscreen and rear window, and behind it an open bed: a floor sunk
-// below a painted rim (a dark liner on most), tail lights at the rear. Seen from above the dark bed
-// lies at the back, where a car's dark glass is at its front: the real front/back failures this
-// shape is for.
+// below a painted rim (a dark liner on 60 %), tail lights at the rear. Seen from above the dark
+// bed lies at the back, where a car's dark glass is at its front: a shape real footage shows
+// reversed often.
 struct PickupSpec {
   DimensionRange length_m{5.0, 5.9};  // mid-size to full-size crew cabs
   DimensionRange width_m{1.85, 2.05};
