@@ -7,6 +7,7 @@
 
 #include "default_asm.hpp"
 #include "shape/vehicle_model.hpp"
+#include "twin_cars.hpp"
 #include "vehicles.hpp"
 
 namespace {
@@ -15,34 +16,27 @@ TEST(CityCar, CompactCarsAreShortenedAndOtherCarsStayTheSame) {
   const vp::shape::ActiveShapeModel asmModel = vp::sim::test::loadDefaultAsm();
   const vp::sim::VehicleFactory plain(asmModel);
   const vp::sim::VehicleFactory city(asmModel, 0.0, 1.0);
-  vp::sim::Rng rngPlain(7);
-  vp::sim::Rng rngCity(7);
   int compact = 0;
-  for (int i = 0; i < 120; ++i) {
-    const auto type = plain.drawCarType(rngPlain);
-    ASSERT_EQ(city.drawCarType(rngCity), type);
-    const auto a = plain.makeCar(rngPlain, type);
-    const auto b = city.makeCar(rngCity, type);
-    ASSERT_EQ(a->vertices.size(), b->vertices.size());
-    EXPECT_TRUE(a->look.paint.isApprox(b->look.paint));  // the stream is not touched
+  vp::sim::test::forEachTwinCar(plain, city, 7, 120, [&](auto type, const auto& a, const auto& b) {
+    ASSERT_EQ(a.vertices.size(), b.vertices.size());
     if (type != vp::shape::VehicleType::Compact) {
-      EXPECT_TRUE(a->vertices.front().isApprox(b->vertices.front()));
-      EXPECT_TRUE(a->dimensions_m.isApprox(b->dimensions_m));
-      EXPECT_EQ(b->gamma.count, a->gamma.count);
-      continue;
+      EXPECT_TRUE(a.vertices.front().isApprox(b.vertices.front()));
+      EXPECT_TRUE(a.dimensions_m.isApprox(b.dimensions_m));
+      EXPECT_EQ(b.gamma.count, a.gamma.count);
+      return;
     }
     ++compact;
-    EXPECT_GE(a->dimensions_m.x(), 3.5);  // the ASM's compact cars start above a city car
-    EXPECT_GE(b->dimensions_m.x(), vp::sim::kCityCarLength_m.min_m - 1e-9);
-    EXPECT_LE(b->dimensions_m.x(), vp::sim::kCityCarLength_m.max_m + 1e-9);
-    EXPECT_LE(b->dimensions_m.y(), a->dimensions_m.y() + 1e-9);
-    EXPECT_GE(b->dimensions_m.y(), vp::sim::kCityCarWidthScaleMin * a->dimensions_m.y() - 1e-9);
-    EXPECT_DOUBLE_EQ(b->dimensions_m.z(), a->dimensions_m.z());  // as tall as before
-    EXPECT_LT(b->wheelbase_m, a->wheelbase_m);
-    EXPECT_GT(b->wheelbase_m, 1.2);
-    EXPECT_EQ(b->gamma.count, 0) << "a scaled car has no gamma";
-    EXPECT_GT(a->gamma.count, 0);
-  }
+    EXPECT_GE(a.dimensions_m.x(), 3.5);  // the ASM's compact cars start above a city car
+    EXPECT_GE(b.dimensions_m.x(), vp::sim::kCityCarLength_m.min_m - 1e-9);
+    EXPECT_LE(b.dimensions_m.x(), vp::sim::kCityCarLength_m.max_m + 1e-9);
+    EXPECT_LE(b.dimensions_m.y(), a.dimensions_m.y() + 1e-9);
+    EXPECT_GE(b.dimensions_m.y(), vp::sim::kCityCarWidthScaleMin * a.dimensions_m.y() - 1e-9);
+    EXPECT_DOUBLE_EQ(b.dimensions_m.z(), a.dimensions_m.z());  // as tall as before
+    EXPECT_LT(b.wheelbase_m, a.wheelbase_m);
+    EXPECT_GT(b.wheelbase_m, 1.2);
+    EXPECT_EQ(b.gamma.count, 0) << "a scaled car has no gamma";
+    EXPECT_GT(a.gamma.count, 0);
+  });
   EXPECT_GT(compact, 15);
 }
 

@@ -14,6 +14,7 @@
 #include "car_generator.hpp"
 #include "default_asm.hpp"
 #include "shape/vehicle_model.hpp"
+#include "twin_cars.hpp"
 #include "vehicles.hpp"
 
 namespace {
@@ -93,28 +94,22 @@ TEST(Pickup, OnlySuvsBecomePickupsAndTheStreamIsUntouched) {
   const vp::shape::ActiveShapeModel asmModel = vp::sim::test::loadDefaultAsm();
   const vp::sim::VehicleFactory plain(asmModel);
   const vp::sim::VehicleFactory pickups(asmModel, 0.0, 0.0, 1.0);
-  vp::sim::Rng rngPlain(11);
-  vp::sim::Rng rngPickup(11);
   int suv = 0;
-  for (int i = 0; i < 150; ++i) {
-    const auto type = plain.drawCarType(rngPlain);
-    ASSERT_EQ(pickups.drawCarType(rngPickup), type);
-    const auto a = plain.makeCar(rngPlain, type);
-    const auto b = pickups.makeCar(rngPickup, type);
-    EXPECT_TRUE(a->look.paint.isApprox(b->look.paint));  // the sequence stream is not touched
-    EXPECT_EQ(b->type, type);
-    if (type != vp::shape::VehicleType::Suv) {
-      EXPECT_TRUE(a->dimensions_m.isApprox(b->dimensions_m));
-      EXPECT_TRUE(b->hasKeypoints);
-      continue;
-    }
-    ++suv;
-    EXPECT_FALSE(b->hasKeypoints) << "a pickup has no ASM keypoints";
-    EXPECT_EQ(b->gamma.count, 0);
-    EXPECT_GE(b->dimensions_m.x(), vp::shape::kPickupSpec.length_m.min);
-    EXPECT_GT(b->wheelbase_m, 2.5);
-    EXPECT_LT(b->rearAxleXM, 0.0);
-  }
+  vp::sim::test::forEachTwinCar(
+      plain, pickups, 11, 150, [&](auto type, const auto& a, const auto& b) {
+        EXPECT_EQ(b.type, type);
+        if (type != vp::shape::VehicleType::Suv) {
+          EXPECT_TRUE(a.dimensions_m.isApprox(b.dimensions_m));
+          EXPECT_TRUE(b.hasKeypoints);
+          return;
+        }
+        ++suv;
+        EXPECT_FALSE(b.hasKeypoints) << "a pickup has no ASM keypoints";
+        EXPECT_EQ(b.gamma.count, 0);
+        EXPECT_GE(b.dimensions_m.x(), vp::shape::kPickupSpec.length_m.min);
+        EXPECT_GT(b.wheelbase_m, 2.5);
+        EXPECT_LT(b.rearAxleXM, 0.0);
+      });
   EXPECT_GT(suv, 10);
 }
 

@@ -15,6 +15,7 @@
 #include "default_asm.hpp"
 #include "shape/vehicle_model.hpp"
 #include "simulator.hpp"
+#include "twin_cars.hpp"
 #include "vehicles.hpp"
 
 namespace fs = std::filesystem;
@@ -37,40 +38,33 @@ TEST(TwoTone, TheRoofPanelAloneTakesAContrastingColour) {
   const vp::shape::ActiveShapeModel asmModel = vp::sim::test::loadDefaultAsm();
   const vp::sim::VehicleFactory plain(asmModel);
   const vp::sim::VehicleFactory twoTone(asmModel, 1.0);
-  vp::sim::Rng rngPlain(11);
-  vp::sim::Rng rngTwo(11);
   int dark = 0;
   int light = 0;
-  for (int i = 0; i < 60; ++i) {
-    const auto type = plain.drawCarType(rngPlain);
-    EXPECT_EQ(twoTone.drawCarType(rngTwo), type);
-    const auto a = plain.makeCar(rngPlain, type);
-    const auto b = twoTone.makeCar(rngTwo, type);
-    // The same car (the sequence stream is not touched by the two-tone draw) ...
-    ASSERT_EQ(a->vertices.size(), b->vertices.size());
-    EXPECT_TRUE(a->vertices.front().isApprox(b->vertices.front()));
-    EXPECT_TRUE(a->look.paint.isApprox(b->look.paint));
-    EXPECT_FALSE(a->look.twoTone);
-    EXPECT_EQ(roofTriangles(*a), 0);
+  vp::sim::test::forEachTwinCar(plain, twoTone, 11, 60, [&](auto, const auto& a, const auto& b) {
+    // The same car ...
+    ASSERT_EQ(a.vertices.size(), b.vertices.size());
+    EXPECT_TRUE(a.vertices.front().isApprox(b.vertices.front()));
+    EXPECT_FALSE(a.look.twoTone);
+    EXPECT_EQ(roofTriangles(a), 0);
     // ... with its roof panel, two or more triangles between the roof corners, repainted.
-    ASSERT_TRUE(b->look.twoTone);
-    EXPECT_GE(roofTriangles(*b), 2);
-    const double roofTop = b->dimensions_m.z();
-    for (std::size_t t = 0; t < b->triangles.size(); ++t) {
-      if (b->triangles[t].material != vp::sim::Material::RoofPaint) {
-        EXPECT_EQ(b->triangles[t].material, a->triangles[t].material) << "triangle " << t;
+    ASSERT_TRUE(b.look.twoTone);
+    EXPECT_GE(roofTriangles(b), 2);
+    const double roofTop = b.dimensions_m.z();
+    for (std::size_t t = 0; t < b.triangles.size(); ++t) {
+      if (b.triangles[t].material != vp::sim::Material::RoofPaint) {
+        EXPECT_EQ(b.triangles[t].material, a.triangles[t].material) << "triangle " << t;
         continue;
       }
-      for (const auto v : b->triangles[t].v) {
+      for (const auto v : b.triangles[t].v) {
         EXPECT_LT(v, vp::shape::kKeypointCount);
-        EXPECT_GT(b->vertices[v].z(), 0.7 * roofTop) << "a roof vertex low on the car";
+        EXPECT_GT(b.vertices[v].z(), 0.7 * roofTop) << "a roof vertex low on the car";
       }
     }
-    const float body = luminance(b->look.paint);
-    const float roof = luminance(b->look.roofPaint);
+    const float body = luminance(b.look.paint);
+    const float roof = luminance(b.look.roofPaint);
     EXPECT_GT(std::abs(body - roof), 0.2F) << "body " << body << " roof " << roof;
     (body < roof ? dark : light) += 1;
-  }
+  });
   EXPECT_GT(dark, 5);  // white roofs on dark cars and black roofs on light ones both occur
   EXPECT_GT(light, 5);
 }

@@ -544,17 +544,24 @@ void addCab(LargeVehicleMesh* m, double xFront, double length, double top, std::
   addBody(m, b);
 }
 
+// A painted box from xFront to xRear in two bands, split at zSplit, with the tail lights in
+// band lightBand (0: below the split, 1: above it).
+BandedBody tailLitBox(double xFront, double xRear, double zBottom, double zSplit, double zTop,
+                      double halfWidth, int lightBand, double lightWidth) {
+  BandedBody b = box(xFront, xRear, zBottom, zTop, halfWidth, SurfacePart::Paint);
+  b.z = {zBottom, zSplit, zTop};
+  b.frontX.assign(3, xFront);
+  b.rearX.assign(3, xRear);
+  b.side = b.front = b.rear = {SurfacePart::Paint, SurfacePart::Paint};
+  b.tailLightBand = lightBand;
+  b.lightWidth = lightWidth;
+  return b;
+}
+
 // A cargo box (truck body or semi-trailer) with the tail lights in its lowest band.
 void addCargoBox(LargeVehicleMesh* m, double xFront, double floor, std::mt19937_64& rng) {
-  const double half = 0.5 * m->length_m;
-  BandedBody b = box(xFront, -half, floor, m->height_m, 0.5 * m->width_m, SurfacePart::Paint);
-  b.z = {floor, floor + 0.30, m->height_m};
-  b.frontX = {xFront, xFront, xFront};
-  b.rearX = {-half, -half, -half};
-  b.side = b.front = b.rear = {SurfacePart::Paint, SurfacePart::Paint};
-  b.tailLightBand = 0;
-  b.lightWidth = uniform(rng, {0.25, 0.35});
-  addBody(m, b);
+  addBody(m, tailLitBox(xFront, -0.5 * m->length_m, floor, floor + 0.30, m->height_m,
+                        0.5 * m->width_m, 0, uniform(rng, {0.25, 0.35})));
 }
 
 void buildTruck(LargeVehicleMesh* m, std::mt19937_64& rng) {
@@ -631,14 +638,9 @@ void buildPickup(PickupMesh* m, std::mt19937_64& rng) {
   const double wall = uniform(rng, {0.06, 0.10});
   const double halfWidth = 0.5 * m->width_m;
   const SurfacePart floorPart = uniform01(rng) < 0.6 ? P::Underbody : P::Paint;
-  BandedBody tub = box(bedFront, -half, clearance, floor, halfWidth, P::Paint);
-  tub.z = {clearance, bumperTop, floor};
-  tub.frontX = {bedFront, bedFront, bedFront};
-  tub.rearX = {-half, -half, -half};
-  tub.side = tub.front = tub.rear = {P::Paint, P::Paint};
+  BandedBody tub = tailLitBox(bedFront, -half, clearance, bumperTop, floor, halfWidth, 1,
+                              uniform(rng, {0.15, 0.25}));
   tub.roof = floorPart;
-  tub.tailLightBand = 1;
-  tub.lightWidth = uniform(rng, {0.15, 0.25});
   addBody(m, tub);
   for (const double side : {1.0, -1.0}) {
     BandedBody w = box(bedFront, -half, floor, bedTop, 0.5 * wall, P::Paint);

@@ -328,7 +328,8 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeCar(Rng& rng,
 namespace {
 
 // A vehicle without ASM keypoints (bus, truck, pickup) from the car generator's mesh: its
-// wheels, axles (the front-most one steers, the mean of the others is the rear axle) and box.
+// wheels, axles (the front-most one steers, the mean of the others is the rear axle), box,
+// normals and extents; the caller gives it its look.
 std::shared_ptr<VehicleModel> modelFromBody(const shape::BodyMesh& mesh, shape::VehicleType type) {
   auto m = std::make_shared<VehicleModel>();
   m->type = type;
@@ -353,6 +354,8 @@ std::shared_ptr<VehicleModel> modelFromBody(const shape::BodyMesh& mesh, shape::
   m->rearAxleXM = rearCount > 0 ? rearSum / rearCount : -0.3 * mesh.length_m;
   m->wheelbase_m = frontAxle - m->rearAxleXM;
   m->dimensions_m = Eigen::Vector3d(mesh.length_m, mesh.width_m, mesh.height_m);
+  computeNormals(*m);
+  finishExtents(*m);
   return m;
 }
 
@@ -376,8 +379,6 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {
     look.colourName = "yellow";
   }
   m->look = look;
-  computeNormals(*m);
-  finishExtents(*m);
   return m;
 }
 
@@ -386,8 +387,6 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makePickup(Rng& rng,
   std::shared_ptr<VehicleModel> m =
       modelFromBody(shape::generatePickup(rng.engine()), shape::VehicleType::Suv);
   m->look = look;
-  computeNormals(*m);
-  finishExtents(*m);
   return m;
 }
 
