@@ -28,21 +28,28 @@ sim_tune_full 5000 36 4  2592x2048  detector tuning at the camera's resolution (
 sim_val_full  9000 13 4  2592x2048  detector held-out at the camera's resolution (the seeds of sim_val)
 sim_val2_full 9400 40 4  2592x2048  detector held-out, a second and larger set
 sim_val_pk    9500 13 4  2592x2048  detector held-out with every SUV drawn as a pickup (front/back of pickups)
-sim_val3_full 9600 40 4  2592x2048  detector held-out, a third set of the second's size (confirmatory tests)"
+sim_val3_full 9600 40 4  2592x2048  detector held-out, a third set of the second's size (confirmatory tests)
+sim_val_ru    9700 40 4  2592x2048  detector held-out with motorbikes, bicycles and pedestrians (false boxes on road users)
+sim_val_ru_plain 9700 40 4  2592x2048  the same seeds without them (what the road users change)
+sim_val_tilt42 9800 20 4  2592x2048  detector held-out seen obliquely: tilt 42 deg from nadir at 90 m
+sim_val_nadir 9800 20 4  2592x2048  the same seeds straight down at 90 m (what the tilt changes)"
 
 # vp_simulate options of a set beyond the defaults (make_sim_data.sh's SIM_ARGS).
 set_args() {
   case "$1" in
     sim_val_pk) echo "--pickup-share 1" ;;
+    sim_val_ru) echo "--road-users" ;;
+    sim_val_tilt42) echo "--tilt-deg 42 --altitude-m 90" ;;
+    sim_val_nadir) echo "--tilt-deg 0 --altitude-m 90" ;;
   esac
 }
 
 usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
 case "${1:-}" in
   -h|--help) usage; exit 0 ;;
-  --list) printf '%-14s %-11s %-7s %-10s %s\n' set seeds frames size use
+  --list) printf '%-16s %-11s %-7s %-10s %s\n' set seeds frames size use
           while read -r name first count frames size use; do
-            printf '%-14s %-11s %-7s %-10s %s\n' "$name" "$first-$((first + count - 1))" "$frames" "$size" "$use"
+            printf '%-16s %-11s %-7s %-10s %s\n' "$name" "$first-$((first + count - 1))" "$frames" "$size" "$use"
           done <<< "$sets"; exit 0 ;;
   "") usage >&2; exit 2 ;;
   -*) echo "make_eval_data.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;

@@ -234,11 +234,23 @@ def import_files(detector_path: str, crop_path: Optional[str], n_s: int,
         verifier = "vehicle_logit" in outputs
         n_convs = sum(node.op_type == "Conv" for node in crop_model.graph.node)
         plain = len(convs_in_order(CropNet(n_s=n_s, verifier=verifier), (CROP_H, CROP_W)))
-        crop = CropNet(n_s=n_s, verifier=verifier, flip_branch=n_convs == plain + 1)
+        # Each branch (front/back, verifier) is one more fully connected Conv of the same shape;
+        # with one extra Conv the file's outputs tell which branch it is.
+        extra = n_convs - plain
+        layouts = [(f, v) for v in (False, True) for f in (False, True)
+                   if f + v == extra and (verifier or not v)]
+        if not layouts:
+            raise ValueError(f"{crop_path}: {n_convs} Conv nodes fit no crop network layout "
+                             f"({plain} without branches, at most {plain + 2})")
         x_crop = normalized(calib_crop) if calib_crop is not None and len(calib_crop) else None
-        n = load_into(crop, crop_model, (CROP_H, CROP_W), x_crop)
         check_x = x_crop[:8] if x_crop is not None else torch.randn(4, 3, CROP_H, CROP_W)
-        errs = check_against_file(crop, crop_model, check_x)
+        for flip_branch, verifier_branch in layouts:
+            crop = CropNet(n_s=n_s, verifier=verifier, flip_branch=flip_branch,
+                           verifier_branch=verifier_branch)
+            n = load_into(crop, crop_model, (CROP_H, CROP_W), x_crop)
+            errs = check_against_file(crop, crop_model, check_x)
+            if max(errs.values()) <= MAX_RELATIVE_ERROR:
+                break
         log(f"crop network: {n} convolutions from {crop_path}"
             f"{' (with the verifier head)' if crop.verifier else ''}; largest relative "
             "difference " + ", ".join(f"{k} {v:.1e}" for k, v in errs.items()))

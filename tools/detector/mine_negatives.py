@@ -15,6 +15,9 @@ that `train.py --verifier-samples FILE` can teach the crop network's verifier he
 mistakes at 6 cm per pixel.
 
   tools/detector/mine_negatives.py --data SEQ_DIR... --detections DIR --out negatives.csv
+  tools/detector/mine_negatives.py --data SEQ_DIR... --detections DIR --by-kind --out neg.csv
+      (also prints what the false detections lie on: benches, shelters ... motorbikes,
+      bicycles, pedestrians, as the simulator lists them in ground_truth/furniture.csv)
   tools/detector/mine_negatives.py --images ROOT --list STEMS --detections FILE --gsd-m G \
       --positives --out real_samples.csv
   tools/detector/mine_negatives.py --data SEQ_DIR... --furniture --out furniture.csv
@@ -152,6 +155,25 @@ def mine(seq_dirs: List[str], det_dir: str, min_score: float, max_iou: float):
     return rows, counts
 
 
+def read_furniture(seq: str) -> Dict[int, List[Tuple]]:
+    """Per frame id: (kind, cx, cy, length, width, angle, visible_px) of each item of the street
+    furniture the simulator listed in view (ground_truth/furniture.csv)."""
+    path = os.path.join(seq, "ground_truth", "furniture.csv")
+    if not os.path.isfile(path):
+        raise DatasetError(f"{path}: no furniture list (render the sequence with a "
+                           "vp_simulate that writes it)")
+    by_frame: Dict[int, List[Tuple]] = {}
+    with open(path, newline="") as f:
+        for line_no, r in enumerate(csv.DictReader(f), start=2):
+            try:
+                by_frame.setdefault(int(r["frame_id"]), []).append(
+                    (r["kind"], float(r["cx_px"]), float(r["cy_px"]), float(r["length_px"]),
+                     float(r["width_px"]), float(r["angle_rad"]), int(r["visible_px"])))
+            except (KeyError, ValueError, TypeError):
+                raise DatasetError(f"{path}:{line_no}: not a furniture row") from None
+    return by_frame
+
+
 def furniture_samples(seq_dirs: List[str], min_visible_px: int, max_iou: float):
     """Background rows for the street furniture the simulator lists in view
     (ground_truth/furniture.csv: benches, shelters, kiosks, stair entrances): a car-sized box
@@ -161,23 +183,11 @@ def furniture_samples(seq_dirs: List[str], min_visible_px: int, max_iou: float):
     rows, counts = [], {}
     for seq in seq_dirs:
         name = os.path.basename(os.path.normpath(seq))
-        path = os.path.join(seq, "ground_truth", "furniture.csv")
-        if not os.path.isfile(path):
-            raise DatasetError(f"{path}: no furniture list (render the sequence with a "
-                               "vp_simulate that writes it)")
-        by_frame: Dict[int, List[Tuple]] = {}
-        with open(path, newline="") as f:
-            for line_no, r in enumerate(csv.DictReader(f), start=2):
-                try:
-                    by_frame.setdefault(int(r["frame_id"]), []).append(
-                        (float(r["cx_px"]), float(r["cy_px"]), float(r["length_px"]),
-                         float(r["width_px"]), float(r["angle_rad"]), int(r["visible_px"])))
-                except (KeyError, ValueError, TypeError):
-                    raise DatasetError(f"{path}:{line_no}: not a furniture row") from None
+        by_frame = read_furniture(seq)
         samples = read_sequence(seq, max_occlusion=1.0, max_truncation=1.0)
         n = 0
         for s in samples:
-            items = [it for it in by_frame.get(s.frame_index, []) if it[5] >= min_visible_px]
+            items = [it[1:] for it in by_frame.get(s.frame_index, []) if it[6] >= min_visible_px]
             if not items:
                 continue
             gsd = float(np.nanmedian(s.gsd_m)) if np.isfinite(s.gsd_m).any() else math.nan
@@ -193,6 +203,36 @@ def furniture_samples(seq_dirs: List[str], min_visible_px: int, max_iou: float):
                     n += 1
         counts[name] = n
     return rows, counts
+
+
+def false_boxes_by_kind(seq_dirs: List[str], rows, min_visible_px: int) -> Dict[str, List[int]]:
+    """What the false detections of ``mine`` lie on: per furniture kind [item-frames in view
+    with at least min_visible_px pixels, false detections whose centre lies inside such an
+    item's image box]; the kind "(elsewhere)" holds the rest. A sequence without a furniture
+    list counts every false detection as elsewhere."""
+    out: Dict[str, List[int]] = {}
+    for seq in seq_dirs:
+        path = os.path.join(seq, "ground_truth", "furniture.csv")
+        by_frame = read_furniture(seq) if os.path.isfile(path) else {}
+        frame_of = {os.path.abspath(s.image_path): s.frame_index
+                    for s in read_sequence(seq, max_occlusion=1.0, max_truncation=1.0)}
+        for items in by_frame.values():
+            for it in items:
+                if it[6] >= min_visible_px:
+                    out.setdefault(it[0], [0, 0])[0] += 1
+        for image, cx, cy, *_ in rows:
+            if image not in frame_of:
+                continue
+            kind = "(elsewhere)"
+            for k, icx, icy, length, width, angle, visible in by_frame.get(frame_of[image], []):
+                c, s_ = math.cos(angle), math.sin(angle)
+                dx, dy = cx - icx, cy - icy
+                if (visible >= min_visible_px and abs(dx * c + dy * s_) <= 0.5 * length
+                        and abs(-dx * s_ + dy * c) <= 0.5 * width):
+                    kind = k
+                    break
+            out.setdefault(kind, [0, 0])[1] += 1
+    return out
 
 
 def read_stems(path: str):
@@ -219,7 +259,11 @@ def main(argv=None) -> int:
                    help="--data: instead of detections, list the street furniture the simulator "
                         "recorded in view (ground_truth/furniture.csv) as background boxes")
     p.add_argument("--min-visible-px", type=int, default=60,
-                   help="--furniture: items with fewer visible pixels are left out")
+                   help="--furniture, --by-kind: items with fewer visible pixels are left out")
+    p.add_argument("--by-kind", action="store_true",
+                   help="--data with --detections: also print what the false detections lie on, "
+                        "per kind of listed furniture (benches ... motorbikes, bicycles, "
+                        "pedestrians), beside the number of item-frames in view")
     p.add_argument("--detections",
                    help="--data: folder of <sequence name>.csv files written by vp_detect_images; "
                         "--images: that tool's one CSV for the folder")
@@ -239,6 +283,8 @@ def main(argv=None) -> int:
         p.error("--min-score must be in [0, 1] and --max-iou in (0, 1]")
     if a.furniture and a.images:
         p.error("--furniture goes with --data (simulated sequences)")
+    if a.by_kind and (a.images or a.furniture):
+        p.error("--by-kind goes with --data and --detections")
     if not a.furniture and not a.detections:
         p.error("--detections is required (except with --furniture)")
     if a.images and not (a.gsd_m > 0):
@@ -252,6 +298,7 @@ def main(argv=None) -> int:
             rows, counts = furniture_samples(a.data, a.min_visible_px, a.max_iou)
         else:
             rows, counts = mine(a.data, a.detections, a.min_score, a.max_iou)
+            kinds = false_boxes_by_kind(a.data, rows, a.min_visible_px) if a.by_kind else {}
     except (DatasetError, OSError) as e:
         print(f"mine_negatives.py: {e}", file=sys.stderr)
         return 1
@@ -269,6 +316,10 @@ def main(argv=None) -> int:
           f"{sum(1 for c in counts.values() if c)} of {len(counts)} "
           f"{'images' if a.images else 'sequences'}"
           + (f", {len(rows) - len(negatives)} matched ones" if a.positives else "") + f" -> {a.out}")
+    if a.by_kind:
+        print(f"{'on':<16} {'items in view':>13} {'false boxes':>11}")
+        for kind, (items, boxes) in sorted(kinds.items(), key=lambda kv: kv[0] == "(elsewhere)"):
+            print(f"{kind:<16} {items if kind != '(elsewhere)' else '':>13} {boxes:>11}")
     return 0
 
 

@@ -163,11 +163,15 @@ class CropNet(nn.Module):
     shows a vehicle at all (the first stage's box may sit on a planter, a shadow or a roof
     fixture), trained on mined false detections (train.py --verifier-samples)."""
 
-    def __init__(self, n_s: int = 3, verifier: bool = False, flip_branch: bool = False):
+    def __init__(self, n_s: int = 3, verifier: bool = False, flip_branch: bool = False,
+                 verifier_branch: bool = False):
         super().__init__()
+        if verifier_branch and not verifier:
+            raise ValueError("CropNet: verifier_branch needs verifier")
         self.n_s = n_s
         self.verifier = verifier
         self.flip_branch = flip_branch
+        self.verifier_branch = verifier_branch
         self.export_mode = False
         self.body = nn.Sequential(
             ConvBN(3, 24, 3, 2),                       # 24 x 48
@@ -197,20 +201,32 @@ class CropNet(nn.Module):
             # --flip-head-only) while type, shape, refinement and verifier stay as they are.
             self.flip_fc = nn.Sequential(nn.Conv2d(128, 192, (CROP_H // 16, CROP_W // 16)),
                                          nn.ReLU(inplace=True))
+        if verifier_branch:
+            # The verifier from its own fully connected layer likewise (train.py
+            # --verifier-branch --verifier-head-only): more capacity for "vehicle or not" than a
+            # single output on the shared features, which type, shape and refinement keep.
+            self.verifier_fc = nn.Sequential(nn.Conv2d(128, 192, (CROP_H // 16, CROP_W // 16)),
+                                             nn.ReLU(inplace=True))
 
     def start_flip_branch_from_shared(self) -> None:
         """Copies the shared fully connected layer into the flip branch: the branch then gives
         exactly the shared flip output, the starting point of its fine-tuning."""
         self.flip_fc[0].load_state_dict(self.fc[0].state_dict())
 
+    def start_verifier_branch_from_shared(self) -> None:
+        """Copies the shared fully connected layer into the verifier branch: the branch then
+        gives exactly the shared verifier output, the starting point of its fine-tuning."""
+        self.verifier_fc[0].load_state_dict(self.fc[0].state_dict())
+
     def forward(self, x) -> Dict[str, torch.Tensor]:
         b = self.body(x)
         f = self.fc(b)
         flip_in = self.flip_fc(b) if self.flip_branch else f
+        verifier_in = self.verifier_fc(b) if self.verifier_branch else f
         out = {"type_logits": self.type_logits(f), "shape": self.shape(f),
                "flip_logit": self.flip_logit(flip_in), "refine": self.refine(f)}
         if self.verifier:
-            out["vehicle_logit"] = self.vehicle_logit(f)
+            out["vehicle_logit"] = self.vehicle_logit(verifier_in)
         return out
 
     @classmethod
@@ -218,7 +234,8 @@ class CropNet(nn.Module):
         """A CropNet with the weights of a checkpoint's ``crop`` entry, with the verifier head
         when the checkpoint has one."""
         net = cls(n_s=n_s, verifier="vehicle_logit.weight" in state,
-                  flip_branch="flip_fc.0.weight" in state)
+                  flip_branch="flip_fc.0.weight" in state,
+                  verifier_branch="verifier_fc.0.weight" in state)
         net.load_state_dict(state)
         return net
 

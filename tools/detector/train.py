@@ -148,6 +148,10 @@ def parse_args(argv=None):
     p.add_argument("--flip-branch", action="store_true",
                    help="give the crop network's front/back output its own fully connected "
                         "layer, started as a copy of the shared one")
+    p.add_argument("--verifier-branch", action="store_true",
+                   help="give the crop network's verifier output its own fully connected layer, "
+                        "started as a copy of the shared one (with --verifier-head-only: trained "
+                        "alone, the rest of the crop network bit for bit --init-from's)")
     p.add_argument("--flip-head-only", action="store_true",
                    help="train only the front/back branch (needs --flip-branch, --init-from and "
                         "--crop-only): type, shape, refinement and verifier stay as they are")
@@ -659,7 +663,10 @@ def train(args) -> dict:
                          "--heading-batch >= 1")
     crop_net = (None if args.no_crop
                 else CropNet(n_s=asm.n_s, verifier=bool(args.verifier_samples),
-                             flip_branch=args.flip_branch).to(device))
+                             flip_branch=args.flip_branch,
+                             verifier_branch=args.verifier_branch).to(device))
+    if args.verifier_branch and not args.verifier_samples:
+        raise SystemExit("--verifier-branch needs --verifier-samples (the verifier's training)")
     if args.init_from:
         ck0 = torch.load(args.init_from, map_location=device)
         missing, unexpected = det.load_state_dict(ck0["detector"], strict=False)
@@ -669,12 +676,16 @@ def train(args) -> dict:
             if "vehicle_logit.weight" in ck0["crop"] and not crop_net.verifier:
                 crop_net = CropNet(n_s=asm.n_s, verifier=True, flip_branch=args.flip_branch).to(device)
             missing_c, unexpected_c = crop_net.load_state_dict(ck0["crop"], strict=False)
-            if unexpected_c or any(not k.startswith(("vehicle_logit.", "flip_fc.")) for k in missing_c):
+            if unexpected_c or any(not k.startswith(("vehicle_logit.", "flip_fc.", "verifier_fc."))
+                                   for k in missing_c):
                 raise SystemExit(f"--init-from {args.init_from}: crop network weights do not fit "
                                  f"(missing {missing_c[:4]}, unexpected {unexpected_c[:4]})")
             if any(k.startswith("flip_fc.") for k in missing_c):
                 crop_net.start_flip_branch_from_shared()
                 missing_c = [k for k in missing_c if not k.startswith("flip_fc.")]
+            if any(k.startswith("verifier_fc.") for k in missing_c):
+                crop_net.start_verifier_branch_from_shared()
+                missing_c = [k for k in missing_c if not k.startswith("verifier_fc.")]
             missing += missing_c
         log(f"initialised from {args.init_from}; new: {sorted({k.split('.')[0] for k in missing})}")
     head_names = ("type_head", "shape_head")
@@ -690,7 +701,7 @@ def train(args) -> dict:
             raise SystemExit("--verifier-head-only needs --verifier-samples, --init-from and "
                              "--crop-only")
         for name, prm in crop_net.named_parameters():
-            prm.requires_grad = name.startswith("vehicle_logit.")
+            prm.requires_grad = name.startswith(("vehicle_logit.", "verifier_fc."))
     if args.flip_head_only:
         if not (args.flip_branch and args.init_from and args.crop_only):
             raise SystemExit("--flip-head-only needs --flip-branch, --init-from and --crop-only")

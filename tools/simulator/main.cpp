@@ -14,11 +14,11 @@ namespace {
 void usage(std::ostream& out) {
   out << "usage: vp_simulate --scene intersection|straight|parking --seed N --frames N --out DIR\n"
          "                   [--width 2592 --height 2048] [--altitude-m 60..150] [--tilt-deg "
-         "0..35]\n"
+         "0..45]\n"
          "                   [--jpeg-quality Q | --png] [--threads N] [--supersampling 1..4]\n"
          "                   [--asm PATH] [--telemetry-noise] [--static-hover] [--instance-masks]\n"
          "                   [--two-tone-share 0..1] [--city-car-share 0..1] [--poles]\n"
-         "                   [--pickup-share 0..1] [--islands] [--help]\n"
+         "                   [--pickup-share 0..1] [--islands] [--road-users] [--help]\n"
          "Renders N frames at 10 Hz of a scene drawn from the seed (same seed: byte-identical\n"
          "output) into DIR as a recorded sequence with ground truth. See docs/simulator.md.\n";
 }
@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
     } else if (arg == "--altitude-m") {
       options.altitude_m = number("--altitude-m", 60, 150);
     } else if (arg == "--tilt-deg") {
-      options.tilt_deg = number("--tilt-deg", 0, 35);
+      options.tilt_deg = number("--tilt-deg", 0, 45);
     } else if (arg == "--jpeg-quality") {
       options.jpegQuality = static_cast<int>(number("--jpeg-quality", 1, 100));
       options.png = false;
@@ -114,6 +114,8 @@ int main(int argc, char** argv) {
       options.poles = true;
     } else if (arg == "--islands") {
       options.islands = true;
+    } else if (arg == "--road-users") {
+      options.roadUsers = true;
     } else {
       std::cerr << "vp_simulate: unknown argument '" << arg << "'\n";
       usage(std::cerr);

@@ -127,7 +127,20 @@ struct Tree {
 // They are not vehicles in the ground truth; the detector must learn to ignore them. Sign posts
 // and street lamps (addPoles) are tall and thin: from a tilted camera the pole, the plate or
 // the arm and their shadows make car-sized lines and blobs.
-enum class FurnitureKind { Bench, Shelter, Kiosk, StairEntrance, SignPost, StreetLamp };
+// Road users that are not vehicles (addRoadUsers): a row of parked motorbikes or scooters, a
+// bicycle rack with its bicycles, a group of pedestrians; one item per row or group, since
+// from 100 m such a row is one car-sized blob.
+enum class FurnitureKind {
+  Bench,
+  Shelter,
+  Kiosk,
+  StairEntrance,
+  SignPost,
+  StreetLamp,
+  Motorbikes,
+  Bicycles,
+  Pedestrians
+};
 const char* toString(FurnitureKind kind);
 
 struct StreetFurniture {
@@ -141,6 +154,9 @@ struct StreetFurniture {
   Eigen::Vector3f albedo{0.5F, 0.5F, 0.5F};      // slats, frame, walls, parapet
   Eigen::Vector3f roofAlbedo{0.3F, 0.3F, 0.3F};  // shelter glass tint, kiosk roof, sign plate
   bool backrest = true;                          // benches
+  // Road users: members of the row or group (motorbikes and bicycles side by side along the
+  // length axis, each facing +left normal; pedestrians anywhere in the footprint).
+  int count = 1;
   std::uint32_t seed = 0;
   Eigen::Vector2d axis() const { return {std::cos(heading_rad), std::sin(heading_rad)}; }
 };
@@ -275,6 +291,14 @@ void addRoofFixtures(Building& building);
 // scene.furniture: opt-in (vp_simulate --poles), from an Rng of its own, so that a seed's scene
 // is otherwise the one it is without them.
 void addPoles(SceneSpec& scene);
+// Road users that are not vehicles (road_users.cpp), appended to scene.furniture: rows of
+// parked motorbikes and scooters and bicycle racks at the kerb edge of the pavements, groups
+// of pedestrians on the pavements and the grass. Opt-in (vp_simulate --road-users), from an Rng
+// of their own, so that a seed's scene is otherwise the one it is without them.
+void addRoadUsers(SceneSpec& scene);
+// True when the item's footprint lies at least minRoad_m off the drivable area and clear of
+// the buildings, the tree trunks and the furniture already placed (street_furniture.cpp).
+bool furnitureSiteClear(const SceneSpec& scene, const StreetFurniture& item, double minRoad_m);
 // Traffic islands (islands.cpp), in two steps of generateScene: widenMedians chooses the roads
 // that get islands and widens their medians before anything is placed beside the roads;
 // addIslands places the islands, their planting and their sign posts once the stop lines,

@@ -176,6 +176,9 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   if (options.poles) {
     addPoles(scene_);
   }
+  if (options.roadUsers) {
+    addRoadUsers(scene_);
+  }
   drawRig();
   if (canvas_.width == 0) {
     return fail(why, "could not draw a valid lens model");
@@ -354,6 +357,9 @@ std::string Simulator::summary() const {
   }
   if (options_.poles) {
     s << ", sign posts and street lamps";
+  }
+  if (options_.roadUsers) {
+    s << ", motorbikes, bicycles and pedestrians";
   }
   if (options_.islands) {
     s << ", " << scene_.islands.size() << " traffic islands";

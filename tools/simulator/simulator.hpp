@@ -65,6 +65,9 @@ struct SimOptions {
   // Sign posts and street lamps along the kerbs (addPoles); the rest of a seed's scene is the
   // same with or without them.
   bool poles = false;
+  // Road users that are not vehicles (road_users.cpp): rows of parked motorbikes, bicycle
+  // racks, groups of pedestrians; the rest of a seed's scene is the same with or without them.
+  bool roadUsers = false;
   // Raised traffic islands in the medians (islands.cpp): their roads are widened, so the scene
   // differs from the seed's scene without them.
   bool islands = false;

@@ -101,6 +101,10 @@ StreetFurniture makeItem(FurnitureKind kind, Rng& rng) {
       item.roofAlbedo = toneColour(rng, Eigen::Vector3f(0.25F, 0.25F, 0.26F), 0.3);  // lamp head
       break;
     }
+    case FurnitureKind::Motorbikes:
+    case FurnitureKind::Bicycles:
+    case FurnitureKind::Pedestrians:
+      break;  // road users are drawn by road_users.cpp
   }
   item.seed = rng.nextU32();
   return item;
@@ -119,9 +123,9 @@ std::array<Eigen::Vector2d, 9> samplePoints(const Footprint& f, double grow) {
   return out;
 }
 
-// The site is on open ground at least minRoad_m behind the kerb line and clear of buildings,
-// tree trunks and furniture already placed.
-bool siteClear(const SceneSpec& scene, const StreetFurniture& item, double minRoad_m) {
+}  // namespace
+
+bool furnitureSiteClear(const SceneSpec& scene, const StreetFurniture& item, double minRoad_m) {
   const Footprint f = footprintOf(item);
   for (const Eigen::Vector2d& p : samplePoints(f, 0.0)) {
     if (scene.roadDistance(p) < minRoad_m) {
@@ -151,6 +155,8 @@ bool siteClear(const SceneSpec& scene, const StreetFurniture& item, double minRo
   return true;
 }
 
+namespace {
+
 void addPavementFurniture(SceneSpec& scene, Rng& rng) {
   const double kerb = scene.kerbWidth_m;
   for (const Road& road : scene.roads) {
@@ -178,7 +184,7 @@ void addPavementFurniture(SceneSpec& scene, Rng& rng) {
         const Eigen::Vector2d front = -side * road.leftNormal();  // towards the road
         // Length along the road, +left normal of the item towards the road.
         item.heading_rad = std::atan2(-front.x(), front.y());
-        if (siteClear(scene, item, kerb + kKerbClearance_m - 0.01)) {
+        if (furnitureSiteClear(scene, item, kerb + kKerbClearance_m - 0.01)) {
           scene.furniture.push_back(item);
         }
       }
@@ -202,7 +208,7 @@ void addGrassFurniture(SceneSpec& scene, Rng& rng) {
       const double a = rng.uniform(0.0, 2.0 * kPi);
       item.centre = scene.viewCentre + r * Eigen::Vector2d(std::cos(a), std::sin(a));
       item.heading_rad = rng.uniform(0.0, 2.0 * kPi);
-      if (siteClear(scene, item, minRoad)) {
+      if (furnitureSiteClear(scene, item, minRoad)) {
         scene.furniture.push_back(item);
         ++placed;
       }
@@ -235,7 +241,7 @@ void addPoleRow(SceneSpec& scene, const Road& road, int side, Rng& rng) {
     const bool underCrown = std::any_of(scene.trees.begin(), scene.trees.end(), [&](const Tree& t) {
       return (t.position - item.centre).norm() < t.canopyRadius_m + 0.5;
     });
-    if (!underCrown && siteClear(scene, item, kerb + kKerbClearance_m - 0.01)) {
+    if (!underCrown && furnitureSiteClear(scene, item, kerb + kKerbClearance_m - 0.01)) {
       scene.furniture.push_back(item);
     }
   };
@@ -288,6 +294,12 @@ const char* toString(FurnitureKind kind) {
       return "sign_post";
     case FurnitureKind::StreetLamp:
       return "street_lamp";
+    case FurnitureKind::Motorbikes:
+      return "motorbikes";
+    case FurnitureKind::Bicycles:
+      return "bicycles";
+    case FurnitureKind::Pedestrians:
+      return "pedestrians";
   }
   return "unknown";
 }

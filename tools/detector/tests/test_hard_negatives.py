@@ -97,6 +97,28 @@ class HardNegatives(unittest.TestCase):
                                                   os.path.join(self.root, "f.csv")]), 1)
         self.assertIn("furniture.csv", err.getvalue())
 
+    def test_false_detections_are_counted_by_the_furniture_they_lie_on(self):
+        x, y = self.empty_spot(1)
+        with open(os.path.join(self.seq, "ground_truth", "furniture.csv"), "w") as f:
+            f.write("frame_id,kind,index,cx_px,cy_px,length_px,width_px,angle_rad,visible_px\n")
+            f.write(f"1,motorbikes,0,{x},{y},8.0,4.0,0.0,90\n")    # in view, under a false box
+            f.write(f"0,pedestrians,1,{x},{y},3.0,3.0,0.0,90\n")   # in view, no false box
+            f.write(f"1,bench,2,{x},{y},3.0,1.0,0.0,5\n")          # too little in view
+        self.write_detections([
+            (1, 0, 0.6, x + 3.0, y + 1.5, 24.0, 10.0, 0.3),  # centre inside the motorbikes' box
+            (1, 1, 0.6, x + 5.0, y, 24.0, 10.0, 0.3),        # beside it: elsewhere
+        ])
+        rows, _ = mine_negatives.mine([self.seq], self.dets, min_score=0.4, max_iou=0.1)
+        kinds = mine_negatives.false_boxes_by_kind([self.seq], rows, min_visible_px=20)
+        self.assertEqual(kinds, {"motorbikes": [1, 1], "pedestrians": [1, 0],
+                                 "(elsewhere)": [0, 1]})
+        out = io.StringIO()
+        with redirect_stderr(io.StringIO()), redirect_stdout(out):
+            self.assertEqual(mine_negatives.main(["--data", self.seq, "--detections", self.dets,
+                                                  "--by-kind", "--min-visible-px", "20",
+                                                  "--out", os.path.join(self.root, "n.csv")]), 0)
+        self.assertRegex(out.getvalue(), r"motorbikes +1 +1")
+
     def test_refuses_missing_or_malformed_detections(self):
         def refusal():
             err = io.StringIO()
@@ -316,6 +338,20 @@ class Verifier(unittest.TestCase):
             train.train(train.parse_args(tiny_run_args(seq, second, 1) + [
                 "--verifier-samples", listed, "--verifier-head-only"]))
         self.assertIn("--verifier-head-only needs", str(e.exception))
+        # With its own fully connected layer (started as a copy of the shared one) the verifier
+        # trains that layer and its output; every other weight and statistic stays.
+        third = os.path.join(self.root, "third")
+        with redirect_stdout(io.StringIO()):
+            train.train(train.parse_args(
+                tiny_run_args(seq, third, 1) + ["--max-steps", "3", "--crop-only", "--init-from",
+                                                os.path.join(second, "checkpoint.pt"),
+                                                "--verifier-samples", listed, "--verifier-branch",
+                                                "--verifier-head-only"]))
+        branched = torch.load(os.path.join(third, "checkpoint.pt"))["crop"]
+        self.assertEqual(set(branched) - set(after), {"verifier_fc.0.weight", "verifier_fc.0.bias"})
+        changed = sorted(k for k, v in after.items() if not torch.equal(v, branched[k]))
+        self.assertEqual(changed, ["vehicle_logit.bias", "vehicle_logit.weight"])
+        self.assertFalse(torch.equal(branched["verifier_fc.0.weight"], after["fc.0.weight"]))
 
 
 if __name__ == "__main__":

@@ -75,6 +75,23 @@ class ImportOnnx(unittest.TestCase):
             diff = (crop(x)["shape"] - self.crop(x)["shape"]).abs().max().item()
         self.assertGreater(diff, 1e-6)
 
+    def test_the_branch_layout_is_read_from_the_file(self):
+        # One extra fully connected Conv is a front/back or a verifier branch: the file's outputs
+        # tell which; both branches make two.
+        for flip_branch, verifier_branch in [(True, False), (False, True), (True, True)]:
+            net = CropNet(n_s=3, verifier=True, flip_branch=flip_branch,
+                          verifier_branch=verifier_branch)
+            path = write_files(self.tmp, f"crop_{flip_branch}_{verifier_branch}", randomized(net),
+                               (CROP_H, CROP_W))
+            ck = import_onnx.import_files(self.det_int8, path, 3, self.calib_det,
+                                          self.calib_crop, log=lambda *_: None)
+            crop = CropNet.from_state_dict(ck["crop"], n_s=3).eval()
+            self.assertEqual((crop.flip_branch, crop.verifier_branch),
+                             (flip_branch, verifier_branch))
+            errs = import_onnx.check_against_file(
+                crop, onnx.load(path), import_onnx.normalized(self.calib_crop[:3]))
+            self.assertLess(max(errs.values()), 1e-5)
+
     def test_train_mode_on_the_calibration_batch_is_eval_mode(self):
         ck = import_onnx.import_files(self.det_int8, self.crop_int8, 3, self.calib_det,
                                       self.calib_crop, log=lambda *_: None)
