@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include "furniture_checks.hpp"
 #include "scene.hpp"
 #include "simulator.hpp"
 #include "traffic_walk.hpp"
@@ -88,25 +89,8 @@ TEST(RoadUsers, OffTheLanesClearOfBuildingsWithRealSizes) {
         }
         ++counts[item.kind];
         members[item.kind] += item.count;
-        const vp::sim::Footprint f = vp::sim::footprintOf(item);
-        const Eigen::Vector2d n(-f.axis.y(), f.axis.x());
-        for (int i = -2; i <= 2; ++i) {
-          for (int j = -2; j <= 2; ++j) {
-            const Eigen::Vector2d p =
-                f.centre + (0.5 * i) * f.halfLength_m * f.axis + (0.5 * j) * f.halfWidth_m * n;
-            EXPECT_GE(scene.roadDistance(p), scene.kerbWidth_m + 0.59)
-                << toString(item.kind) << " on the drivable area, " << toString(kind) << " seed "
-                << seed;
-          }
-        }
-        for (const auto& b : scene.buildings) {
-          const vp::sim::Footprint fb{b.centre,
-                                      {std::cos(b.heading_rad), std::sin(b.heading_rad)},
-                                      0.5 * b.length_m,
-                                      0.5 * b.width_m};
-          EXPECT_FALSE(vp::sim::footprintsOverlap(f, fb, 0.0))
-              << toString(item.kind) << " inside a building, seed " << seed;
-        }
+        vp::sim::testing::expectOffTheRoadsAndBuildings(
+            scene, item, std::string(toString(kind)) + " seed " + std::to_string(seed));
         switch (item.kind) {
           case FurnitureKind::Motorbikes:  // width: one machine's length (scooters from 1.6 m)
             EXPECT_TRUE(item.count >= 1 && item.count <= 5) << item.count;

@@ -10,6 +10,7 @@
 #include <map>
 #include <string>
 
+#include "furniture_checks.hpp"
 #include "scene.hpp"
 #include "traffic_walk.hpp"
 
@@ -81,27 +82,8 @@ TEST(StreetFurniture, OffTheLanesClearOfBuildingsWithRealSizes) {
           }
           facingTraffic += across > 0.7 ? 1 : 0;
         }
-        const vp::sim::Footprint f = vp::sim::footprintOf(item);
-        const Eigen::Vector2d n(-f.axis.y(), f.axis.x());
-        // Every point of the footprint (a 5 x 5 grid over it) lies behind the kerb with the
-        // documented 0.6 m clearance: on no lane, parking lane, lot or driveway.
-        for (int i = -2; i <= 2; ++i) {
-          for (int j = -2; j <= 2; ++j) {
-            const Eigen::Vector2d p =
-                f.centre + (0.5 * i) * f.halfLength_m * f.axis + (0.5 * j) * f.halfWidth_m * n;
-            EXPECT_GE(scene.roadDistance(p), scene.kerbWidth_m + 0.59)
-                << toString(item.kind) << " on the drivable area, " << toString(kind) << " seed "
-                << seed;
-          }
-        }
-        for (const auto& b : scene.buildings) {
-          const vp::sim::Footprint fb{b.centre,
-                                      {std::cos(b.heading_rad), std::sin(b.heading_rad)},
-                                      0.5 * b.length_m,
-                                      0.5 * b.width_m};
-          EXPECT_FALSE(vp::sim::footprintsOverlap(f, fb, 0.0))
-              << toString(item.kind) << " inside a building, seed " << seed;
-        }
+        vp::sim::testing::expectOffTheRoadsAndBuildings(
+            scene, item, std::string(toString(kind)) + " seed " + std::to_string(seed));
         switch (item.kind) {
           case FurnitureKind::Bench:
             EXPECT_TRUE(item.length_m >= 1.5 && item.length_m <= 2.2) << item.length_m;

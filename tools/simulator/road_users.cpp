@@ -128,15 +128,7 @@ void addOnGrass(SceneSpec& scene, Rng& rng) {
   const int groups = rng.uniformInt(0, 4);
   const double minRoad = scene.kerbWidth_m + scene.sidewalkWidth_m + 0.5;
   for (int attempt = 0, placed = 0; attempt < groups * 25 && placed < groups; ++attempt) {
-    StreetFurniture item = makePedestrians(rng);
-    const double r = rng.uniform(6.0, scene.extent_m * 0.6);
-    const double a = rng.uniform(0.0, 2.0 * kPi);
-    item.centre = scene.viewCentre + r * Eigen::Vector2d(std::cos(a), std::sin(a));
-    item.heading_rad = rng.uniform(0.0, 2.0 * kPi);
-    if (furnitureSiteClear(scene, item, minRoad)) {
-      scene.furniture.push_back(item);
-      ++placed;
-    }
+    placed += placeOffTheRoads(scene, rng, makePedestrians(rng), minRoad) ? 1 : 0;
   }
 }
 

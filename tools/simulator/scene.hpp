@@ -299,6 +299,10 @@ void addRoadUsers(SceneSpec& scene);
 // True when the item's footprint lies at least minRoad_m off the drivable area and clear of
 // the buildings, the tree trunks and the furniture already placed (street_furniture.cpp).
 bool furnitureSiteClear(const SceneSpec& scene, const StreetFurniture& item, double minRoad_m);
+// Places the item at a random site within 0.6 extent_m of the view centre, at any heading
+// (the radius, the bearing and the heading drawn from rng in that order), when the site is clear
+// (furnitureSiteClear with minRoad_m); returns whether it was placed (street_furniture.cpp).
+bool placeOffTheRoads(SceneSpec& scene, Rng& rng, StreetFurniture item, double minRoad_m);
 // Traffic islands (islands.cpp), in two steps of generateScene: widenMedians chooses the roads
 // that get islands and widens their medians before anything is placed beside the roads;
 // addIslands places the islands, their planting and their sign posts once the stop lines,

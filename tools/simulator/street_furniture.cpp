@@ -203,15 +203,7 @@ void addGrassFurniture(SceneSpec& scene, Rng& rng) {
       std::make_pair(FurnitureKind::StairEntrance, entrances)};
   for (const auto& [kind, count] : wanted) {
     for (int attempt = 0, placed = 0; attempt < count * 25 && placed < count; ++attempt) {
-      StreetFurniture item = makeItem(kind, rng);
-      const double r = rng.uniform(6.0, scene.extent_m * 0.6);
-      const double a = rng.uniform(0.0, 2.0 * kPi);
-      item.centre = scene.viewCentre + r * Eigen::Vector2d(std::cos(a), std::sin(a));
-      item.heading_rad = rng.uniform(0.0, 2.0 * kPi);
-      if (furnitureSiteClear(scene, item, minRoad)) {
-        scene.furniture.push_back(item);
-        ++placed;
-      }
+      placed += placeOffTheRoads(scene, rng, makeItem(kind, rng), minRoad) ? 1 : 0;
     }
   }
 }
@@ -302,6 +294,18 @@ const char* toString(FurnitureKind kind) {
       return "pedestrians";
   }
   return "unknown";
+}
+
+bool placeOffTheRoads(SceneSpec& scene, Rng& rng, StreetFurniture item, double minRoad_m) {
+  const double r = rng.uniform(6.0, scene.extent_m * 0.6);
+  const double a = rng.uniform(0.0, 2.0 * kPi);
+  item.centre = scene.viewCentre + r * Eigen::Vector2d(std::cos(a), std::sin(a));
+  item.heading_rad = rng.uniform(0.0, 2.0 * kPi);
+  if (!furnitureSiteClear(scene, item, minRoad_m)) {
+    return false;
+  }
+  scene.furniture.push_back(item);
+  return true;
 }
 
 bool footprintsOverlap(const Footprint& a, const Footprint& b, double margin_m) {
