@@ -1,6 +1,8 @@
-// Test helper: the site checks every kind of street furniture and road user must pass.
+// Test helpers of the scene tests: the three scene kinds, the equality of two furniture items,
+// and the site checks every kind of street furniture and road user must pass.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -9,6 +11,16 @@
 #include "scene.hpp"
 
 namespace vp::sim::testing {
+
+inline constexpr std::array<SceneKind, 3> kSceneKinds = {SceneKind::Intersection,
+                                                         SceneKind::Straight, SceneKind::Parking};
+
+// The same item, drawn alike: kind, site, size, row or group count, colour and seed.
+inline bool sameItem(const StreetFurniture& x, const StreetFurniture& y) {
+  return x.kind == y.kind && x.centre == y.centre && x.heading_rad == y.heading_rad &&
+         x.length_m == y.length_m && x.width_m == y.width_m && x.height_m == y.height_m &&
+         x.count == y.count && x.albedo == y.albedo && x.seed == y.seed;
+}
 
 // Every point of the item's footprint (a 5 x 5 grid over it) lies behind the kerb with the
 // documented 0.6 m clearance (on no lane, parking lane, lot or driveway), and the footprint

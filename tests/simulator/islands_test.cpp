@@ -8,6 +8,7 @@
 #include <cmath>
 #include <string>
 
+#include "furniture_checks.hpp"
 #include "ground_texture.hpp"
 #include "scene.hpp"
 #include "traffic_walk.hpp"
@@ -18,8 +19,7 @@ using vp::sim::Island;
 using vp::sim::SceneKind;
 using vp::sim::SceneSpec;
 
-constexpr std::array<SceneKind, 3> kKinds = {SceneKind::Intersection, SceneKind::Straight,
-                                             SceneKind::Parking};
+constexpr auto& kKinds = vp::sim::testing::kSceneKinds;
 
 SceneSpec sceneFor(SceneKind kind, std::uint64_t seed, bool islands) {
   vp::sim::Rng rng(seed);

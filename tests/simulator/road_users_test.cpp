@@ -25,8 +25,7 @@ using vp::sim::FurnitureKind;
 using vp::sim::SceneKind;
 using vp::sim::SceneSpec;
 
-constexpr std::array<SceneKind, 3> kKinds = {SceneKind::Intersection, SceneKind::Straight,
-                                             SceneKind::Parking};
+constexpr auto& kKinds = vp::sim::testing::kSceneKinds;
 
 SceneSpec sceneFor(SceneKind kind, std::uint64_t seed, bool roadUsers) {
   vp::sim::Rng rng(seed);
@@ -42,12 +41,6 @@ bool isRoadUser(FurnitureKind k) {
          k == FurnitureKind::Pedestrians;
 }
 
-bool sameItem(const vp::sim::StreetFurniture& x, const vp::sim::StreetFurniture& y) {
-  return x.kind == y.kind && x.centre == y.centre && x.heading_rad == y.heading_rad &&
-         x.length_m == y.length_m && x.width_m == y.width_m && x.height_m == y.height_m &&
-         x.count == y.count && x.albedo == y.albedo && x.seed == y.seed;
-}
-
 TEST(RoadUsers, AddedAfterTheSceneAndChangeNothingElse) {
   std::size_t added = 0;
   for (const SceneKind kind : kKinds) {
@@ -56,7 +49,7 @@ TEST(RoadUsers, AddedAfterTheSceneAndChangeNothingElse) {
       const SceneSpec with = sceneFor(kind, seed, true);
       ASSERT_GE(with.furniture.size(), plain.furniture.size()) << toString(kind) << " " << seed;
       for (std::size_t i = 0; i < plain.furniture.size(); ++i) {
-        EXPECT_TRUE(sameItem(plain.furniture[i], with.furniture[i]))
+        EXPECT_TRUE(vp::sim::testing::sameItem(plain.furniture[i], with.furniture[i]))
             << toString(kind) << " seed " << seed << " item " << i;
       }
       for (std::size_t i = plain.furniture.size(); i < with.furniture.size(); ++i) {
@@ -70,7 +63,7 @@ TEST(RoadUsers, AddedAfterTheSceneAndChangeNothingElse) {
       const SceneSpec again = sceneFor(kind, seed, true);
       ASSERT_EQ(again.furniture.size(), with.furniture.size());
       for (std::size_t i = 0; i < with.furniture.size(); ++i) {
-        EXPECT_TRUE(sameItem(again.furniture[i], with.furniture[i]));
+        EXPECT_TRUE(vp::sim::testing::sameItem(again.furniture[i], with.furniture[i]));
       }
     }
   }

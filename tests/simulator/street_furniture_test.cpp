@@ -20,8 +20,7 @@ using vp::sim::FurnitureKind;
 using vp::sim::SceneKind;
 using vp::sim::SceneSpec;
 
-constexpr std::array<SceneKind, 3> kKinds = {SceneKind::Intersection, SceneKind::Straight,
-                                             SceneKind::Parking};
+constexpr auto& kKinds = vp::sim::testing::kSceneKinds;
 
 SceneSpec sceneFor(SceneKind kind, std::uint64_t seed, bool poles = false) {
   vp::sim::Rng rng(seed);
@@ -37,11 +36,7 @@ bool sameFurniture(const SceneSpec& a, const SceneSpec& b) {
     return false;
   }
   for (std::size_t i = 0; i < a.furniture.size(); ++i) {
-    const auto& x = a.furniture[i];
-    const auto& y = b.furniture[i];
-    if (x.kind != y.kind || x.centre != y.centre || x.heading_rad != y.heading_rad ||
-        x.length_m != y.length_m || x.width_m != y.width_m || x.height_m != y.height_m ||
-        x.albedo != y.albedo || x.seed != y.seed) {
+    if (!vp::sim::testing::sameItem(a.furniture[i], b.furniture[i])) {
       return false;
     }
   }

@@ -110,12 +110,14 @@ void addAlongPavements(SceneSpec& scene, Rng& rng) {
         // A row that does not fit (a tree, a bench) is shortened, as riders park in the gap.
         const int fewest = item.kind == FurnitureKind::Bicycles ? 2 : 1;
         const double pitch = item.count > 1 ? (item.length_m - 0.8) / (item.count - 1) : 0.0;
-        while (!furnitureSiteClear(scene, item, kerb + kKerbClearance_m - 0.01) &&
-               item.kind != FurnitureKind::Pedestrians && item.count > fewest) {
+        const double minRoad = kerb + kKerbClearance_m - 0.01;
+        bool clear = furnitureSiteClear(scene, item, minRoad);
+        while (!clear && item.kind != FurnitureKind::Pedestrians && item.count > fewest) {
           --item.count;
           item.length_m = (item.count - 1) * pitch + 0.8;
+          clear = furnitureSiteClear(scene, item, minRoad);
         }
-        if (furnitureSiteClear(scene, item, kerb + kKerbClearance_m - 0.01)) {
+        if (clear) {
           scene.furniture.push_back(item);
         }
       }
