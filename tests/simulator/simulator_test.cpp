@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <sstream>
 
 #include <unistd.h>
 #include <fstream>
@@ -321,4 +323,62 @@ TEST(Simulator, BicycleMatchesEulerIntegrationOfTheOde) {
   EXPECT_NEAR(exact.x, x, 1e-2);
   EXPECT_NEAR(exact.y, y, 1e-2);
   EXPECT_NEAR(exact.psi, psi, 1e-6);
+}
+
+// --large-share replaces the scene's share of buses and trucks among the vehicles entering the
+// roads: 1 makes every moving vehicle large, 0 none; the scene (site map, terrain) is the seed's.
+TEST(Simulator, LargeShareSetsTheShareOfBusesAndTrucksInTraffic) {
+  const auto run = [](std::optional<double> share, const std::string& name) {
+    const fs::path dir = freshDir(name);
+    vp::sim::SimOptions o = smallOptions(vp::sim::SceneKind::Straight, 11, dir);
+    o.largeVehicleShare = share;
+    vp::sim::Simulator sim;
+    std::string why;
+    EXPECT_TRUE(sim.init(o, &why)) << why;
+    EXPECT_TRUE(sim.write(&why)) << why;
+    auto files = dirContents(dir);
+    fs::remove_all(dir);
+    return files;
+  };
+  // Moving vehicles (parked 0) of the ground truth: [large, all].
+  const auto moving = [](const std::string& objects) {
+    std::istringstream in(objects);
+    std::string line;
+    std::getline(in, line);
+    std::vector<std::string> header;
+    for (std::istringstream h(line); std::getline(h, line, ',');)
+      header.push_back(line);
+    const auto column = [&](const std::string& name) {
+      return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) -
+                                      header.begin());
+    };
+    const std::size_t type = column("type"), parked = column("parked");
+    EXPECT_LT(parked, header.size());
+    std::array<int, 2> counts{0, 0};
+    while (std::getline(in, line)) {
+      std::vector<std::string> cells;
+      for (std::istringstream c(line); std::getline(c, line, ',');)
+        cells.push_back(line);
+      if (cells.size() != header.size() || cells[parked] != "0")
+        continue;
+      counts[0] += cells[type] == "large" ? 1 : 0;
+      ++counts[1];
+    }
+    return counts;
+  };
+  const auto all = run(1.0, "large_all");
+  const auto none = run(0.0, "large_none");
+  const auto seed = run(std::nullopt, "large_seed");
+  const auto a = moving(all.at("ground_truth/objects.csv"));
+  const auto n = moving(none.at("ground_truth/objects.csv"));
+  EXPECT_GT(a[1], 0);
+  EXPECT_EQ(a[0], a[1]);
+  EXPECT_GT(n[1], 0);
+  EXPECT_EQ(n[0], 0);
+  for (const char* file : {"site.geojson", "dtm.tif", "rig.yaml"}) {
+    EXPECT_TRUE(all.at(file) == seed.at(file)) << file;
+    EXPECT_TRUE(none.at(file) == seed.at(file)) << file;
+  }
+  EXPECT_NE(all.at("sequence.yaml").find("large-vehicle share 1"), std::string::npos);
+  EXPECT_EQ(seed.at("sequence.yaml").find("large-vehicle share"), std::string::npos);
 }

@@ -179,6 +179,9 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
   if (options.roadUsers) {
     addRoadUsers(scene_);
   }
+  if (options.largeVehicleShare) {
+    scene_.traffic.largeVehicleShare = *options.largeVehicleShare;
+  }
   drawRig();
   if (canvas_.width == 0) {
     return fail(why, "could not draw a valid lens model");
@@ -354,6 +357,9 @@ std::string Simulator::summary() const {
   }
   if (options_.pickupShare > 0.0) {
     s << ", pickup share " << num(options_.pickupShare);
+  }
+  if (options_.largeVehicleShare) {
+    s << ", large-vehicle share " << num(*options_.largeVehicleShare);
   }
   if (options_.poles) {
     s << ", sign posts and street lamps";
