@@ -66,6 +66,18 @@ std::map<std::string, std::string> dirContents(const fs::path& dir) {
   return files;
 }
 
+// Renders the options' sequence and returns its files (path relative to the folder -> bytes),
+// removing the folder.
+std::map<std::string, std::string> renderedFiles(const vp::sim::SimOptions& o) {
+  vp::sim::Simulator sim;
+  std::string why;
+  EXPECT_TRUE(sim.init(o, &why)) << why;
+  EXPECT_TRUE(sim.write(&why)) << why;
+  auto files = dirContents(o.outDir);
+  fs::remove_all(o.outDir);
+  return files;
+}
+
 struct Recorded {
   std::vector<vp::sim::FrameOutput> frames;
   fs::path dir;
@@ -259,17 +271,10 @@ TEST(Simulator, FurnitureListEnclosesEachItemsPixels) {
 
 TEST(Simulator, SameSeedSameBytesDifferentSeedDifferentFiles) {
   const auto run = [](std::uint64_t seed, const std::string& name, int threads) {
-    const fs::path dir = freshDir(name);
-    vp::sim::SimOptions o = smallOptions(vp::sim::SceneKind::Straight, seed, dir);
+    vp::sim::SimOptions o = smallOptions(vp::sim::SceneKind::Straight, seed, freshDir(name));
     o.png = false;  // JPEG path too
     o.threads = threads;
-    vp::sim::Simulator sim;
-    std::string why;
-    EXPECT_TRUE(sim.init(o, &why)) << why;
-    EXPECT_TRUE(sim.write(&why)) << why;
-    auto files = dirContents(dir);
-    fs::remove_all(dir);
-    return files;
+    return renderedFiles(o);
   };
   const auto a = run(5, "a", 1);
   const auto b = run(5, "b", 2);  // another thread count must not change a byte
@@ -329,16 +334,9 @@ TEST(Simulator, BicycleMatchesEulerIntegrationOfTheOde) {
 // roads: 1 makes every moving vehicle large, 0 none; the scene (site map, terrain) is the seed's.
 TEST(Simulator, LargeShareSetsTheShareOfBusesAndTrucksInTraffic) {
   const auto run = [](std::optional<double> share, const std::string& name) {
-    const fs::path dir = freshDir(name);
-    vp::sim::SimOptions o = smallOptions(vp::sim::SceneKind::Straight, 11, dir);
+    vp::sim::SimOptions o = smallOptions(vp::sim::SceneKind::Straight, 11, freshDir(name));
     o.largeVehicleShare = share;
-    vp::sim::Simulator sim;
-    std::string why;
-    EXPECT_TRUE(sim.init(o, &why)) << why;
-    EXPECT_TRUE(sim.write(&why)) << why;
-    auto files = dirContents(dir);
-    fs::remove_all(dir);
-    return files;
+    return renderedFiles(o);
   };
   // Moving vehicles (parked 0) of the ground truth: [large, all].
   const auto moving = [](const std::string& objects) {

@@ -82,6 +82,9 @@ struct Prepared {
   const Layer* L;
   int groups;             // ceil(C / 64)
   int cpad;               // groups * 64
+  int tail;               // channels of the last group, 1..64
+  __mmask64 tailMask;     // their bytes
+  Zi zpOut, lo, hi;       // output zero point (16-bit lanes), the fused Relu's bounds (bytes)
   std::vector<Zi> wq;     // [g][ky][i]
   std::vector<Zi> bias;   // [g][i]
   std::vector<Zf> scale;  // [g][i]
@@ -99,6 +102,11 @@ static Prepared prepare(const Layer& L, int threads) {
   p.L = &L;
   p.groups = (L.C + 63) / 64;
   p.cpad = p.groups * 64;
+  p.tail = L.C - 64 * (p.groups - 1);
+  p.tailMask = p.tail == 64 ? ~0ULL : ((1ULL << p.tail) - 1);
+  p.zpOut.v = _mm512_set1_epi16(static_cast<short>(L.zpOut));
+  p.lo.v = _mm512_set1_epi8(static_cast<char>(L.outMin));
+  p.hi.v = _mm512_set1_epi8(static_cast<char>(L.outMax));
   p.wq.resize(static_cast<std::size_t>(p.groups) * 12);
   p.bias.resize(static_cast<std::size_t>(p.groups) * 4);
   p.scale.resize(static_cast<std::size_t>(p.groups) * 4);
@@ -135,36 +143,43 @@ static Prepared prepare(const Layer& L, int threads) {
   return p;
 }
 
-// Quad row of padded input row r (0 = the top padding, H + 1 = the bottom one) into dst.
-static void buildQuads(const Prepared& p, Prepared::Scratch& s, const std::int8_t* in, int r,
-                       __m512i* dst) {
+// The padded u8 copy of input row r (0 = the top padding, H + 1 = the bottom one): sign bit
+// flipped, the input's zero point in the padding pixels, channels padded to 64.
+static void buildRow(const Prepared& p, std::uint8_t* row, const std::int8_t* in, int r) {
   const Layer& L = *p.L;
   const int cpad = p.cpad;
-  std::uint8_t* row = s.row.data();
   const __m512i padValue = _mm512_set1_epi8(static_cast<char>(L.zpIn ^ 0x80));
   const __m512i flip = _mm512_set1_epi8(static_cast<char>(0x80));
   if (r == 0 || r == L.H + 1) {
     for (int x = 0; x < L.W + 2; ++x)
       for (int g = 0; g < p.groups; ++g)
         _mm512_storeu_si512(row + static_cast<std::size_t>(x) * cpad + 64 * g, padValue);
-  } else {
-    const std::int8_t* src = in + static_cast<std::size_t>(r - 1) * L.W * L.C;
-    for (int g = 0; g < p.groups; ++g) {
-      _mm512_storeu_si512(row + 64 * g, padValue);
-      _mm512_storeu_si512(row + static_cast<std::size_t>(L.W + 1) * cpad + 64 * g, padValue);
-    }
-    const int tail = L.C - 64 * (p.groups - 1);
-    const __mmask64 tailMask = tail == 64 ? ~0ULL : ((1ULL << tail) - 1);
-    for (int x = 0; x < L.W; ++x) {
-      const std::int8_t* px = src + static_cast<std::size_t>(x) * L.C;
-      std::uint8_t* d = row + static_cast<std::size_t>(x + 1) * cpad;
-      for (int g = 0; g + 1 < p.groups; ++g)
-        _mm512_storeu_si512(d + 64 * g, _mm512_xor_si512(_mm512_loadu_si512(px + 64 * g), flip));
-      const int g = p.groups - 1;
-      _mm512_storeu_si512(d + 64 * g,
-                          _mm512_xor_si512(_mm512_maskz_loadu_epi8(tailMask, px + 64 * g), flip));
-    }
+    return;
   }
+  const std::int8_t* src = in + static_cast<std::size_t>(r - 1) * L.W * L.C;
+  for (int g = 0; g < p.groups; ++g) {
+    _mm512_storeu_si512(row + 64 * g, padValue);
+    _mm512_storeu_si512(row + static_cast<std::size_t>(L.W + 1) * cpad + 64 * g, padValue);
+  }
+  const __mmask64 tailMask = p.tailMask;
+  for (int x = 0; x < L.W; ++x) {
+    const std::int8_t* px = src + static_cast<std::size_t>(x) * L.C;
+    std::uint8_t* d = row + static_cast<std::size_t>(x + 1) * cpad;
+    for (int g = 0; g + 1 < p.groups; ++g)
+      _mm512_storeu_si512(d + 64 * g, _mm512_xor_si512(_mm512_loadu_si512(px + 64 * g), flip));
+    const int g = p.groups - 1;
+    _mm512_storeu_si512(d + 64 * g,
+                        _mm512_xor_si512(_mm512_maskz_loadu_epi8(tailMask, px + 64 * g), flip));
+  }
+}
+
+// Quad row of padded input row r (0 = the top padding, H + 1 = the bottom one) into dst.
+static void buildQuads(const Prepared& p, Prepared::Scratch& s, const std::int8_t* in, int r,
+                       __m512i* dst) {
+  const Layer& L = *p.L;
+  const int cpad = p.cpad;
+  std::uint8_t* row = s.row.data();
+  buildRow(p, row, in, r);
   const __m512i zero = _mm512_setzero_si512();
   const int step = L.stride * cpad;
   for (int x = 0; x < L.Wo; ++x) {
@@ -186,17 +201,33 @@ static void buildQuads(const Prepared& p, Prepared::Scratch& s, const std::int8_
   }
 }
 
+// Requantizes the four accumulators of 64 channels (unpack order), saturates, clamps to the fused
+// Relu's bounds and stores them in channel order (the pack chain undoes the unpacks' order).
+static inline void requantizeStore(__m512i a0, __m512i a1, __m512i a2, __m512i a3,
+                                   const __m512* scale, __m512i zpOut, __m512i lo, __m512i hi,
+                                   std::int8_t* d, bool full, __mmask64 tailMask) {
+  const __m512i i0 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a0), scale[0]));
+  const __m512i i1 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a1), scale[1]));
+  const __m512i i2 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a2), scale[2]));
+  const __m512i i3 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a3), scale[3]));
+  const __m512i p01 = _mm512_adds_epi16(_mm512_packs_epi32(i0, i1), zpOut);
+  const __m512i p23 = _mm512_adds_epi16(_mm512_packs_epi32(i2, i3), zpOut);
+  const __m512i v = _mm512_min_epi8(_mm512_max_epi8(_mm512_packs_epi16(p01, p23), lo), hi);
+  if (full)
+    _mm512_storeu_si512(d, v);
+  else
+    _mm512_mask_storeu_epi8(d, tailMask, v);
+}
+
 static bool gSkipBuild = false;  // "multiply": the quad rows are built once
 static void runRows(const Prepared& p, Prepared::Scratch& s, const std::int8_t* in,
                     std::int8_t* out, int y0, int y1) {
   const Layer& L = *p.L;
   const std::size_t quadRow = static_cast<std::size_t>(L.Wo) * p.groups * 4;
   s.rowOf[0] = s.rowOf[1] = s.rowOf[2] = -1;
-  const __m512i zpOut = _mm512_set1_epi16(static_cast<short>(L.zpOut));
-  const __m512i lo = _mm512_set1_epi8(static_cast<char>(L.outMin));
-  const __m512i hi = _mm512_set1_epi8(static_cast<char>(L.outMax));
-  const int tail = L.C - 64 * (p.groups - 1);
-  const __mmask64 tailMask = tail == 64 ? ~0ULL : ((1ULL << tail) - 1);
+  const __m512i zpOut = p.zpOut.v, lo = p.lo.v, hi = p.hi.v;
+  const int tail = p.tail;
+  const __mmask64 tailMask = p.tailMask;
   for (int y = y0; y < y1; ++y) {
     const __m512i* q[3];
     for (int ky = 0; ky < 3; ++ky) {
@@ -217,8 +248,7 @@ static void runRows(const Prepared& p, Prepared::Scratch& s, const std::int8_t* 
       const __m512i w20 = wq[8], w21 = wq[9], w22 = wq[10], w23 = wq[11];
       const __m512i b0 = p.bias[g * 4 + 0].v, b1 = p.bias[g * 4 + 1].v, b2 = p.bias[g * 4 + 2].v,
                     b3 = p.bias[g * 4 + 3].v;
-      const __m512 s0 = p.scale[g * 4 + 0].v, s1 = p.scale[g * 4 + 1].v, s2 = p.scale[g * 4 + 2].v,
-                   s3 = p.scale[g * 4 + 3].v;
+      const __m512* scale = &p.scale[g * 4].v;
       const bool full = g + 1 < p.groups || tail == 64;
       for (int x = 0; x < L.Wo; ++x) {
         const std::size_t off = (static_cast<std::size_t>(x) * p.groups + g) * 4;
@@ -237,19 +267,8 @@ static void runRows(const Prepared& p, Prepared::Scratch& s, const std::int8_t* 
         a1 = _mm512_dpbusd_epi32(a1, r2[1], w21);
         a2 = _mm512_dpbusd_epi32(a2, r2[2], w22);
         a3 = _mm512_dpbusd_epi32(a3, r2[3], w23);
-        const __m512i i0 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a0), s0));
-        const __m512i i1 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a1), s1));
-        const __m512i i2 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a2), s2));
-        const __m512i i3 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a3), s3));
-        const __m512i p01 = _mm512_adds_epi16(_mm512_packs_epi32(i0, i1), zpOut);
-        const __m512i p23 = _mm512_adds_epi16(_mm512_packs_epi32(i2, i3), zpOut);
-        __m512i v = _mm512_packs_epi16(p01, p23);
-        v = _mm512_min_epi8(_mm512_max_epi8(v, lo), hi);
-        std::int8_t* d = o + static_cast<std::size_t>(x) * L.C + 64 * g;
-        if (full)
-          _mm512_storeu_si512(d, v);
-        else
-          _mm512_mask_storeu_epi8(d, tailMask, v);
+        requantizeStore(a0, a1, a2, a3, scale, zpOut, lo, hi,
+                        o + static_cast<std::size_t>(x) * L.C + 64 * g, full, tailMask);
       }
     }
   }
@@ -257,35 +276,6 @@ static void runRows(const Prepared& p, Prepared::Scratch& s, const std::int8_t* 
 
 // Direct variant: the quads are made in registers for every output (no quad rows in memory);
 // per thread a ring of three padded u8 rows; x outer, channel groups inner (L1-friendly).
-static void buildRow(const Prepared& p, std::uint8_t* row, const std::int8_t* in, int r) {
-  const Layer& L = *p.L;
-  const int cpad = p.cpad;
-  const __m512i padValue = _mm512_set1_epi8(static_cast<char>(L.zpIn ^ 0x80));
-  const __m512i flip = _mm512_set1_epi8(static_cast<char>(0x80));
-  if (r == 0 || r == L.H + 1) {
-    for (int x = 0; x < L.W + 2; ++x)
-      for (int g = 0; g < p.groups; ++g)
-        _mm512_storeu_si512(row + static_cast<std::size_t>(x) * cpad + 64 * g, padValue);
-    return;
-  }
-  const std::int8_t* src = in + static_cast<std::size_t>(r - 1) * L.W * L.C;
-  for (int g = 0; g < p.groups; ++g) {
-    _mm512_storeu_si512(row + 64 * g, padValue);
-    _mm512_storeu_si512(row + static_cast<std::size_t>(L.W + 1) * cpad + 64 * g, padValue);
-  }
-  const int tail = L.C - 64 * (p.groups - 1);
-  const __mmask64 tailMask = tail == 64 ? ~0ULL : ((1ULL << tail) - 1);
-  for (int x = 0; x < L.W; ++x) {
-    const std::int8_t* px = src + static_cast<std::size_t>(x) * L.C;
-    std::uint8_t* d = row + static_cast<std::size_t>(x + 1) * cpad;
-    for (int g = 0; g + 1 < p.groups; ++g)
-      _mm512_storeu_si512(d + 64 * g, _mm512_xor_si512(_mm512_loadu_si512(px + 64 * g), flip));
-    const int g = p.groups - 1;
-    _mm512_storeu_si512(d + 64 * g,
-                        _mm512_xor_si512(_mm512_maskz_loadu_epi8(tailMask, px + 64 * g), flip));
-  }
-}
-
 static inline void tapRow(const std::uint8_t* a0, int cpad, const __m512i* w, __m512i& a0c,
                           __m512i& a1c, __m512i& a2c, __m512i& a3c) {
   const __m512i zero = _mm512_setzero_si512();
@@ -309,11 +299,9 @@ static void runRowsDirect(const Prepared& p, Prepared::Scratch& s, const std::in
   if (s.row.size() < 3 * rowBytes)
     s.row.resize(3 * rowBytes);
   s.rowOf[0] = s.rowOf[1] = s.rowOf[2] = -1;
-  const __m512i zpOut = _mm512_set1_epi16(static_cast<short>(L.zpOut));
-  const __m512i lo = _mm512_set1_epi8(static_cast<char>(L.outMin));
-  const __m512i hi = _mm512_set1_epi8(static_cast<char>(L.outMax));
-  const int tail = L.C - 64 * (p.groups - 1);
-  const __mmask64 tailMask = tail == 64 ? ~0ULL : ((1ULL << tail) - 1);
+  const __m512i zpOut = p.zpOut.v, lo = p.lo.v, hi = p.hi.v;
+  const int tail = p.tail;
+  const __mmask64 tailMask = p.tailMask;
   const int cpad = p.cpad;
   for (int y = y0; y < y1; ++y) {
     const std::uint8_t* rows[3];
@@ -339,19 +327,9 @@ static void runRowsDirect(const Prepared& p, Prepared::Scratch& s, const std::in
         tapRow(rows[0] + off, cpad, wq, a0, a1, a2, a3);
         tapRow(rows[1] + off, cpad, wq + 4, a0, a1, a2, a3);
         tapRow(rows[2] + off, cpad, wq + 8, a0, a1, a2, a3);
-        const __m512i i0 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a0), sq[0]));
-        const __m512i i1 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a1), sq[1]));
-        const __m512i i2 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a2), sq[2]));
-        const __m512i i3 = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_cvtepi32_ps(a3), sq[3]));
-        const __m512i p01 = _mm512_adds_epi16(_mm512_packs_epi32(i0, i1), zpOut);
-        const __m512i p23 = _mm512_adds_epi16(_mm512_packs_epi32(i2, i3), zpOut);
-        __m512i v = _mm512_packs_epi16(p01, p23);
-        v = _mm512_min_epi8(_mm512_max_epi8(v, lo), hi);
-        std::int8_t* d = o + static_cast<std::size_t>(x) * L.C + 64 * g;
-        if (g + 1 < p.groups || tail == 64)
-          _mm512_storeu_si512(d, v);
-        else
-          _mm512_mask_storeu_epi8(d, tailMask, v);
+        requantizeStore(a0, a1, a2, a3, sq, zpOut, lo, hi,
+                        o + static_cast<std::size_t>(x) * L.C + 64 * g,
+                        g + 1 < p.groups || tail == 64, tailMask);
       }
     }
   }
