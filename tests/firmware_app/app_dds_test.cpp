@@ -22,6 +22,7 @@
 #include "dds_test_support.hpp"
 #include "loop_log.hpp"
 #include "state_format.hpp"
+#include "time_scale.hpp"
 
 namespace vp::app {
 namespace {
@@ -193,7 +194,9 @@ TEST(AppDds, ReplayLatencyAtTheReceiverIsPositiveAndMatchesTheAppsEndToEnd) {
       "latency at publish: min %.2f ms, median %.2f ms; app e2e median %.2f ms (%zu states)\n",
       static_cast<double>(sorted.front()) / 1e6, median_ms, e2eMedian_ms, sorted.size());
   EXPECT_GE(sorted.front(), 0) << "a state was published before its frame was captured";
-  EXPECT_NEAR(median_ms, e2eMedian_ms, 5.0);
+  // The two clocks stop a few steps apart (the publish, then the end of the loop's frame): 5 ms
+  // on the device; under an emulator those steps stretch, so the bound is scaled (time_scale.hpp).
+  EXPECT_NEAR(median_ms, e2eMedian_ms, 5.0 * test::timeScale());
 }
 
 }  // namespace
