@@ -11,10 +11,9 @@
 #include <set>
 #include <string>
 
-#include <unistd.h>
-
 #include "furniture_checks.hpp"
 #include "scene.hpp"
+#include "sim_render.hpp"
 #include "simulator.hpp"
 #include "traffic_walk.hpp"
 
@@ -139,18 +138,9 @@ TEST(RoadUsers, NoVehicleEverOverlapsOne) {
 // as furniture; the vehicles' ground truth is the seed's without them.
 TEST(RoadUsers, RenderedAsListedBackground) {
   const auto render = [](bool roadUsers, const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() /
-                         ("vp_sim_test_" + std::to_string(::getpid()) + "_road_users_" + name);
-    fs::remove_all(dir);
-    vp::sim::SimOptions o;
-    o.scene = SceneKind::Straight;
-    o.seed = 11;
+    const fs::path dir = vp::sim::testing::freshDir("road_users_" + name);
+    vp::sim::SimOptions o = vp::sim::testing::smallOptions(SceneKind::Straight, 11, dir, 480, 380);
     o.frames = 1;
-    o.outDir = dir.string();
-    o.width = 480;
-    o.height = 380;
-    o.png = true;
-    o.asmPath = std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml";
     o.roadUsers = roadUsers;
     vp::sim::Simulator sim;
     std::string why;

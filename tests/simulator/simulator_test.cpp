@@ -11,7 +11,6 @@
 #include <optional>
 #include <sstream>
 
-#include <unistd.h>
 #include <fstream>
 #include <map>
 #include <string>
@@ -21,6 +20,7 @@
 #include "io/dtm_file.hpp"
 #include "lifting/lifting.hpp"
 #include "sequence/recorded_sequence.hpp"
+#include "sim_render.hpp"
 #include "simulator.hpp"
 #include "traffic.hpp"
 
@@ -28,55 +28,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path freshDir(const std::string& name) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("vp_sim_test_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(dir);
-  return dir;
-}
-
-vp::sim::SimOptions smallOptions(vp::sim::SceneKind scene, std::uint64_t seed,
-                                 const fs::path& out) {
-  vp::sim::SimOptions o;
-  o.scene = scene;
-  o.seed = seed;
-  o.frames = 2;
-  o.outDir = out.string();
-  o.width = 240;  // fx scales with the width: same field of view as 2592 x 2048
-  o.height = 190;
-  o.png = true;
-  o.asmPath = std::string(VP_SOURCE_DIR) + "/models/asm/default_asm.yaml";
-  return o;
-}
-
-std::string readAll(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::string bytes(static_cast<std::size_t>(fs::file_size(p)), '\0');
-  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  return bytes;
-}
-
-std::map<std::string, std::string> dirContents(const fs::path& dir) {
-  std::map<std::string, std::string> files;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    if (e.is_regular_file()) {
-      files[fs::relative(e.path(), dir).string()] = readAll(e.path());
-    }
-  }
-  return files;
-}
-
-// Renders the options' sequence and returns its files (path relative to the folder -> bytes),
-// removing the folder.
-std::map<std::string, std::string> renderedFiles(const vp::sim::SimOptions& o) {
-  vp::sim::Simulator sim;
-  std::string why;
-  EXPECT_TRUE(sim.init(o, &why)) << why;
-  EXPECT_TRUE(sim.write(&why)) << why;
-  auto files = dirContents(o.outDir);
-  fs::remove_all(o.outDir);
-  return files;
-}
+using vp::sim::testing::dirContents;
+using vp::sim::testing::freshDir;
+using vp::sim::testing::readAll;
+using vp::sim::testing::renderedFiles;
+using vp::sim::testing::smallOptions;
 
 struct Recorded {
   std::vector<vp::sim::FrameOutput> frames;

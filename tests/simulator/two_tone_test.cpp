@@ -5,20 +5,15 @@
 
 #include <cmath>
 #include <cstddef>
-#include <filesystem>
-#include <fstream>
 #include <string>
 #include <utility>
 
-#include <unistd.h>
-
 #include "default_asm.hpp"
 #include "shape/vehicle_model.hpp"
+#include "sim_render.hpp"
 #include "simulator.hpp"
 #include "twin_cars.hpp"
 #include "vehicles.hpp"
-
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -82,33 +77,15 @@ TEST(TwoTone, AShareOfCarsAndTheSameScene) {
 
   // A whole sequence: the ground truth (cars, boxes, keypoints) is the seed's; frames differ.
   const auto run = [](double share, const std::string& name) {
-    const fs::path dir =
-        fs::temp_directory_path() / ("vp_two_tone_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(dir);
-    vp::sim::SimOptions o;
-    o.scene = vp::sim::SceneKind::Straight;
-    o.seed = 5;
+    vp::sim::SimOptions o = vp::sim::testing::smallOptions(
+        vp::sim::SceneKind::Straight, 5, vp::sim::testing::freshDir("two_tone_" + name), 320, 256);
     o.frames = 1;
-    o.outDir = dir.string();
-    o.width = 320;
-    o.height = 256;
-    o.png = true;
     o.twoToneShare = share;
-    vp::sim::Simulator sim;
-    std::string why;
-    EXPECT_TRUE(sim.init(o, &why)) << why;
-    EXPECT_TRUE(sim.write(&why)) << why;
-    const auto read = [](const fs::path& p) {
-      std::ifstream in(p, std::ios::binary);
-      std::string bytes(static_cast<std::size_t>(fs::file_size(p)), '\0');
-      in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-      return bytes;
-    };
-    const auto out = std::make_pair(read(dir / "ground_truth" / "objects.csv"),
-                                    read(dir / "frames" / "000000.png"));
+    const auto files = vp::sim::testing::renderedFiles(o);
+    const auto out =
+        std::make_pair(files.at("ground_truth/objects.csv"), files.at("frames/000000.png"));
     // The sequence says how it was made (its notes), and only when the option is on.
-    EXPECT_EQ(read(dir / "sequence.yaml").find("two-tone share") != std::string::npos, share > 0.0);
-    fs::remove_all(dir);
+    EXPECT_EQ(files.at("sequence.yaml").find("two-tone share") != std::string::npos, share > 0.0);
     return out;
   };
   const auto plain = run(0.0, "plain");
