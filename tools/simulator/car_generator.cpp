@@ -708,6 +708,117 @@ LargeVehicleMesh generateLargeVehicle(LargeVehicleKind kind, std::mt19937_64& rn
   return m;
 }
 
+namespace {
+
+// A closed box on the roof: x from xRear to xFront, y centreY +- halfWidth, z from the roof up.
+void addRoofBox(LargeVehicleMesh* m, double xFront, double xRear, double centreY, double halfWidth,
+                double roofZ, double height, SurfacePart part) {
+  BandedBody b = box(xFront, xRear, roofZ, roofZ + height, halfWidth, part);
+  b.centreY = centreY;
+  b.bottom = part;  // sits on the roof: its bottom is never seen
+  addBody(m, b);
+}
+
+// Seven-segment strokes of each digit (a, b, c, d, e, f, g: top, upper right, lower right,
+// bottom, lower left, upper left, middle).
+constexpr std::array<std::uint8_t, 10> kSegments = {0x3F, 0x06, 0x5B, 0x4F, 0x66,
+                                                    0x6D, 0x7D, 0x07, 0x7F, 0x6F};
+
+// One digit of height h and width w whose reading direction is +x (its "up" is +y), lower-left
+// corner at (x0, y0), strokes t wide, painted as thin dark boxes on the roof; with turned, every
+// stroke is turned by 180 deg about (cx, cy) (a number read from the other side).
+void addDigit(LargeVehicleMesh* m, int digit, double x0, double y0, double w, double h, double t,
+              double roofZ, bool turned, double cx, double cy) {
+  const double paint = 0.01;  // thick enough to win the depth test against the roof
+  const std::uint8_t segments = kSegments[static_cast<std::size_t>(digit)];
+  const double half = 0.5 * h;
+  struct Stroke {
+    double xa, xb, ya, yb;
+  };
+  const std::array<Stroke, 7> strokes = {{
+      {x0, x0 + w, y0 + h - t, y0 + h},                        // a: top
+      {x0 + w - t, x0 + w, y0 + half, y0 + h},                 // b: upper right
+      {x0 + w - t, x0 + w, y0, y0 + half},                     // c: lower right
+      {x0, x0 + w, y0, y0 + t},                                // d: bottom
+      {x0, x0 + t, y0, y0 + half},                             // e: lower left
+      {x0, x0 + t, y0 + half, y0 + h},                         // f: upper left
+      {x0, x0 + w, y0 + half - 0.5 * t, y0 + half + 0.5 * t},  // g: middle
+  }};
+  for (std::size_t i = 0; i < strokes.size(); ++i) {
+    if ((segments >> i) & 1U) {
+      Stroke k = strokes[i];
+      if (turned) {
+        k = {2.0 * cx - k.xb, 2.0 * cx - k.xa, 2.0 * cy - k.yb, 2.0 * cy - k.ya};
+      }
+      addRoofBox(m, k.xb, k.xa, 0.5 * (k.ya + k.yb), 0.5 * (k.yb - k.ya), roofZ, paint,
+                 SurfacePart::Underbody);
+    }
+  }
+}
+
+}  // namespace
+
+void addBusRoofDetails(LargeVehicleMesh* m, std::mt19937_64& rng) {
+  const double half = 0.5 * m->length_m;
+  const double roofZ = m->height_m;
+  const double halfWidth = 0.5 * m->width_m;
+  // The flat roof runs from about -half + 0.1 to half - 0.2 (buildBus's profile).
+  const double roofFront = half - 0.25;
+  const double roofRear = -half + 0.15;
+  // Which end carries the unit and which the number: either, as on real fleets.
+  const double unitEnd = uniform01(rng) < 0.7 ? -1.0 : 1.0;  // mostly over the rear engine
+  const double unitLength = uniform(rng, {2.2, 3.6});
+  const double unitHalfWidth = halfWidth * uniform(rng, {0.70, 0.85});
+  const double unitHeight = uniform(rng, {0.18, 0.30});
+  const bool unitInMiddle = uniform01(rng) < 0.25;
+  const double unitCentre =
+      unitInMiddle ? uniform(rng, {-1.0, 1.0}) : unitEnd * (half - 0.6 - 0.5 * unitLength);
+  addRoofBox(m, unitCentre + 0.5 * unitLength, unitCentre - 0.5 * unitLength, 0.0, unitHalfWidth,
+             roofZ, unitHeight, SurfacePart::Paint);
+  // Fans on the unit: a row of dark squares across it.
+  const int fans = 2 + static_cast<int>(uniform01(rng) * 3.0);  // 2..4
+  const double fanPitch = 1.8 * unitHalfWidth / fans;           // apart, not one dark bar
+  const double fan = fanPitch * uniform(rng, {0.45, 0.65});
+  const double fanX = unitCentre + unitEnd * uniform(rng, {0.0, 0.25}) * unitLength;
+  for (int i = 0; i < fans; ++i) {
+    const double y = fanPitch * (i + 0.5 - 0.5 * fans);
+    addRoofBox(m, fanX + 0.5 * fan, fanX - 0.5 * fan, y, 0.5 * fan, roofZ + unitHeight, 0.02,
+               SurfacePart::Underbody);
+  }
+  // Hatches on the centre line, away from the unit.
+  const int hatches = 2 + static_cast<int>(uniform01(rng) * 2.0);  // 2..3
+  const double hatch = uniform(rng, {0.55, 0.80});
+  const double hatchSpan = std::min(3.5, m->length_m - unitLength - 3.0);
+  const double hatchCentre = -unitEnd * uniform(rng, {0.5, 2.0});
+  for (int i = 0; i < hatches; ++i) {
+    const double x = hatchCentre + hatchSpan * ((i + 0.5) / hatches - 0.5);
+    if (std::abs(x - unitCentre) < 0.5 * unitLength + hatch) {
+      continue;  // under the unit
+    }
+    addRoofBox(m, x + 0.5 * hatch, x - 0.5 * hatch, 0.0, 0.5 * hatch, roofZ, 0.03,
+               SurfacePart::Underbody);
+  }
+  // The fleet number: large dark digits reading along the bus, at the end without the unit.
+  if (uniform01(rng) < 0.75) {
+    const int digits = uniform01(rng) < 0.5 ? 3 : 4;
+    const double h = m->width_m * uniform(rng, {0.45, 0.60});
+    const double w = 0.55 * h;
+    const double t = 0.18 * h;
+    const double gap = 0.25 * w;
+    const double total = digits * w + (digits - 1) * gap;
+    const double numberEnd = unitInMiddle ? unitEnd : -unitEnd;
+    const double inset = uniform(rng, {0.4, 1.2});
+    const double x0 = numberEnd > 0 ? roofFront - inset - total : roofRear + inset;
+    const double y0 = -0.5 * h + uniform(rng, {-0.1, 0.1}) * m->width_m;
+    const bool turned = uniform01(rng) < 0.5;  // read from either side
+    for (int i = 0; i < digits; ++i) {
+      const int digit = static_cast<int>(uniform01(rng) * 10.0) % 10;
+      addDigit(m, digit, x0 + i * (w + gap), y0, w, h, t, roofZ, turned, x0 + 0.5 * total,
+               y0 + 0.5 * h);
+    }
+  }
+}
+
 double meshVolume(std::span<const Eigen::Vector3d> vertices, std::span<const Triangle> triangles) {
   double sixVolume = 0.0;
   for (const Triangle& t : triangles) {

@@ -165,6 +165,14 @@ struct LargeVehicleMesh : BodyMesh {
 
 LargeVehicleMesh generateLargeVehicle(LargeVehicleKind kind, std::mt19937_64& rng);
 
+// Roof details of a bus or coach as real footage shows them from above (the plain roof of
+// generateLargeVehicle differs from a car's only by its length): a raised air-conditioning unit
+// at one end or in the middle, two or three dark hatches on the centre line, a row of dark fans
+// across the roof at one end and, on most, a fleet number of three or four digits painted large
+// and dark near one end. Each detail is a closed box standing on the roof; the vehicle's
+// length, width, height and wheels stay as they were. Draws only from rng.
+void addBusRoofDetails(LargeVehicleMesh* m, std::mt19937_64& rng);
+
 // --- Pickup trucks (light vehicles with an open load bed; no ASM) -------------------------
 //
 // A bonnet, a cab with windscreen and rear window, and behind it an open bed: a floor sunk

@@ -18,8 +18,8 @@ void usage(std::ostream& out) {
          "                   [--jpeg-quality Q | --png] [--threads N] [--supersampling 1..4]\n"
          "                   [--asm PATH] [--telemetry-noise] [--static-hover] [--instance-masks]\n"
          "                   [--two-tone-share 0..1] [--city-car-share 0..1] [--poles]\n"
-         "                   [--pickup-share 0..1] [--large-share 0..1] [--islands] "
-         "[--road-users]\n"
+         "                   [--pickup-share 0..1] [--large-share 0..1] [--bus-roof-share 0..1]\n"
+         "                   [--islands] [--road-users]\n"
          "                   [--help]\n"
          "Renders N frames at 10 Hz of a scene drawn from the seed (same seed: byte-identical\n"
          "output) into DIR as a recorded sequence with ground truth. See docs/simulator.md.\n";
@@ -112,6 +112,8 @@ int main(int argc, char** argv) {
       options.cityCarShare = number("--city-car-share", 0, 1);
     } else if (arg == "--pickup-share") {
       options.pickupShare = number("--pickup-share", 0, 1);
+    } else if (arg == "--bus-roof-share") {
+      options.busRoofShare = number("--bus-roof-share", 0, 1);
     } else if (arg == "--large-share") {
       options.largeVehicleShare = number("--large-share", 0, 1);
     } else if (arg == "--poles") {

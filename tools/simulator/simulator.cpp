@@ -211,7 +211,7 @@ bool Simulator::init(const SimOptions& options, std::string* why) {
     return false;
   }
   factory_ = std::make_unique<VehicleFactory>(asm_, options.twoToneShare, options.cityCarShare,
-                                              options.pickupShare);
+                                              options.pickupShare, options.busRoofShare);
   traffic_.init(scene_, *factory_, pathHalf, options.warmUpS, kFrameIntervalS, rng);
   sensor_.init(camera_, canvas_, sensorSpec_);
   renderer_.init(scene_, world_, lo, hi, rig_.altitude_m / rig_.intrinsics.fx_px,
@@ -357,6 +357,9 @@ std::string Simulator::summary() const {
   }
   if (options_.pickupShare > 0.0) {
     s << ", pickup share " << num(options_.pickupShare);
+  }
+  if (options_.busRoofShare > 0.0) {
+    s << ", bus-roof share " << num(options_.busRoofShare);
   }
   if (options_.largeVehicleShare) {
     s << ", large-vehicle share " << num(*options_.largeVehicleShare);

@@ -62,6 +62,10 @@ struct SimOptions {
   // Share of SUVs drawn as pickup trucks with an open bed (car_generator.hpp), 0..1; drawn from
   // each car's own shape like the two shares above. Their ground truth has no gamma or keypoints.
   double pickupShare = 0.0;
+  // Share of buses and coaches with roof details (car_generator.hpp addBusRoofDetails: an
+  // air-conditioning unit, hatches, fans, a fleet number), 0..1; drawn from each bus's own
+  // dimensions, so the scene and every other vehicle stay those of the seed.
+  double busRoofShare = 0.0;
   // Share of the vehicles entering the roads that are buses or trucks, 0..1, instead of the
   // scene's own draw (0-10 %); unset: the scene's. The scene itself is the same; the traffic
   // differs once a share is given (its draws follow the vehicles drawn).

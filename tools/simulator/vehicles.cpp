@@ -1,6 +1,7 @@
 #include "vehicles.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -365,11 +366,23 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {
   static const std::array<double, shape::kLargeVehicleKindCount> kShares = {0.35, 0.1, 0.1, 0.3,
                                                                             0.15};
   const auto kind = static_cast<shape::LargeVehicleKind>(rng.weighted(kShares));
-  const shape::LargeVehicleMesh mesh = shape::generateLargeVehicle(kind, rng.engine());
-  std::shared_ptr<VehicleModel> m = modelFromBody(mesh, shape::VehicleType::Large);
+  shape::LargeVehicleMesh mesh = shape::generateLargeVehicle(kind, rng.engine());
   const bool bus = kind == shape::LargeVehicleKind::CityBus ||
                    kind == shape::LargeVehicleKind::ArticulatedBus ||
                    kind == shape::LargeVehicleKind::Coach;
+  if (bus && busRoofShare_ > 0.0) {
+    // Its own stream from the bus's drawn dimensions, so that the scene's stream (and with it
+    // every other vehicle) stays the seed's.
+    std::uint64_t h = 0xcbf29ce484222325ULL;
+    for (const double v : {mesh.length_m, mesh.width_m, mesh.height_m, mesh.wheelRadius_m}) {
+      h = (h ^ std::bit_cast<std::uint64_t>(v)) * 0x100000001b3ULL;
+    }
+    Rng own(h);
+    if (own.chance(busRoofShare_)) {
+      shape::addBusRoofDetails(&mesh, own.engine());
+    }
+  }
+  std::shared_ptr<VehicleModel> m = modelFromBody(mesh, shape::VehicleType::Large);
   VehicleLook look = drawLook(rng);
   if (rng.chance(bus ? 0.5 : 0.7)) {
     look.paint = srgbToLinear(232, 232, 228);

@@ -102,12 +102,16 @@ class VehicleFactory {
   // same way: every other car, and the scene's draws, stay those of the seed.
   // pickupShare: share of SUVs drawn as pickup trucks with an open bed
   // (shape::generatePickup; type SUV, no keypoints, gamma unknown), drawn the same way.
+  // busRoofShare: share of buses and coaches with roof details (shape::addBusRoofDetails),
+  // drawn from a stream of the bus's own dimensions: the scene's draws stay the seed's.
   explicit VehicleFactory(const shape::ActiveShapeModel& asmModel, double twoToneShare = 0.0,
-                          double cityCarShare = 0.0, double pickupShare = 0.0)
+                          double cityCarShare = 0.0, double pickupShare = 0.0,
+                          double busRoofShare = 0.0)
       : asm_(&asmModel),
         twoToneShare_(twoToneShare),
         cityCarShare_(cityCarShare),
-        pickupShare_(pickupShare) {}
+        pickupShare_(pickupShare),
+        busRoofShare_(busRoofShare) {}
 
   // A car of the given type (one of the six ASM types) with gamma drawn from its prior.
   std::shared_ptr<const VehicleModel> makeCar(Rng& rng, shape::VehicleType type) const;
@@ -133,6 +137,7 @@ class VehicleFactory {
   double twoToneShare_ = 0.0;
   double cityCarShare_ = 0.0;
   double pickupShare_ = 0.0;
+  double busRoofShare_ = 0.0;
 };
 
 VehicleLook drawLook(Rng& rng);

@@ -1,0 +1,142 @@
+#!/usr/bin/python3
+"""Buses and trucks on real images with axis-aligned labels: boxed whole, in parts, or missed.
+
+A real set such as ``../shared/data/real/cats-madison`` (YOLO: ``images/``, ``labels/<stem>.txt``
+with ``class cx cy w h`` normalised) labels every vehicle as one class. Its long vehicles are
+found by size: a label whose long side is at least --min-length-m at the set's --gsd-m (8.5 m:
+longer than any car or van) is a bus or a truck. For each such label and the detections
+``vp_detect_images --images ROOT`` wrote for the set (docs/detections_file.md, the ``image``
+variant), with each detection's rotated box taken as its axis-aligned enclosing box clipped to
+the image:
+
+* **whole**: some detection overlaps the label with IoU >= --iou (0.5, the set's rule);
+* **parts**: none does, but at least one detection lies mostly (over half its area) inside the
+  label: the vehicle was boxed in pieces or with a box of the wrong size;
+* **missed**: neither.
+
+Prints the three counts (and --out writes them as JSON with one row per vehicle). The
+detections are not matched one to one here: the figure says how long vehicles are boxed, the
+set's precision and recall stay ``vp_evaluate``'s.
+
+  tools/detector/eval_large_real.py --root ../shared/data/real/cats-madison --gsd-m 0.047 \\
+      --detections dets.csv [--list split.json] [--out report.json]
+
+Run with Debian's Python (/usr/bin/python3).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from typing import Dict, List, Optional, Set
+
+import cv2
+import numpy as np
+
+if __package__ in (None, ""):
+    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from detector.datasets import DatasetError, read_yolo  # noqa: E402
+from detector.mine_negatives import enclosing_box, read_detections, yolo_pixel_boxes  # noqa: E402
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    iw = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
+    ih = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
+    inter = iw * ih
+    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
+    return inter / union if union > 0 else 0.0
+
+
+def _inside_share(det: np.ndarray, label: np.ndarray) -> float:
+    iw = max(0.0, min(det[2], label[2]) - max(det[0], label[0]))
+    ih = max(0.0, min(det[3], label[3]) - max(det[1], label[1]))
+    area = (det[2] - det[0]) * (det[3] - det[1])
+    return iw * ih / area if area > 0 else 0.0
+
+
+def classify(label: np.ndarray, dets: List[np.ndarray], iou: float) -> tuple:
+    """('whole' | 'parts' | 'missed', best IoU) of one label [x0, y0, x1, y1] against the
+    detections' clipped enclosing boxes."""
+    best = max((_iou(label, d) for d in dets), default=0.0)
+    if best >= iou:
+        return "whole", best
+    if any(_inside_share(d, label) > 0.5 for d in dets):
+        return "parts", best
+    return "missed", best
+
+
+def evaluate(root: str, detections: Dict, gsd_m: float, min_length_m: float, iou: float = 0.5,
+             stems: Optional[Set[str]] = None) -> dict:
+    counts = {"whole": 0, "parts": 0, "missed": 0}
+    rows = []
+    min_px = min_length_m / gsd_m
+    for sample in read_yolo(root):
+        stem = os.path.splitext(os.path.basename(sample.image_path))[0]
+        if stems is not None and stem not in stems:
+            continue
+        if not len(sample.boxes):
+            continue
+        image = cv2.imread(sample.image_path, cv2.IMREAD_UNCHANGED)
+        if image is None:
+            raise DatasetError(f"{sample.image_path}: cannot read the image")
+        height, width = image.shape[:2]
+        dets = [enclosing_box(b, width, height) for _, b in detections.get(stem, [])]
+        for box in yolo_pixel_boxes(sample.boxes, width, height):
+            length_px = max(box[2] - box[0], box[3] - box[1])
+            if length_px < min_px:
+                continue
+            kind, best = classify(box, dets, iou)
+            counts[kind] += 1
+            rows.append({"image": stem, "cx_px": float(box[0] + box[2]) / 2,
+                         "cy_px": float(box[1] + box[3]) / 2, "length_px": float(length_px),
+                         "result": kind, "best_iou": round(float(best), 3)})
+    return {"min_length_m": min_length_m, "gsd_m": gsd_m, "iou": iou,
+            "vehicles": sum(counts.values()), **counts, "rows": rows}
+
+
+def read_stems(path: str) -> Set[str]:
+    """The images named by a list: split.json's "val_stems" or one stem per line."""
+    with open(path) as f:
+        text = f.read()
+    if path.endswith(".json"):
+        try:
+            return set(json.loads(text)["val_stems"])
+        except (ValueError, KeyError) as e:
+            raise DatasetError(f"{path}: not a split file with \"val_stems\" ({e})") from None
+    return {line.strip() for line in text.splitlines() if line.strip()}
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--root", required=True, help="YOLO folder (images/, labels/)")
+    p.add_argument("--detections", required=True, help="vp_detect_images --images CSV")
+    p.add_argument("--gsd-m", type=float, required=True, help="metres per image pixel")
+    p.add_argument("--min-length-m", type=float, default=8.5,
+                   help="labels at least this long are buses and trucks (default 8.5)")
+    p.add_argument("--iou", type=float, default=0.5, help="IoU from which a box is whole")
+    p.add_argument("--list", default=None, help="only these images (split.json or stems)")
+    p.add_argument("--out", default=None, help="JSON report with one row per vehicle")
+    a = p.parse_args(argv)
+    if not a.gsd_m > 0 or not a.min_length_m > 0:
+        p.error("--gsd-m and --min-length-m must be > 0")
+    if not 0 < a.iou <= 1:
+        p.error("--iou must be in (0, 1]")
+    try:
+        report = evaluate(a.root, read_detections(a.detections, key="image"), a.gsd_m,
+                          a.min_length_m, a.iou, read_stems(a.list) if a.list else None)
+    except (DatasetError, OSError) as e:
+        print(f"eval_large_real: {e}", file=sys.stderr)
+        return 1
+    print(f"long vehicles (>= {a.min_length_m} m): {report['vehicles']}  whole {report['whole']}  "
+          f"parts {report['parts']}  missed {report['missed']}")
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump(report, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
