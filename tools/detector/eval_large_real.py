@@ -38,7 +38,8 @@ if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from detector.datasets import DatasetError, read_yolo  # noqa: E402
-from detector.mine_negatives import enclosing_box, read_detections, yolo_pixel_boxes  # noqa: E402
+from detector.mine_negatives import (enclosing_box, read_detections, read_stems,  # noqa: E402
+                                     yolo_pixel_boxes)
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> float:
@@ -96,18 +97,6 @@ def evaluate(root: str, detections: Dict, gsd_m: float, min_length_m: float, iou
             "vehicles": sum(counts.values()), **counts, "rows": rows}
 
 
-def read_stems(path: str) -> Set[str]:
-    """The images named by a list: split.json's "val_stems" or one stem per line."""
-    with open(path) as f:
-        text = f.read()
-    if path.endswith(".json"):
-        try:
-            return set(json.loads(text)["val_stems"])
-        except (ValueError, KeyError) as e:
-            raise DatasetError(f"{path}: not a split file with \"val_stems\" ({e})") from None
-    return {line.strip() for line in text.splitlines() if line.strip()}
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -126,7 +115,7 @@ def main(argv=None) -> int:
         p.error("--iou must be in (0, 1]")
     try:
         report = evaluate(a.root, read_detections(a.detections, key="image"), a.gsd_m,
-                          a.min_length_m, a.iou, read_stems(a.list) if a.list else None)
+                          a.min_length_m, a.iou, read_stems(a.list, "val_stems") if a.list else None)
     except (DatasetError, OSError) as e:
         print(f"eval_large_real: {e}", file=sys.stderr)
         return 1

@@ -235,17 +235,18 @@ def false_boxes_by_kind(seq_dirs: List[str], rows, min_visible_px: int) -> Dict[
     return out
 
 
-def read_stems(path: str):
-    """Image stems from a text file (one per line) or a split JSON (its train_stems)."""
+def read_stems(path: str, key: str = "train_stems"):
+    """Image stems from a text file (one per line) or a split JSON (its ``key`` list:
+    train_stems, or val_stems for the held-out images)."""
     import json
 
     with open(path) as f:
         text = f.read()
     if path.endswith(".json"):
         try:
-            return set(json.loads(text)["train_stems"])
+            return set(json.loads(text)[key])
         except (ValueError, KeyError):
-            raise DatasetError(f"{path}: not a split JSON with train_stems") from None
+            raise DatasetError(f"{path}: not a split JSON with {key}") from None
     return {line.strip() for line in text.splitlines() if line.strip()}
 
 
