@@ -29,41 +29,33 @@ import argparse
 import json
 import os
 import sys
-from typing import Dict, List, Optional, Set
+from typing import Dict, Optional, Set
 
-import cv2
 import numpy as np
 
 if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from detector.datasets import DatasetError, read_yolo  # noqa: E402
-from detector.mine_negatives import (enclosing_box, read_detections, read_stems,  # noqa: E402
-                                     yolo_pixel_boxes)
+from detector.datasets import DatasetError, file_stem, read_yolo  # noqa: E402
+from detector.mine_negatives import (aa_iou, enclosing_box, read_detections,  # noqa: E402
+                                     read_stems, yolo_pixel_boxes)
 
 
-def _iou(a: np.ndarray, b: np.ndarray) -> float:
-    iw = max(0.0, min(a[2], b[2]) - max(a[0], b[0]))
-    ih = max(0.0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = iw * ih
-    union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-    return inter / union if union > 0 else 0.0
+def _inside_share(dets: np.ndarray, label: np.ndarray) -> np.ndarray:
+    """Share of each detection box [x0, y0, x1, y1] (rows of ``dets``) inside the label."""
+    iw = np.clip(np.minimum(dets[:, 2], label[2]) - np.maximum(dets[:, 0], label[0]), 0, None)
+    ih = np.clip(np.minimum(dets[:, 3], label[3]) - np.maximum(dets[:, 1], label[1]), 0, None)
+    area = (dets[:, 2] - dets[:, 0]) * (dets[:, 3] - dets[:, 1])
+    return np.where(area > 0, iw * ih / np.maximum(area, 1e-9), 0.0)
 
 
-def _inside_share(det: np.ndarray, label: np.ndarray) -> float:
-    iw = max(0.0, min(det[2], label[2]) - max(det[0], label[0]))
-    ih = max(0.0, min(det[3], label[3]) - max(det[1], label[1]))
-    area = (det[2] - det[0]) * (det[3] - det[1])
-    return iw * ih / area if area > 0 else 0.0
-
-
-def classify(label: np.ndarray, dets: List[np.ndarray], iou: float) -> tuple:
+def classify(label: np.ndarray, dets: np.ndarray, iou: float) -> tuple:
     """('whole' | 'parts' | 'missed', best IoU) of one label [x0, y0, x1, y1] against the
-    detections' clipped enclosing boxes."""
-    best = max((_iou(label, d) for d in dets), default=0.0)
+    detections' clipped enclosing boxes ([N, 4])."""
+    best = float(aa_iou(label, dets).max(initial=0.0))
     if best >= iou:
         return "whole", best
-    if any(_inside_share(d, label) > 0.5 for d in dets):
+    if len(dets) and (_inside_share(dets, label) > 0.5).any():
         return "parts", best
     return "missed", best
 
@@ -74,16 +66,12 @@ def evaluate(root: str, detections: Dict, gsd_m: float, min_length_m: float, iou
     rows = []
     min_px = min_length_m / gsd_m
     for sample in read_yolo(root):
-        stem = os.path.splitext(os.path.basename(sample.image_path))[0]
-        if stems is not None and stem not in stems:
+        stem = file_stem(sample.image_path)
+        if (stems is not None and stem not in stems) or not len(sample.boxes):
             continue
-        if not len(sample.boxes):
-            continue
-        image = cv2.imread(sample.image_path, cv2.IMREAD_UNCHANGED)
-        if image is None:
-            raise DatasetError(f"{sample.image_path}: cannot read the image")
-        height, width = image.shape[:2]
-        dets = [enclosing_box(b, width, height) for _, b in detections.get(stem, [])]
+        height, width = sample.loaded().image.shape[:2]
+        dets = np.array([enclosing_box(b, width, height)
+                         for _, b in detections.get(stem, [])]).reshape(-1, 4)
         for box in yolo_pixel_boxes(sample.boxes, width, height):
             length_px = max(box[2] - box[0], box[3] - box[1])
             if length_px < min_px:

@@ -149,14 +149,28 @@ Eigen::Vector3f srgbToLinear(double r, double g, double b) {
   return {f(r), f(g), f(b)};
 }
 
-// FNV-1a over the bits of a car's first n shape parameters from the given basis: a seed that
-// belongs to the car itself, for draws that must leave the sequence stream untouched.
+// One FNV-1a step. The hashes below seed streams that belong to one vehicle, for draws that
+// must leave the sequence stream untouched.
+std::uint64_t fnvMix(std::uint64_t h, std::uint64_t bits) {
+  return (h ^ bits) * 1099511628211ULL;
+}
+
+// Over the bits of a car's first n shape parameters from the given basis.
 std::uint64_t shapeHash(std::uint64_t basis, const shape::ShapeParams& gamma, int n) {
   std::uint64_t h = basis;
   for (int s = 0; s < n; ++s) {
     std::uint32_t bits = 0;
     std::memcpy(&bits, &gamma.gamma[static_cast<std::size_t>(s)], sizeof bits);
-    h = (h ^ bits) * 1099511628211ULL;
+    h = fnvMix(h, bits);
+  }
+  return h;
+}
+
+// Over a bus's or truck's drawn dimensions.
+std::uint64_t dimensionsHash(const shape::BodyMesh& mesh) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (const double v : {mesh.length_m, mesh.width_m, mesh.height_m, mesh.wheelRadius_m}) {
+    h = fnvMix(h, std::bit_cast<std::uint64_t>(v));
   }
   return h;
 }
@@ -373,11 +387,7 @@ std::shared_ptr<const VehicleModel> VehicleFactory::makeLarge(Rng& rng) const {
   if (bus && busRoofShare_ > 0.0) {
     // Its own stream from the bus's drawn dimensions, so that the scene's stream (and with it
     // every other vehicle) stays the seed's.
-    std::uint64_t h = 0xcbf29ce484222325ULL;
-    for (const double v : {mesh.length_m, mesh.width_m, mesh.height_m, mesh.wheelRadius_m}) {
-      h = (h ^ std::bit_cast<std::uint64_t>(v)) * 0x100000001b3ULL;
-    }
-    Rng own(h);
+    Rng own(dimensionsHash(mesh));
     if (own.chance(busRoofShare_)) {
       shape::addBusRoofDetails(&mesh, own.engine());
     }
