@@ -73,6 +73,7 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   wiring.shapeModel = &asm_;
   wiring.site = config_.site.file.empty() ? nullptr : &site_;
   wiring.offRoad = config_.site.offRoad;
+  wiring.laneDirectionPrior = config_.site.laneDirectionPrior;
   wiring.traffic = &config_.traffic;
   wiring.dsm = config_.terrain.dsmPath.empty() ? nullptr : &dsm_;
   wiring.maxStructureHeight_m = config_.site.maxStructureHeight_m;

@@ -1,5 +1,6 @@
 #include "frame_step.hpp"
 
+#include <algorithm>
 #include <utility>
 
 #include "detection/detection.hpp"
@@ -55,6 +56,16 @@ bool FrameStep::init(const FrameStepWiring& wiring, std::unique_ptr<FramePercept
       return false;
     }
     surfaced_.resize(detection::kMaxDetectionsPerFrame);
+  }
+  if (!lanePrior_.init(wiring_.site, wiring_.laneDirectionPrior, perception_->detectionLifter(),
+                       &problem)) {
+    if (why) {
+      *why = problem;
+    }
+    return false;
+  }
+  if (lanePrior_.active()) {
+    laned_.resize(detection::kMaxDetectionsPerFrame);
   }
   sitePrior_.init(wiring_.site, wiring_.offRoad);
   if (sitePrior_.active()) {
@@ -313,6 +324,16 @@ void FrameStep::countObservations() {
 
 std::span<const perception::VehicleObservation> FrameStep::screenObservations() {
   std::span<const perception::VehicleObservation> observations = perception_->observations();
+  if (lanePrior_.active() && perception_->liftSummary().poseStatus == perception::LiftStatus::Ok) {
+    // First, on the DTM lift: the surface prior lifts a deck's vehicle again from its box.
+    const std::size_t n = std::min(observations.size(), laned_.size());
+    std::copy_n(observations.begin(), n, laned_.begin());
+    const std::span<perception::VehicleObservation> laned(laned_.data(), n);
+    wiring_.counters->laneTurned +=
+        lanePrior_.apply(laned, perception_->lifter(), perception_->liftSummary().cameraPose)
+            .turned;
+    observations = laned;
+  }
   if (surfacePrior_.active()) {
     const perception::SurfaceScreening surface =
         surfacePrior_.screen(perception_->liftSummary().cameraPose, observations, surfaced_);

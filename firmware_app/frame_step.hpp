@@ -48,6 +48,7 @@
 #include "loop_outputs.hpp"
 #include "loop_stats.hpp"
 #include "messages/messages.hpp"
+#include "perception/lane_prior.hpp"
 #include "perception/site_prior.hpp"
 #include "perception/surface_prior.hpp"
 #include "perception_stage.hpp"
@@ -101,6 +102,7 @@ struct FrameStepWiring {
   const site::Site* site = nullptr;                          // the site map (null: no scene prior)
   const traffic::TrafficAnalyzerOptions* traffic = nullptr;  // null: no traffic analysis
   site::OffRoadPolicy offRoad = site::OffRoadPolicy::Drop;
+  double laneDirectionPrior = site::SiteOptions{}.laneDirectionPrior;  // site.lane_direction_prior
   // The surface model (terrain.dsm_path; null: none) and its prior's options (site:), with the
   // perception stage's lift options (a deck's vehicle is lifted again as perception lifts).
   const terrain::TerrainModel* dsm = nullptr;
@@ -169,6 +171,8 @@ class FrameStep {
 
   // Per-frame arrays, sized at init.
   std::vector<tracking::WorldDetection> worldDetections_;
+  perception::LanePrior lanePrior_;
+  std::vector<perception::VehicleObservation> laned_;  // the lane prior's output (active)
   perception::SurfacePrior surfacePrior_;
   std::vector<perception::VehicleObservation> surfaced_;  // the surface prior's output (active)
   perception::SitePrior sitePrior_;

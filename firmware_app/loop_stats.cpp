@@ -65,7 +65,7 @@ int formatStatsLine(std::span<char> out, const LoopCounters& c, const LoopStats&
       out, &length,
       "stats: %.1f fps | frames in %llu processed %llu dropped %llu bad %llu | pose no %llu "
       "stale %llu invalid %llu | detections %llu lifted %llu outside_dtm %llu off_site %llu "
-      "on_deck %llu on_structure %llu | "
+      "on_deck %llu on_structure %llu lane_turned %llu | "
       "published "
       "%llu disposed %llu publish_errors %llu | ms median/p99:",
       period_s > 0.0 ? periodFrames / period_s : 0.0, static_cast<unsigned long long>(c.framesIn),
@@ -76,6 +76,7 @@ int formatStatsLine(std::span<char> out, const LoopCounters& c, const LoopStats&
       static_cast<unsigned long long>(c.detections), static_cast<unsigned long long>(c.lifted),
       static_cast<unsigned long long>(c.outsideDtm), static_cast<unsigned long long>(c.offSite),
       static_cast<unsigned long long>(c.onDeck), static_cast<unsigned long long>(c.onStructure),
+      static_cast<unsigned long long>(c.laneTurned),
       static_cast<unsigned long long>(c.statesPublished),
       static_cast<unsigned long long>(c.tracksDisposed),
       static_cast<unsigned long long>(c.publishErrors));
@@ -107,27 +108,28 @@ int formatSummaryLine(std::span<char> out, const LoopCounters& c, const LoopStat
   }
   out[0] = '\0';
   int length = 0;
-  append(out, &length,
-         "summary: wall_s=%.3f fps=%.2f frames_in=%llu processed=%llu dropped=%llu bad=%llu "
-         "no_pose=%llu stale_pose=%llu invalid_pose=%llu pipeline_errors=%llu detections=%llu "
-         "lifted=%llu outside_dtm=%llu off_site=%llu on_deck=%llu on_structure=%llu "
-         "states_published=%llu tracks_disposed=%llu "
-         "publish_errors=%llu output_errors=%llu",
-         wall_s, wall_s > 0.0 ? static_cast<double>(c.framesProcessed) / wall_s : 0.0,
-         static_cast<unsigned long long>(c.framesIn),
-         static_cast<unsigned long long>(c.framesProcessed),
-         static_cast<unsigned long long>(c.framesDropped),
-         static_cast<unsigned long long>(c.badFrames), static_cast<unsigned long long>(c.noPose),
-         static_cast<unsigned long long>(c.stalePose),
-         static_cast<unsigned long long>(c.invalidPose),
-         static_cast<unsigned long long>(c.pipelineErrors),
-         static_cast<unsigned long long>(c.detections), static_cast<unsigned long long>(c.lifted),
-         static_cast<unsigned long long>(c.outsideDtm), static_cast<unsigned long long>(c.offSite),
-         static_cast<unsigned long long>(c.onDeck), static_cast<unsigned long long>(c.onStructure),
-         static_cast<unsigned long long>(c.statesPublished),
-         static_cast<unsigned long long>(c.tracksDisposed),
-         static_cast<unsigned long long>(c.publishErrors),
-         static_cast<unsigned long long>(c.outputErrors));
+  append(
+      out, &length,
+      "summary: wall_s=%.3f fps=%.2f frames_in=%llu processed=%llu dropped=%llu bad=%llu "
+      "no_pose=%llu stale_pose=%llu invalid_pose=%llu pipeline_errors=%llu detections=%llu "
+      "lifted=%llu outside_dtm=%llu off_site=%llu on_deck=%llu on_structure=%llu lane_turned=%llu "
+      "states_published=%llu tracks_disposed=%llu "
+      "publish_errors=%llu output_errors=%llu",
+      wall_s, wall_s > 0.0 ? static_cast<double>(c.framesProcessed) / wall_s : 0.0,
+      static_cast<unsigned long long>(c.framesIn),
+      static_cast<unsigned long long>(c.framesProcessed),
+      static_cast<unsigned long long>(c.framesDropped),
+      static_cast<unsigned long long>(c.badFrames), static_cast<unsigned long long>(c.noPose),
+      static_cast<unsigned long long>(c.stalePose), static_cast<unsigned long long>(c.invalidPose),
+      static_cast<unsigned long long>(c.pipelineErrors),
+      static_cast<unsigned long long>(c.detections), static_cast<unsigned long long>(c.lifted),
+      static_cast<unsigned long long>(c.outsideDtm), static_cast<unsigned long long>(c.offSite),
+      static_cast<unsigned long long>(c.onDeck), static_cast<unsigned long long>(c.onStructure),
+      static_cast<unsigned long long>(c.laneTurned),
+      static_cast<unsigned long long>(c.statesPublished),
+      static_cast<unsigned long long>(c.tracksDisposed),
+      static_cast<unsigned long long>(c.publishErrors),
+      static_cast<unsigned long long>(c.outputErrors));
   // Pose samples, not frames: what the telemetry delivered and what was refused (by the link's
   // or the pose buffer's checks, docs/telemetry.md).
   append(out, &length, " telemetry_samples=%llu telemetry_rejected=%llu",

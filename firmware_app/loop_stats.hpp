@@ -54,6 +54,9 @@ struct LoopCounters {
   // drivable or parking area marks, and those on a structure no such area marks (a roof).
   std::uint64_t onDeck = 0;
   std::uint64_t onStructure = 0;
+  // With a site's lanes (site.lane_direction_prior): lifted observations turned round to face
+  // the way of the lane they stand in.
+  std::uint64_t laneTurned = 0;
   std::uint64_t statesPublished = 0;
   std::uint64_t tracksDisposed = 0;
   std::uint64_t publishErrors = 0;

@@ -35,6 +35,9 @@ class FramePerception {
   // The frame the observations' pixels refer to, and the Lifter on its camera (annotation).
   virtual const cv::Mat& correctedFrame() const = 0;
   virtual const lifting::Lifter& lifter() const = 0;
+  // The DetectionLifter the observations were lifted with (the lane prior lifts a turned one
+  // again); null where the stage has none (the tests' injecting stages).
+  virtual const perception::DetectionLifter* detectionLifter() const { return nullptr; }
   virtual const char* modelId() const = 0;  // for the drone status, e.g. "detector_int8"
   // Working px per frame px of the last frame and the GSD (m/px) at its image centre that chose
   // it (perception.working_gsd_m); 0 where the stage has none (the tests' injecting stages).
@@ -82,6 +85,9 @@ class PipelinePerception final : public FramePerception {
   const char* lastError() const override { return pipeline_.lastError(); }
   const cv::Mat& correctedFrame() const override { return pipeline_.correctedFrame(); }
   const lifting::Lifter& lifter() const override { return pipeline_.lifter(); }
+  const perception::DetectionLifter* detectionLifter() const override {
+    return &pipeline_.detectionLifter();
+  }
   const char* modelId() const override { return modelId_.c_str(); }
   double workingScale() const override { return pipeline_.workingScale(); }
   double frameGsd_m() const override { return pipeline_.frameGsd_m(); }

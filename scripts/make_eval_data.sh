@@ -32,7 +32,8 @@ sim_val3_full 9600 40 4  2592x2048  detector held-out, a third set of the second
 sim_val_ru    9700 40 4  2592x2048  detector held-out with motorbikes, bicycles and pedestrians (false boxes on road users)
 sim_val_ru_plain 9700 40 4  2592x2048  the same seeds without them (what the road users change)
 sim_val_tilt42 9800 20 4  2592x2048  detector held-out seen obliquely: tilt 42 deg from nadir at 90 m
-sim_val_nadir 9800 20 4  2592x2048  the same seeds straight down at 90 m (what the tilt changes)"
+sim_val_nadir 9800 20 4  2592x2048  the same seeds straight down at 90 m (what the tilt changes)
+sim_val4_full 9900 40 4  2592x2048  detector held-out, a fourth set of the second's size (the lane prior's confirmatory test)"
 
 # vp_simulate options of a set beyond the defaults (make_sim_data.sh's SIM_ARGS).
 set_args() {

@@ -69,7 +69,7 @@ set +e
 "$root/scripts/make_eval_data.sh" "$work/sets" no_such_set 2> "$work/err"; rc=$?
 set -e
 [[ $rc -eq 2 ]] && grep -q "no set 'no_such_set'" "$work/err" || fail "unknown set: rc $rc"
-[[ $("$root/scripts/make_eval_data.sh" --list | tail -n +2 | wc -l) -eq 18 ]] || fail "--list"
+[[ $("$root/scripts/make_eval_data.sh" --list | tail -n +2 | wc -l) -eq 19 ]] || fail "--list"
 # The list is read whole first: `grep -q` on a pipe closes it at the first match, and under
 # pipefail the writer's SIGPIPE would fail the check now and then.
 sets=$("$root/scripts/make_eval_data.sh" --list)
@@ -77,6 +77,7 @@ grep -q "^trk_val3 *9300-9305 *60" <<< "$sets" || fail "trk_val3 seeds"
 grep -q "^sim_val_full *9000-9012 *4 *2592x2048" <<< "$sets" || fail "sim_val_full seeds and size"
 grep -q "^sim_val_pk *9500-9512 *4 *2592x2048" <<< "$sets" || fail "sim_val_pk seeds and size"
 grep -q 'sim_val_pk) echo "--pickup-share 1"' "$root/scripts/make_eval_data.sh" || fail "sim_val_pk options"
+grep -q "^sim_val4_full *9900-9939 *4 *2592x2048" <<< "$sets" || fail "sim_val4_full seeds and size"
 grep -q "^sim_val_ru_plain *9700-9739 *4 *2592x2048" <<< "$sets" || fail "sim_val_ru_plain seeds and size"
 grep -q 'sim_val_ru) echo "--road-users"' "$root/scripts/make_eval_data.sh" || fail "sim_val_ru options"
 grep -q 'sim_val_tilt42) echo "--tilt-deg 42 --altitude-m 90"' "$root/scripts/make_eval_data.sh" || fail "sim_val_tilt42 options"

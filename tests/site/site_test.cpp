@@ -2,6 +2,7 @@
 // conversion to the world frame and the point-in-area queries.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -267,6 +268,58 @@ TEST(SiteQueries, PointInPolygonAndPlacement) {
   EXPECT_EQ(site.classify({45.0, 0.0}), Placement::Excluded) << "the roof over the road";
   EXPECT_EQ(site.classify({0.0, 20.0}), Placement::OffRoad);
   EXPECT_EQ(site.classify({230.0, 30.0}), Placement::OffRoad);
+}
+
+}  // namespace
+}  // namespace vp::site
+
+namespace vp::site {
+namespace {
+
+// placeOnLane(): the nearest point of a lane's centre line, its arc length and direction, and
+// whether the point lies alongside the lane or beyond one of its ends.
+TEST(SitePlaceOnLane, NearestPointAlongAndBetweenTheEnds) {
+  Site site("lanes.geojson");
+  Feature lane;
+  lane.kind = FeatureKind::Lane;
+  lane.id = "l";
+  // East 10 m, a repeated vertex, then north 5 m.
+  const std::vector<Eigen::Vector2d> line = {{0.0, 0.0}, {10.0, 0.0}, {10.0, 0.0}, {10.0, 5.0}};
+  site.append(lane, line);
+  Feature area;
+  area.kind = FeatureKind::Drivable;
+  area.id = "a";
+  const std::vector<Eigen::Vector2d> ring = {{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}};
+  site.append(area, ring);
+  const Feature& l = site.features()[0];
+
+  LanePlace p = site.placeOnLane(l, {4.0, 1.0});
+  EXPECT_NEAR(p.distance_m, 1.0, 1e-12);
+  EXPECT_NEAR(p.along_m, 4.0, 1e-12);
+  EXPECT_NEAR(p.direction_rad, 0.0, 1e-12);
+  EXPECT_TRUE(p.betweenEnds);
+
+  p = site.placeOnLane(l, {11.0, 3.0});  // beside the second segment
+  EXPECT_NEAR(p.distance_m, 1.0, 1e-12);
+  EXPECT_NEAR(p.along_m, 13.0, 1e-12);
+  EXPECT_NEAR(p.direction_rad, 0.5 * 3.141592653589793, 1e-12);
+  EXPECT_TRUE(p.betweenEnds);
+
+  p = site.placeOnLane(l, {-1.0, 0.5});  // before the start
+  EXPECT_NEAR(p.distance_m, std::hypot(1.0, 0.5), 1e-12);
+  EXPECT_NEAR(p.along_m, 0.0, 1e-12);
+  EXPECT_FALSE(p.betweenEnds);
+
+  p = site.placeOnLane(l, {10.5, 6.0});  // beyond the end
+  EXPECT_NEAR(p.along_m, 15.0, 1e-12);
+  EXPECT_FALSE(p.betweenEnds);
+
+  p = site.placeOnLane(l, {11.0, -1.0});  // outside the corner: nearest is the joint, inside
+  EXPECT_NEAR(p.distance_m, std::sqrt(2.0), 1e-12);
+  EXPECT_TRUE(p.betweenEnds);
+
+  // Not a lane: infinitely far.
+  EXPECT_TRUE(std::isinf(site.placeOnLane(site.features()[1], {0.5, 0.5}).distance_m));
 }
 
 }  // namespace

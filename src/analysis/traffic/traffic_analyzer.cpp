@@ -94,10 +94,6 @@ bool TrafficAnalyzer::init(const site::Site& site, const TrafficAnalyzerOptions&
   options_ = options;
   site_ = site;
   gateCount_ = zoneCount_ = laneCount_ = 0;
-  segStart_.clear();
-  segDir_.clear();
-  segLength_.clear();
-  segAlong_.clear();
   std::vector<Gate> counterGates;
   for (const site::Feature& feature : site_.features()) {
     const std::span<const Eigen::Vector2d> v = site_.vertices(feature);
@@ -114,7 +110,6 @@ bool TrafficAnalyzer::init(const site::Site& site, const TrafficAnalyzerOptions&
     } else if (feature.kind == site::FeatureKind::Lane) {
       LaneGeometry& g = laneGeometry_[laneCount_];
       g = LaneGeometry{};
-      g.first = static_cast<std::uint32_t>(segStart_.size());
       g.halfWidth_m = 0.5 * feature.width_m;
       if (!(feature.width_m > 0.0)) {
         return fail(name + ": width_m must be > 0");
@@ -125,14 +120,9 @@ bool TrafficAnalyzer::init(const site::Site& site, const TrafficAnalyzerOptions&
         if (!(length_m > 1e-6)) {
           continue;  // a repeated position
         }
-        segStart_.push_back(v[i]);
-        segDir_.push_back(d / length_m);
-        segLength_.push_back(length_m);
-        segAlong_.push_back(g.length_m);
         g.length_m += length_m;
-        ++g.count;
       }
-      if (g.count == 0) {
+      if (g.length_m == 0.0) {
         return fail(name + ": the lane has no length");
       }
       lanes_[laneCount_++] = &feature;
@@ -191,23 +181,12 @@ bool TrafficAnalyzer::init(const site::Site& site, const TrafficAnalyzerOptions&
 
 TrafficAnalyzer::LanePlace TrafficAnalyzer::placeOnLane(std::size_t lane,
                                                         const Eigen::Vector2d& point_m) const {
-  LanePlace best;
-  best.distance_m = std::numeric_limits<double>::infinity();
   if (lane >= laneCount_) {
-    return best;
+    LanePlace none;
+    none.distance_m = std::numeric_limits<double>::infinity();
+    return none;
   }
-  const LaneGeometry& g = laneGeometry_[lane];
-  for (std::uint32_t s = g.first; s < g.first + g.count; ++s) {
-    const Eigen::Vector2d rel = point_m - segStart_[s];
-    const double t = std::clamp(rel.dot(segDir_[s]), 0.0, segLength_[s]);
-    const double distance_m = (rel - t * segDir_[s]).norm();
-    if (distance_m < best.distance_m) {
-      best.distance_m = distance_m;
-      best.along_m = segAlong_[s] + t;
-      best.direction_rad = std::atan2(segDir_[s].y(), segDir_[s].x());
-    }
-  }
-  return best;
+  return site_.placeOnLane(*lanes_[lane], point_m);
 }
 
 double TrafficAnalyzer::laneLength_m(std::size_t lane) const {

@@ -110,11 +110,7 @@ class TrafficAnalyzer {
   std::span<const site::Feature* const> lanes() const { return {lanes_.data(), laneCount_}; }
 
   // Lane geometry helper (also for tools): where a point lies relative to lane index l.
-  struct LanePlace {
-    double distance_m = 0.0;     // from the polyline
-    double along_m = 0.0;        // arc length of the nearest point from the lane's start
-    double direction_rad = 0.0;  // of the nearest segment, counter-clockwise from east
-  };
+  using LanePlace = site::LanePlace;
   LanePlace placeOnLane(std::size_t lane, const Eigen::Vector2d& point_m) const;
   double laneLength_m(std::size_t lane) const;
 
@@ -152,8 +148,6 @@ class TrafficAnalyzer {
     double dwellMax_s = 0.0;
   };
   struct LaneGeometry {
-    std::uint32_t first = 0;  // into segStart_/segDir_/segLength_/segAlong_
-    std::uint32_t count = 0;  // segments
     double halfWidth_m = 1.75;
     double length_m = 0.0;
     std::int16_t queueZone = -1;
@@ -181,10 +175,6 @@ class TrafficAnalyzer {
   std::array<const site::Feature*, kMaxReportLanes> lanes_{};
   std::array<LaneGeometry, kMaxReportLanes> laneGeometry_{};
   std::size_t laneCount_ = 0;
-  std::vector<Eigen::Vector2d> segStart_;
-  std::vector<Eigen::Vector2d> segDir_;  // unit
-  std::vector<double> segLength_;
-  std::vector<double> segAlong_;  // arc length at the segment's start
 
   GateCounter counter_;
   std::vector<Slot> slots_;

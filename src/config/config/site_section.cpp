@@ -27,6 +27,10 @@ site::SiteOptions readSite(MapReader section, const std::string& baseDir) {
                      d.maxStructureHeight_m);
   s.onStructure = section.choice<site::OffRoadPolicy>("on_structure", site::offRoadPolicyFromString,
                                                       kOffRoadNames, d.onStructure);
+  s.laneDirectionPrior =
+      section.number("lane_direction_prior",
+                     Range::closed(site::kMinLaneDirectionPrior, site::kMaxLaneDirectionPrior),
+                     d.laneDirectionPrior);
   section.warnUnknownKeys();
   return s;
 }

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <string_view>
@@ -16,6 +17,9 @@
 
 namespace vp::site {
 namespace {
+
+// A lane's vertices closer than this are one position (no direction between them), m.
+constexpr double kMinSegment_m = 1e-6;
 
 constexpr std::array<FeatureKind, 6> kKinds = {FeatureKind::Drivable,  FeatureKind::Parking,
                                                FeatureKind::Exclusion, FeatureKind::Lane,
@@ -448,6 +452,44 @@ bool Site::contains(const Feature& feature, const Eigen::Vector2d& p) const {
     }
   }
   return inside;
+}
+
+LanePlace Site::placeOnLane(const Feature& lane, const Eigen::Vector2d& point_m) const {
+  LanePlace best;
+  best.distance_m = std::numeric_limits<double>::infinity();
+  if (lane.kind != FeatureKind::Lane) {
+    return best;
+  }
+  const std::span<const Eigen::Vector2d> line = vertices(lane);
+  double along_m = 0.0;
+  std::size_t last = 0;  // the last segment of non-zero length
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+    if ((line[i + 1] - line[i]).norm() > kMinSegment_m) {
+      last = i;
+    }
+  }
+  bool first = true;
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+    const Eigen::Vector2d d = line[i + 1] - line[i];
+    const double length_m = d.norm();
+    if (!(length_m > kMinSegment_m)) {
+      continue;  // a repeated position
+    }
+    const Eigen::Vector2d dir = d / length_m;
+    const Eigen::Vector2d rel = point_m - line[i];
+    const double raw = rel.dot(dir);
+    const double t = std::clamp(raw, 0.0, length_m);
+    const double distance_m = (rel - t * dir).norm();
+    if (distance_m < best.distance_m) {
+      best.distance_m = distance_m;
+      best.along_m = along_m + t;
+      best.direction_rad = std::atan2(dir.y(), dir.x());
+      best.betweenEnds = !(first && raw < 0.0) && !(i == last && raw > length_m);
+    }
+    along_m += length_m;
+    first = false;
+  }
+  return best;
 }
 
 Placement Site::classify(const Eigen::Vector2d& point_m) const {

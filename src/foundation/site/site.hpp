@@ -13,9 +13,9 @@
 // zone's lane that is not a lane of the file, or a site without a drivable or parking area is
 // refused, the message naming the file, the feature (index and id, line) and the problem. Every
 // vertex is converted once to the world ENU frame (geodesy::LocalFrame, east/north in metres).
-// After loading, a Site is immutable: its queries (contains(), classify()) are const, never
-// allocate and never throw, so the loop may call them per detection; it is safe to share read-only
-// between threads.
+// After loading, a Site is immutable: its queries (contains(), classify(), placeOnLane()) are
+// const, never allocate and never throw, so the loop may call them per detection; it is safe to
+// share read-only between threads.
 #pragma once
 
 #include <cstddef>
@@ -80,6 +80,10 @@ std::optional<OffRoadPolicy> offRoadPolicyFromString(const std::string& text);
 inline constexpr double kMinStructureHeight_m = 0.5;
 inline constexpr double kMaxStructureHeight_m = 50.0;
 
+// Range of SiteOptions::laneDirectionPrior.
+inline constexpr double kMinLaneDirectionPrior = 0.5;
+inline constexpr double kMaxLaneDirectionPrior = 1.0;
+
 // The `site:` section of the configuration (docs/site_map.md).
 struct SiteOptions {
   std::string file;  // the site file, absolute after loading; empty: none
@@ -90,6 +94,20 @@ struct SiteOptions {
   // a car's height and the surface model's noise, below a storey. [0.5, 50] m.
   double maxStructureHeight_m = 2.5;
   OffRoadPolicy onStructure = OffRoadPolicy::Drop;  // what is done with vehicles on a roof
+  // The probability that a vehicle standing in a lane faces the lane's driving direction: the
+  // prior the lanes put on a detection's front/back (perception/lane_prior.hpp). Wrong-way
+  // driving is rare; 0.5 says nothing (off). [0.5, 1].
+  double laneDirectionPrior = 0.99;
+};
+
+// Where a point lies relative to a lane (a LineString in its driving direction): the nearest
+// point of its centre line.
+struct LanePlace {
+  double distance_m = 0.0;     // from the centre line (infinity: not a lane)
+  double along_m = 0.0;        // arc length of the nearest point from the lane's start
+  double direction_rad = 0.0;  // of the nearest segment, ENU, counter-clockwise from east
+  bool betweenEnds = false;    // the nearest point is neither the lane's first nor last vertex
+                               // reached from beyond it (the point lies alongside the lane)
 };
 
 class Site {
@@ -113,6 +131,9 @@ class Site {
   // line feature.
   bool contains(const Feature& feature, const Eigen::Vector2d& point_m) const;
   Placement classify(const Eigen::Vector2d& point_m) const;
+  // The nearest point of a lane's centre line to point_m (segments of zero length skipped; on a
+  // tie the first segment). distance_m is infinite for a feature that is not a lane.
+  LanePlace placeOnLane(const Feature& lane, const Eigen::Vector2d& point_m) const;
 
  private:
   std::string sourceName_;

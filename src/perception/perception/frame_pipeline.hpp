@@ -183,6 +183,7 @@ class FramePipeline {
   // refer to; for annotation) and the Lifter on its camera.
   const cv::Mat& correctedFrame() const { return corrected_; }
   const lifting::Lifter& lifter() const { return lifter_; }
+  const DetectionLifter& detectionLifter() const { return detectionLifter_; }
   const char* lastError() const { return lastError_.data(); }
 
  private:
