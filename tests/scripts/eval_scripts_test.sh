@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The evaluation scripts end to end on a tiny simulated sequence (8 frames, 648 x 512):
-# scripts/eval_detector.sh, scripts/eval_tracking.sh and scripts/eval_traffic.sh run the real
+# scripts/eval_detector.sh, scripts/eval_tracking.sh, scripts/eval_traffic.sh and scripts/eval_real.sh run the real
 # binaries and leave reports with the measures the docs quote; scripts/make_eval_data.sh knows its sets and
 # refuses unknown ones; bad arguments exit 2 with a message.
 #   tests/scripts/eval_scripts_test.sh BUILD_DIR
@@ -35,6 +35,39 @@ grep -q "^# source: .* working_scale 0.5" "$work/photos.csv" || fail "--gsd-m 0.
 "$build/tools/detect_images/vp_detect_images" --images "$work/photos" --gsd-m 0.06 \
   --working-scale 0.3 --out "$work/photos.csv" > /dev/null 2>&1 || fail "vp_detect_images --working-scale"
 grep -q "^# source: .* working_scale 0.3" "$work/photos.csv" || fail "--working-scale 0.3 not kept"
+
+# Real footage across working scales: a stand-in for bev-intersection-de (the sequence's first
+# frame, its vehicles as rotated labels) swept at three scales; one line per scale, then the mean,
+# min and max of each figure.
+mkdir -p "$work/real/bev-intersection-de/images" "$work/real/bev-intersection-de/labels"
+first=$(ls "$seq/frames" | head -1)
+cp "$seq/frames/$first" "$work/real/bev-intersection-de/images/"
+/usr/bin/python3 - "$seq/ground_truth/objects.csv" "$work/real/bev-intersection-de/labels/${first%.*}.txt" <<'PY'
+import csv, sys
+rows = [r for r in csv.DictReader(open(sys.argv[1])) if r["frame_id"] == "0"]
+with open(sys.argv[2], "w") as f:
+    for r in rows:
+        f.write(f"car {r['box_cx_px']} {r['box_cy_px']} {r['box_length_px']} {r['box_width_px']} "
+                f"{r['box_angle_rad']}\n")
+PY
+"$root/scripts/eval_real.sh" --build "$build" --real "$work/real" --steps 1 "$work/real_out" \
+  > "$work/real.out" || fail "eval_real.sh failed"
+[[ $(grep -c "^bev 0\.5" "$work/real_out/summary.txt") -eq 3 ]] || fail "eval_real.sh: not three scales"
+/usr/bin/python3 - "$work/real_out/summary.txt" <<'PY' || fail "eval_real.sh summary"
+import re, sys
+text = open(sys.argv[1]).read()
+scales = [float(m) for m in re.findall(r"^bev (0\.\d+) P", text, re.M)]
+assert abs(scales[1] - 0.567) < 1e-9 and abs(scales[0] - 0.567 * 0.996) < 1e-5, scales
+p = [float(v) for v in re.findall(r"^bev \S+ P ([0-9.]+)", text, re.M)]
+m = re.search(r"^bev P: mean ([0-9.]+)  min ([0-9.]+)  max ([0-9.]+)  \(3 scales\)", text, re.M)
+assert m, text
+mean, lo, hi = map(float, m.groups())
+assert lo == min(p) and hi == max(p) and abs(mean - sum(p) / 3) < 1e-3, (p, m.groups())
+PY
+set +e
+"$root/scripts/eval_real.sh" --steps x "$work/real_bad" 2> "$work/err"; rc=$?
+set -e
+[[ $rc -eq 2 ]] && grep -q "not a whole number" "$work/err" || fail "eval_real.sh --steps x: rc $rc"
 
 # Tracking: the app per sequence, then the tracking section with the largest speed errors.
 "$root/scripts/eval_tracking.sh" --build "$build" --set perception.working_scale=1.0 \
