@@ -320,6 +320,10 @@ TEST(SitePlaceOnLane, NearestPointAlongAndBetweenTheEnds) {
 
   // Not a lane: infinitely far.
   EXPECT_TRUE(std::isinf(site.placeOnLane(site.features()[1], {0.5, 0.5}).distance_m));
+
+  // Its length: the segments', the repeated vertex adding nothing; 0 for an area.
+  EXPECT_NEAR(site.laneLength_m(l), 15.0, 1e-12);
+  EXPECT_EQ(site.laneLength_m(site.features()[1]), 0.0);
 }
 
 }  // namespace

@@ -114,14 +114,7 @@ bool TrafficAnalyzer::init(const site::Site& site, const TrafficAnalyzerOptions&
       if (!(feature.width_m > 0.0)) {
         return fail(name + ": width_m must be > 0");
       }
-      for (std::size_t i = 0; i + 1 < v.size(); ++i) {
-        const Eigen::Vector2d d = v[i + 1] - v[i];
-        const double length_m = d.norm();
-        if (!(length_m > 1e-6)) {
-          continue;  // a repeated position
-        }
-        g.length_m += length_m;
-      }
+      g.length_m = site_.laneLength_m(feature);
       if (g.length_m == 0.0) {
         return fail(name + ": the lane has no length");
       }

@@ -492,6 +492,19 @@ LanePlace Site::placeOnLane(const Feature& lane, const Eigen::Vector2d& point_m)
   return best;
 }
 
+double Site::laneLength_m(const Feature& lane) const {
+  if (lane.kind != FeatureKind::Lane) {
+    return 0.0;
+  }
+  const std::span<const Eigen::Vector2d> line = vertices(lane);
+  double length_m = 0.0;
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+    const double segment_m = (line[i + 1] - line[i]).norm();
+    length_m += segment_m > kMinSegment_m ? segment_m : 0.0;
+  }
+  return length_m;
+}
+
 Placement Site::classify(const Eigen::Vector2d& point_m) const {
   bool onArea = false;
   for (const Feature& feature : features_) {

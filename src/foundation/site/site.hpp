@@ -134,6 +134,9 @@ class Site {
   // The nearest point of a lane's centre line to point_m (segments of zero length skipped; on a
   // tie the first segment). distance_m is infinite for a feature that is not a lane.
   LanePlace placeOnLane(const Feature& lane, const Eigen::Vector2d& point_m) const;
+  // A lane's length along its centre line (0 for a feature that is not a lane, or a lane whose
+  // vertices all stand at one position).
+  double laneLength_m(const Feature& lane) const;
 
  private:
   std::string sourceName_;
