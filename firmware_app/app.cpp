@@ -72,12 +72,9 @@ bool App::init(const config::AppConfig& config, const RunSettings& run, AppSeams
   wiring.terrain = &terrain_;
   wiring.shapeModel = &asm_;
   wiring.site = config_.site.file.empty() ? nullptr : &site_;
-  wiring.offRoad = config_.site.offRoad;
-  wiring.laneDirectionPrior = config_.site.laneDirectionPrior;
+  wiring.siteOptions = &config_.site;
   wiring.traffic = &config_.traffic;
   wiring.dsm = config_.terrain.dsmPath.empty() ? nullptr : &dsm_;
-  wiring.maxStructureHeight_m = config_.site.maxStructureHeight_m;
-  wiring.onStructure = config_.site.onStructure;
   wiring.lift = config_.perception.lift;
   wiring.droneId = config_.dds.droneId;
   wiring.sourceOnMonotonicClock = capture_.source().capturesOnMonotonicClock();

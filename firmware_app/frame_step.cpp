@@ -44,12 +44,13 @@ bool FrameStep::init(const FrameStepWiring& wiring, std::unique_ptr<FramePercept
     return false;
   }
   worldDetections_.resize(detection::kMaxDetectionsPerFrame);
+  static const site::SiteOptions kDefaultSiteOptions{};
+  const site::SiteOptions& siteOptions =
+      wiring_.siteOptions != nullptr ? *wiring_.siteOptions : kDefaultSiteOptions;
   if (wiring_.dsm != nullptr) {
-    site::SiteOptions surface;
-    surface.maxStructureHeight_m = wiring_.maxStructureHeight_m;
-    surface.onStructure = wiring_.onStructure;
     if (!surfacePrior_.init(*wiring_.terrain, wiring_.dsm, perception_->lifter(), *wiring_.world,
-                            *wiring_.shapeModel, wiring_.lift, wiring_.site, surface, &problem)) {
+                            *wiring_.shapeModel, wiring_.lift, wiring_.site, siteOptions,
+                            &problem)) {
       if (why) {
         *why = "terrain.dsm_path: " + problem;
       }
@@ -57,7 +58,7 @@ bool FrameStep::init(const FrameStepWiring& wiring, std::unique_ptr<FramePercept
     }
     surfaced_.resize(detection::kMaxDetectionsPerFrame);
   }
-  if (!lanePrior_.init(wiring_.site, wiring_.laneDirectionPrior, perception_->detectionLifter(),
+  if (!lanePrior_.init(wiring_.site, siteOptions.laneDirectionPrior, perception_->detectionLifter(),
                        &problem)) {
     if (why) {
       *why = problem;
@@ -67,7 +68,7 @@ bool FrameStep::init(const FrameStepWiring& wiring, std::unique_ptr<FramePercept
   if (lanePrior_.active()) {
     laned_.resize(detection::kMaxDetectionsPerFrame);
   }
-  sitePrior_.init(wiring_.site, wiring_.offRoad);
+  sitePrior_.init(wiring_.site, siteOptions.offRoad);
   if (sitePrior_.active()) {
     screened_.resize(detection::kMaxDetectionsPerFrame);
   }

@@ -101,13 +101,11 @@ struct FrameStepWiring {
   const shape::ActiveShapeModel* shapeModel = nullptr;
   const site::Site* site = nullptr;                          // the site map (null: no scene prior)
   const traffic::TrafficAnalyzerOptions* traffic = nullptr;  // null: no traffic analysis
-  site::OffRoadPolicy offRoad = site::OffRoadPolicy::Drop;
-  double laneDirectionPrior = site::SiteOptions{}.laneDirectionPrior;  // site.lane_direction_prior
-  // The surface model (terrain.dsm_path; null: none) and its prior's options (site:), with the
-  // perception stage's lift options (a deck's vehicle is lifted again as perception lifts).
+  // The `site:` section (the priors' policies and values; null: the defaults).
+  const site::SiteOptions* siteOptions = nullptr;
+  // The surface model (terrain.dsm_path; null: none), with the perception stage's lift options
+  // (a deck's vehicle is lifted again as perception lifts).
   const terrain::TerrainModel* dsm = nullptr;
-  double maxStructureHeight_m = site::SiteOptions{}.maxStructureHeight_m;
-  site::OffRoadPolicy onStructure = site::OffRoadPolicy::Drop;
   perception::DetectionLifterOptions lift{};
   std::uint32_t droneId = 0;
   bool sourceOnMonotonicClock = false;  // camera stamps: CLOCK_MONOTONIC

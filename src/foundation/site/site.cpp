@@ -462,13 +462,6 @@ LanePlace Site::placeOnLane(const Feature& lane, const Eigen::Vector2d& point_m)
   }
   const std::span<const Eigen::Vector2d> line = vertices(lane);
   double along_m = 0.0;
-  std::size_t last = 0;  // the last segment of non-zero length
-  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
-    if ((line[i + 1] - line[i]).norm() > kMinSegment_m) {
-      last = i;
-    }
-  }
-  bool first = true;
   for (std::size_t i = 0; i + 1 < line.size(); ++i) {
     const Eigen::Vector2d d = line[i + 1] - line[i];
     const double length_m = d.norm();
@@ -477,18 +470,17 @@ LanePlace Site::placeOnLane(const Feature& lane, const Eigen::Vector2d& point_m)
     }
     const Eigen::Vector2d dir = d / length_m;
     const Eigen::Vector2d rel = point_m - line[i];
-    const double raw = rel.dot(dir);
-    const double t = std::clamp(raw, 0.0, length_m);
+    const double t = std::clamp(rel.dot(dir), 0.0, length_m);
     const double distance_m = (rel - t * dir).norm();
     if (distance_m < best.distance_m) {
       best.distance_m = distance_m;
       best.along_m = along_m + t;
       best.direction_rad = std::atan2(dir.y(), dir.x());
-      best.betweenEnds = !(first && raw < 0.0) && !(i == last && raw > length_m);
     }
     along_m += length_m;
-    first = false;
   }
+  // Nearest to the first or the last vertex: the point lies before or beyond the lane.
+  best.betweenEnds = best.along_m > 0.0 && best.along_m < along_m;
   return best;
 }
 

@@ -106,8 +106,8 @@ struct LanePlace {
   double distance_m = 0.0;     // from the centre line (infinity: not a lane)
   double along_m = 0.0;        // arc length of the nearest point from the lane's start
   double direction_rad = 0.0;  // of the nearest segment, ENU, counter-clockwise from east
-  bool betweenEnds = false;    // the nearest point is neither the lane's first nor last vertex
-                               // reached from beyond it (the point lies alongside the lane)
+  bool betweenEnds = false;    // the nearest point is neither the lane's first nor its last
+                               // vertex (the point lies alongside the lane)
 };
 
 class Site {
