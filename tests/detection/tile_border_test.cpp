@@ -1,4 +1,4 @@
-// Issue 5 acceptance: a vehicle straddling a tile border is detected once — not twice (one
+// Acceptance: a vehicle straddling a tile border is detected once — not twice (one
 // copy per tile) and not never (the cut copy suppressing the whole one, or both dropped).
 //
 // A frame is rendered by the simulator (held-out seed) and cut into overlapping tiles by

@@ -1,4 +1,4 @@
-// Issue 10's acceptance: the app replaying a simulated sequence publishes its tracks over DDS
+// Acceptance: the app replaying a simulated sequence publishes its tracks over DDS
 // and the roadside-unit subscriber in ANOTHER process (vp_rsu_subscriber, CSV output) receives
 // every confirmed track with equal fields, and sees every track disposed. Vehicles are injected
 // from the sequence's ground truth (TruthPerception), so the test does not depend on the

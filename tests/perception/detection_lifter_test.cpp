@@ -33,7 +33,7 @@ struct LiftCase {
 
 class GroundTruthLift : public ::testing::TestWithParam<LiftCase> {};
 
-// Acceptance (issue 5): a perfect detection of a ground-truth vehicle (its footprint
+// Acceptance: a perfect detection of a ground-truth vehicle (its footprint
 // projected through the Lifter) lifts back to the vehicle's world position within 1 cm, on
 // flat and sloped terrain, nadir and tilted, pinhole and distorted lens.
 TEST_P(GroundTruthLift, PositionWithinOneCentimetre) {

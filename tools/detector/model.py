@@ -164,7 +164,7 @@ class CropNet(nn.Module):
     fixture), trained on mined false detections (train.py --verifier-samples)."""
 
     def __init__(self, n_s: int = 3, verifier: bool = False, flip_branch: bool = False,
-                 verifier_branch: bool = False):
+                 verifier_branch: bool = False, verifier_width: int = 192):
         super().__init__()
         if verifier_branch and not verifier:
             raise ValueError("CropNet: verifier_branch needs verifier")
@@ -190,7 +190,7 @@ class CropNet(nn.Module):
         self.refine = nn.Conv2d(192, 5, 1)
         heads = [self.type_logits, self.shape, self.flip_logit, self.refine]
         if verifier:
-            self.vehicle_logit = nn.Conv2d(192, 1, 1)
+            self.vehicle_logit = nn.Conv2d(verifier_width if verifier_branch else 192, 1, 1)
             heads.append(self.vehicle_logit)
         for m in heads:
             nn.init.normal_(m.weight, std=0.01)
@@ -204,8 +204,11 @@ class CropNet(nn.Module):
         if verifier_branch:
             # The verifier from its own fully connected layer likewise (train.py
             # --verifier-branch --verifier-head-only): more capacity for "vehicle or not" than a
-            # single output on the shared features, which type, shape and refinement keep.
-            self.verifier_fc = nn.Sequential(nn.Conv2d(128, 192, (CROP_H // 16, CROP_W // 16)),
+            # single output on the shared features, which type, shape and refinement keep. A
+            # wider branch (verifier_width 384) holds two verifiers side by side, their logits
+            # averaged by the head (verifier_ensemble.py).
+            self.verifier_fc = nn.Sequential(nn.Conv2d(128, verifier_width,
+                                                       (CROP_H // 16, CROP_W // 16)),
                                              nn.ReLU(inplace=True))
 
     def start_flip_branch_from_shared(self) -> None:
@@ -235,7 +238,9 @@ class CropNet(nn.Module):
         when the checkpoint has one."""
         net = cls(n_s=n_s, verifier="vehicle_logit.weight" in state,
                   flip_branch="flip_fc.0.weight" in state,
-                  verifier_branch="verifier_fc.0.weight" in state)
+                  verifier_branch="verifier_fc.0.weight" in state,
+                  verifier_width=int(state["verifier_fc.0.weight"].shape[0])
+                  if "verifier_fc.0.weight" in state else 192)
         net.load_state_dict(state)
         return net
 
