@@ -63,6 +63,9 @@ m = re.search(r"^bev P: mean ([0-9.]+)  min ([0-9.]+)  max ([0-9.]+)  \(3 scales
 assert m, text
 mean, lo, hi = map(float, m.groups())
 assert lo == min(p) and hi == max(p) and abs(mean - sum(p) / 3) < 1e-3, (p, m.groups())
+inside = [float(v) for v in re.findall(r"^bev \S+ P .* P_inside ([0-9.]+)$", text, re.M)]
+assert len(inside) == 3 and all(pi >= pv for pi, pv in zip(inside, p)), (inside, p)
+assert re.search(r"^bev P_inside: mean [0-9.]+ ", text, re.M), text
 PY
 set +e
 "$root/scripts/eval_real.sh" --steps x "$work/real_bad" 2> "$work/err"; rc=$?
