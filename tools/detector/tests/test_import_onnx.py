@@ -78,16 +78,20 @@ class ImportOnnx(unittest.TestCase):
     def test_the_branch_layout_is_read_from_the_file(self):
         # One extra fully connected Conv is a front/back or a verifier branch: the file's outputs
         # tell which; both branches make two.
-        for flip_branch, verifier_branch in [(True, False), (False, True), (True, True)]:
+        # A verifier branch twice as wide holds two verifiers averaged (verifier_ensemble.py).
+        for flip_branch, verifier_branch, width in [(True, False, 192), (False, True, 192),
+                                                    (True, True, 192), (True, True, 384)]:
             net = CropNet(n_s=3, verifier=True, flip_branch=flip_branch,
-                          verifier_branch=verifier_branch)
-            path = write_files(self.tmp, f"crop_{flip_branch}_{verifier_branch}", randomized(net),
-                               (CROP_H, CROP_W))
+                          verifier_branch=verifier_branch, verifier_width=width)
+            path = write_files(self.tmp, f"crop_{flip_branch}_{verifier_branch}_{width}",
+                               randomized(net), (CROP_H, CROP_W))
             ck = import_onnx.import_files(self.det_int8, path, 3, self.calib_det,
                                           self.calib_crop, log=lambda *_: None)
             crop = CropNet.from_state_dict(ck["crop"], n_s=3).eval()
             self.assertEqual((crop.flip_branch, crop.verifier_branch),
                              (flip_branch, verifier_branch))
+            if verifier_branch:
+                self.assertEqual(crop.verifier_fc[0].out_channels, width)
             errs = import_onnx.check_against_file(
                 crop, onnx.load(path), import_onnx.normalized(self.calib_crop[:3]))
             self.assertLess(max(errs.values()), 1e-5)
