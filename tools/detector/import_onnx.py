@@ -244,18 +244,15 @@ def import_files(detector_path: str, crop_path: Optional[str], n_s: int,
                              f"({plain} without branches, at most {plain + 2})")
         x_crop = normalized(calib_crop) if calib_crop is not None and len(calib_crop) else None
         check_x = x_crop[:8] if x_crop is not None else torch.randn(4, 3, CROP_H, CROP_W)
-        # A verifier branch is 192 wide, or 384 when it holds two verifiers averaged
-        # (verifier_ensemble.py); a width that does not fit the file's weights is skipped.
-        candidates = [(f, v, w) for f, v in layouts for w in ((192, 384) if v else (192,))]
-        for i, (flip_branch, verifier_branch, width) in enumerate(candidates):
+        # The fully connected Convs (shared, branches) are 192 wide; a verifier branch holding
+        # two verifiers averaged (verifier_ensemble.py) is wider: the widest of them.
+        fc_shape = (128, CROP_H // 16, CROP_W // 16)
+        verifier_width = max(w.shape[0] for _, w, _ in conv_weights(crop_model)
+                             if tuple(w.shape[1:]) == fc_shape)
+        for flip_branch, verifier_branch in layouts:
             crop = CropNet(n_s=n_s, verifier=verifier, flip_branch=flip_branch,
-                           verifier_branch=verifier_branch, verifier_width=width)
-            try:
-                n = load_into(crop, crop_model, (CROP_H, CROP_W), x_crop)
-            except ValueError:
-                if i + 1 < len(candidates):
-                    continue
-                raise
+                           verifier_branch=verifier_branch, verifier_width=verifier_width)
+            n = load_into(crop, crop_model, (CROP_H, CROP_W), x_crop)
             errs = check_against_file(crop, crop_model, check_x)
             if max(errs.values()) <= MAX_RELATIVE_ERROR:
                 break

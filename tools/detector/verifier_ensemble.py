@@ -44,8 +44,10 @@ def merge(base: Dict[str, torch.Tensor], other: Dict[str, torch.Tensor],
           weight: float) -> Dict[str, torch.Tensor]:
     """The base crop network's state with a verifier branch holding both verifiers, whose head
     gives (1 - weight) x base's logit + weight x other's."""
-    for key in ("fc.0.weight", "body.0.0.weight"):
-        if key in base and key in other and not torch.equal(base[key], other[key]):
+    # Both verifiers must read the same features, the body's (each brings its own fully
+    # connected layer into the branch).
+    for key in [k for k in base if k.startswith("body.")]:
+        if key not in other or not torch.equal(base[key], other[key]):
             raise SystemExit(f"verifier_ensemble.py: the two crop networks differ in {key}: "
                              "their verifiers do not read the same features")
     fa, ba, ha, hba = _verifier_parts(base, "--base")

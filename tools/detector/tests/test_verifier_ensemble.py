@@ -55,8 +55,8 @@ class VerifierEnsemble(unittest.TestCase):
 
     def test_different_bodies_are_refused(self):
         other = _checkpoint(self.branched)["crop"]
-        other["fc.0.weight"] = other["fc.0.weight"] + 0.1
-        with self.assertRaisesRegex(SystemExit, "differ in fc.0.weight"):
+        other["body.2.0.weight"] = other["body.2.0.weight"] + 0.1
+        with self.assertRaisesRegex(SystemExit, "differ in body.2.0.weight"):
             verifier_ensemble.merge(_checkpoint(self.shared)["crop"], other, 0.5)
 
     def test_command_line(self):
