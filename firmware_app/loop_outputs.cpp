@@ -44,6 +44,8 @@ output_files::DetectionRecord toDetectionRecord(std::int64_t frameId, int detId,
   record.score = d.score;
   record.box = d.box;
   record.directionKnown = d.directionKnown;
+  record.atFrameEdge = d.atFrameEdge;
+  record.vehicleProbability = d.vehicleProbability;
   record.typeProbabilities = d.typeProbabilities;
   record.gamma = d.gamma;
   record.liftStatus = toFileStatus(observation.liftStatus);

@@ -236,6 +236,10 @@ def output_file_seeds():
     for i, row in enumerate(r for r in rows if r):
         image.append(f"IMG_{i:04d}" + row[row.index(","):])
     write("detections_file", "images_no_metadata.csv", ("\n".join(image) + "\n").encode())
+    # format 1 (no at_frame_edge, vehicle_probability: fields 9 and 10), which the reader still reads
+    old = [",".join(f[:9] + f[11:]) for f in (line.split(",") for line in image)]
+    write("detections_file", "images_format1.csv",
+          ("# format_version: 1\n" + "\n".join(old) + "\n").encode())
     traj = doc_block("tracking.md", "frame_id,class_id")
     write("trajectory_file", "doc_example.csv", traj)
     lines = traj.decode().split("\n")

@@ -55,6 +55,10 @@ DetectionRecord randomRecord(std::mt19937_64& rng, std::int64_t frameId, int det
   r.box = {unit(rng) * 2592.0, unit(rng) * 2048.0, 20.0 + 40.0 * unit(rng), 8.0 + 10 * unit(rng),
            unit(rng) * 6.28};
   r.directionKnown = unit(rng) > 0.3;
+  r.atFrameEdge = unit(rng) > 0.8;
+  if (unit(rng) > 0.2) {  // else NaN: no verifier (an empty field)
+    r.vehicleProbability = static_cast<float>(unit(rng));
+  }
   float sum = 0.0F;
   for (float& p : r.typeProbabilities) {
     p = static_cast<float>(unit(rng));
@@ -90,6 +94,11 @@ void expectSame(const DetectionRecord& a, const DetectionRecord& b) {
   EXPECT_EQ(a.box.width, b.box.width);
   EXPECT_EQ(a.box.angle, b.box.angle);
   EXPECT_EQ(a.directionKnown, b.directionKnown);
+  EXPECT_EQ(a.atFrameEdge, b.atFrameEdge);
+  EXPECT_EQ(std::isnan(a.vehicleProbability), std::isnan(b.vehicleProbability));
+  if (!std::isnan(a.vehicleProbability)) {
+    EXPECT_EQ(a.vehicleProbability, b.vehicleProbability);
+  }
   EXPECT_EQ(a.typeProbabilities, b.typeProbabilities);
   ASSERT_EQ(a.gamma.count, b.gamma.count);
   for (int i = 0; i < a.gamma.count; ++i) {
@@ -140,6 +149,16 @@ TEST_F(DetectionsFileTest, RoundTripIsExactForFrameRows) {
     expectSame(written[i], file.rows[i]);
   }
   EXPECT_EQ(file.lines.front(), 5);  // 3 metadata lines + the header
+  EXPECT_EQ(file.formatVersion, kDetectionsFormatVersion);
+  const auto edge = std::count_if(written.begin(), written.end(),
+                                  [](const DetectionRecord& r) { return r.atFrameEdge; });
+  const auto noVerifier = std::count_if(written.begin(), written.end(), [](const auto& r) {
+    return std::isnan(r.vehicleProbability);
+  });
+  EXPECT_GT(edge, 0);  // both values of both new columns are exercised
+  EXPECT_LT(edge, static_cast<long>(written.size()));
+  EXPECT_GT(noVerifier, 0);
+  EXPECT_LT(noVerifier, static_cast<long>(written.size()));
 }
 
 TEST_F(DetectionsFileTest, RoundTripIsExactForImageRows) {
@@ -304,6 +323,10 @@ TEST_F(DetectionsFileTest, WriterRejectsBadRecordsWithoutWriting) {
   EXPECT_FALSE(writer.writeRow(r, &why));
   EXPECT_NE(why.find("box_angle_rad"), std::string::npos) << why;
   r = randomRecord(rng, 1, 0, true);
+  r.vehicleProbability = 1.25F;
+  EXPECT_FALSE(writer.writeRow(r, &why));
+  EXPECT_NE(why.find("vehicle_probability: must be in [0, 1]"), std::string::npos) << why;
+  r = randomRecord(rng, 1, 0, true);
   r.headingEnu_rad = std::nan("");
   EXPECT_FALSE(writer.writeRow(r, &why));
   EXPECT_NE(why.find("heading_enu_rad: not finite"), std::string::npos) << why;
@@ -320,17 +343,26 @@ TEST_F(DetectionsFileTest, WriterReportsAnUnwritablePath) {
   EXPECT_NE(why.find("not open"), std::string::npos) << why;
 }
 
-// A valid two-row file, broken one way at a time.
+// A valid two-row file (format 2), broken one way at a time.
 const std::string kHeader =
+    "frame_id,det_id,score,box_cx_px,box_cy_px,box_length_px,box_width_px,box_angle_rad,"
+    "direction_known,at_frame_edge,vehicle_probability,type,p_estate,p_compact,p_sports,p_sedan,"
+    "p_suv,p_van,p_large,gamma_0,gamma_1,gamma_2,lift_status,east_m,north_m,up_m,lat_deg,lon_deg,"
+    "height_m,heading_enu_rad,length_m,width_m,height_m_vehicle";
+const std::string kRow1 =
+    "3,0,0.9,100.5,200.25,40,16,1.5,1,0,0.97,sedan,0,0,0,1,0,0,0,0.5,-1,0.25,ok,1,2,260,43.07,"
+    "-89.4,260,0.5,4.5,1.8,1.45";
+const std::string kRow2 =
+    "4,0,0.8,10,20,30,12,0,0,1,,van,0.1,0.1,0.1,0.1,0.1,0.3,0.2,,,,outside_dtm,,,,,,,,,,";
+// The same rows in format 1 (no at_frame_edge, vehicle_probability), which the reader still reads.
+const std::string kHeaderFormat1 =
     "frame_id,det_id,score,box_cx_px,box_cy_px,box_length_px,box_width_px,box_angle_rad,"
     "direction_known,type,p_estate,p_compact,p_sports,p_sedan,p_suv,p_van,p_large,gamma_0,"
     "gamma_1,gamma_2,lift_status,east_m,north_m,up_m,lat_deg,lon_deg,height_m,heading_enu_rad,"
     "length_m,width_m,height_m_vehicle";
-const std::string kRow1 =
+const std::string kRow1Format1 =
     "3,0,0.9,100.5,200.25,40,16,1.5,1,sedan,0,0,0,1,0,0,0,0.5,-1,0.25,ok,1,2,260,43.07,-89.4,"
     "260,0.5,4.5,1.8,1.45";
-const std::string kRow2 =
-    "4,0,0.8,10,20,30,12,0,0,van,0.1,0.1,0.1,0.1,0.1,0.3,0.2,,,,outside_dtm,,,,,,,,,,";
 
 TEST_F(DetectionsFileTest, ValidFixtureReads) {
   writeText("ok.csv", "# model: m1\n" + kHeader + "\n" + kRow1 + "\n" + kRow2 + "\n");
@@ -344,6 +376,34 @@ TEST_F(DetectionsFileTest, ValidFixtureReads) {
   EXPECT_EQ(file.rows[1].liftStatus, LiftStatus::OutsideDtm);
   EXPECT_DOUBLE_EQ(file.rows[0].positionEnu.z(), 260.0);
   EXPECT_EQ(file.lines, (std::vector<int>{3, 4}));
+  EXPECT_EQ(file.formatVersion, 2);
+  EXPECT_FALSE(file.rows[0].atFrameEdge);
+  EXPECT_FLOAT_EQ(file.rows[0].vehicleProbability, 0.97F);
+  EXPECT_TRUE(file.rows[1].atFrameEdge);
+  EXPECT_TRUE(std::isnan(file.rows[1].vehicleProbability));
+}
+
+TEST_F(DetectionsFileTest, FormatOneFilesStillRead) {
+  for (const std::string& metadata : {std::string("# format_version: 1\n"), std::string()}) {
+    SCOPED_TRACE(metadata);
+    writeText("v1.csv", metadata + kHeaderFormat1 + "\n" + kRow1Format1 + "\n");
+    DetectionsFile file;
+    std::string why;
+    ASSERT_TRUE(readDetectionsFile(path("v1.csv"), &file, &why)) << why;
+    EXPECT_EQ(file.formatVersion, 1);
+    ASSERT_EQ(file.rows.size(), 1U);
+    EXPECT_EQ(file.rows[0].topType(), shape::VehicleType::Sedan);
+    EXPECT_EQ(file.rows[0].gamma.count, 3);
+    EXPECT_DOUBLE_EQ(file.rows[0].dimensions_m.z(), 1.45);
+    EXPECT_FALSE(file.rows[0].atFrameEdge);  // not in format 1: unknown, read as false / NaN
+    EXPECT_TRUE(std::isnan(file.rows[0].vehicleProbability));
+  }
+  // A declared version must match the header.
+  writeText("mixed.csv", "# format_version: 1\n" + kHeader + "\n");
+  DetectionsFile file;
+  std::string why;
+  EXPECT_FALSE(readDetectionsFile(path("mixed.csv"), &file, &why));
+  EXPECT_NE(why.find("mixed.csv:2: header: expected"), std::string::npos) << why;
 }
 
 TEST_F(DetectionsFileTest, MalformedRowsNameFileLineAndColumn) {
@@ -359,11 +419,11 @@ TEST_F(DetectionsFileTest, MalformedRowsNameFileLineAndColumn) {
       {kHeader + "\n" + replaced(kRow1, "100.5", "10x") + "\n",
        "bad.csv:2:9: box_cx_px: not a number '10x'"},
       {kHeader + "\n" + kRow1 + "\n" + replaced(kRow2, "outside_dtm", "lost") + "\n",
-       "bad.csv:3:60: lift_status: unknown lift status 'lost'"},
+       "bad.csv:3:63: lift_status: unknown lift status 'lost'"},
       {kHeader + "\n" + replaced(kRow1, ",sedan,", ",van,") + "\n",
-       "bad.csv:2:34: type: 'van' is not the most probable type (p_sedan 1)"},
+       "bad.csv:2:41: type: 'van' is not the most probable type (p_sedan 1)"},
       {kHeader + "\n" + replaced(kRow1, ",sedan,", ",truck,") + "\n",
-       "bad.csv:2:34: type: unknown vehicle type 'truck'"},
+       "bad.csv:2:41: type: unknown vehicle type 'truck'"},
       {kHeader + "\n" + replaced(kRow1, "0.9,", "1.2,") + "\n",
        "bad.csv:2:5: score: must be in [0, 1], got '1.2'"},
       {kHeader + "\n" + replaced(kRow1, "0,0,0,1,0,0,0,", "0,0,0,0.5,0,0,0,") + "\n",
@@ -373,14 +433,19 @@ TEST_F(DetectionsFileTest, MalformedRowsNameFileLineAndColumn) {
       {kHeader + "\n" + replaced(kRow2, "outside_dtm,,,", "outside_dtm,1,,") + "\n",
        "east_m: must be empty when lift_status is outside_dtm, got '1'"},
       {kHeader + "\n" + replaced(kRow1, ",1.45", "") + "\n",
-       "bad.csv:2: expected 31 fields, got 30"},
+       "bad.csv:2: expected 33 fields, got 32"},
       {kHeader + "\n" + kRow2 + "\n" + kRow1 + "\n",
        "bad.csv:3:1: frame_id: not in non-decreasing order (3 after 4)"},
       {kHeader + "\n" + kRow1 + "\n" + kRow1 + "\n",
        "bad.csv:3:3: det_id: det_id 0 appears twice in frame 3"},
       {kHeader + "\n" + kRow1 + "\n\n", "bad.csv:3: empty line"},
       {"# model: a\n# colour: red\n" + kHeader + "\n", "bad.csv:2: unknown metadata key 'colour'"},
-      {"# format_version: 2\n" + kHeader + "\n", "bad.csv:1: format_version: 2 not supported"},
+      {"# format_version: 3\n" + kHeader + "\n",
+       "bad.csv:1: format_version: 3 not supported (this reader reads 1 to 2)"},
+      {kHeader + "\n" + replaced(kRow1, ",1,0,0.97,", ",1,2,0.97,") + "\n",
+       "at_frame_edge: expected 0 or 1, got '2'"},
+      {kHeader + "\n" + replaced(kRow1, ",0.97,", ",1.5,") + "\n",
+       "vehicle_probability: must be in [0, 1] (or empty: no verifier), got '1.5'"},
       {"id,det_id\n", "bad.csv:1: header: must start with 'frame_id,'"},
       {replaced(kHeader, "p_van", "p_bus") + "\n", "bad.csv:1: header: expected"},
       {"# model: only metadata\n", "bad.csv:2: header: missing"},

@@ -313,6 +313,8 @@ vp::output_files::DetectionRecord toRecord(const vp::detection::Detection& d, in
   row.score = d.score;
   row.box = d.box;
   row.directionKnown = d.directionKnown;
+  row.atFrameEdge = d.atFrameEdge;
+  row.vehicleProbability = d.vehicleProbability;
   row.typeProbabilities = d.typeProbabilities;
   row.gamma = d.gamma;
   row.liftStatus = vp::output_files::LiftStatus::NotLifted;

@@ -23,40 +23,70 @@ constexpr std::array<const char*, kLiftStatusCount> kLiftStatusWords{
     "ok",           "not_lifted",    "no_pose",     "stale_pose", "invalid_pose",   "invalid_box",
     "outside_lens", "behind_camera", "outside_dtm", "no_data",    "no_intersection"};
 
-// The columns after the key (frame_id or image) and before the probabilities.
-constexpr std::array<const char*, 9> kHeadColumns{
-    "det_id",       "score",         "box_cx_px",       "box_cy_px", "box_length_px",
-    "box_width_px", "box_angle_rad", "direction_known", "type"};
+// The columns after the key (frame_id or image) and before the probabilities; format 1 lacks
+// at_frame_edge and vehicle_probability (kFormat2Columns of them, after direction_known).
+constexpr std::array<const char*, 11> kHeadColumns{
+    "det_id",       "score",         "box_cx_px",       "box_cy_px",     "box_length_px",
+    "box_width_px", "box_angle_rad", "direction_known", "at_frame_edge", "vehicle_probability",
+    "type"};
+constexpr int kFormat2Columns = 2;
 constexpr std::array<const char*, shape::kVehicleTypeCount> kProbabilityColumns{
     "p_estate", "p_compact", "p_sports", "p_sedan", "p_suv", "p_van", "p_large"};
 constexpr std::array<const char*, 10> kWorldColumns{
     "east_m",   "north_m",         "up_m",     "lat_deg", "lon_deg",
     "height_m", "heading_enu_rad", "length_m", "width_m", "height_m_vehicle"};
 
-// Column layout of one file: fixed head, 7 probabilities, n gamma, lift status, world tail.
+// Column layout of one file: fixed head (format 2: with the frame-edge flag and the verifier's
+// probability), 7 probabilities, n gamma, lift status, world tail.
 struct Layout {
   int gammaColumns = 0;
+  int formatVersion = kDetectionsFormatVersion;
   static constexpr int kKey = 0;
   static constexpr int kDetId = 1;
   static constexpr int kScore = 2;
   static constexpr int kBox = 3;  // cx, cy, length, width, angle
   static constexpr int kDirection = 8;
-  static constexpr int kType = 9;
-  static constexpr int kProbabilities = 10;
-  static constexpr int kGamma = kProbabilities + shape::kVehicleTypeCount;
-  int liftStatus() const { return kGamma + gammaColumns; }
-  int world() const { return liftStatus() + 1; }
-  int count() const { return world() + static_cast<int>(kWorldColumns.size()); }
+  static constexpr int kFrameEdge = 9;            // format 2
+  static constexpr int kVehicleProbability = 10;  // format 2
+  constexpr bool hasFormat2Columns() const { return formatVersion >= 2; }
+  constexpr int type() const { return hasFormat2Columns() ? 11 : 9; }
+  constexpr int probabilities() const { return type() + 1; }
+  constexpr int gamma() const { return probabilities() + shape::kVehicleTypeCount; }
+  constexpr int liftStatus() const { return gamma() + gammaColumns; }
+  constexpr int world() const { return liftStatus() + 1; }
+  constexpr int count() const { return world() + static_cast<int>(kWorldColumns.size()); }
+  // The name of column c (for messages).
+  constexpr const char* name(int c, DetectionsKey key) const {
+    if (c == kKey) {
+      return key == DetectionsKey::FrameId ? "frame_id" : "image";
+    }
+    if (c < probabilities()) {
+      const int skipped = !hasFormat2Columns() && c > kDirection ? kFormat2Columns : 0;
+      return kHeadColumns[static_cast<std::size_t>(c - kDetId + skipped)];
+    }
+    if (c < gamma()) {
+      return kProbabilityColumns[static_cast<std::size_t>(c - probabilities())];
+    }
+    if (c < liftStatus()) {
+      return "gamma";
+    }
+    if (c == liftStatus()) {
+      return "lift_status";
+    }
+    return kWorldColumns[static_cast<std::size_t>(c - world())];
+  }
 };
-static_assert(kHeadColumns.size() == Layout::kProbabilities - Layout::kDetId);
+static_assert(kHeadColumns.size() ==
+              static_cast<std::size_t>(Layout{0, 2}.type() - Layout::kDetId + 1));
 
 bool finite(double value) {
   return std::isfinite(value);
 }
 
 // Semantic checks shared by the writer (before formatting) and the reader (after parsing).
-std::optional<Problem> checkRecord(const DetectionRecord& r, DetectionsKey key, int gammaColumns) {
-  const Layout layout{gammaColumns};
+std::optional<Problem> checkRecord(const DetectionRecord& r, DetectionsKey key,
+                                   const Layout& layout) {
+  const int gammaColumns = layout.gammaColumns;
   if (key == DetectionsKey::FrameId && r.frameId < 0) {
     return Problem{Layout::kKey, "must be >= 0"};
   }
@@ -90,23 +120,27 @@ std::optional<Problem> checkRecord(const DetectionRecord& r, DetectionsKey key, 
   if (!(r.box.angle >= 0.0 && r.box.angle < geometry::kTwoPi)) {
     return Problem{Layout::kBox + 4, "must be in [0, 2 pi)"};
   }
+  if (!std::isnan(r.vehicleProbability) &&
+      !(r.vehicleProbability >= 0.0F && r.vehicleProbability <= 1.0F)) {
+    return Problem{Layout::kVehicleProbability, "must be in [0, 1] (or empty: no verifier)"};
+  }
   double sum = 0.0;
   for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
     const float p = r.typeProbabilities[static_cast<std::size_t>(t)];
     if (!(p >= 0.0F && p <= 1.0F)) {
-      return Problem{Layout::kProbabilities + t, "must be in [0, 1]"};
+      return Problem{layout.probabilities() + t, "must be in [0, 1]"};
     }
     sum += static_cast<double>(p);
   }
   if (std::abs(sum - 1.0) > kProbabilitySumTolerance) {
-    return Problem{Layout::kProbabilities, "probabilities p_estate..p_large do not sum to 1"};
+    return Problem{layout.probabilities(), "probabilities p_estate..p_large do not sum to 1"};
   }
   if (r.gamma.count < 0 || r.gamma.count > gammaColumns) {
-    return Problem{Layout::kGamma, "more gamma values than gamma columns"};
+    return Problem{layout.gamma(), "more gamma values than gamma columns"};
   }
   for (int s = 0; s < r.gamma.count; ++s) {
     if (!std::isfinite(r.gamma.gamma[static_cast<std::size_t>(s)])) {
-      return Problem{Layout::kGamma + s, "not finite"};
+      return Problem{layout.gamma() + s, "not finite"};
     }
   }
   if (static_cast<int>(r.liftStatus) >= kLiftStatusCount) {
@@ -183,6 +217,8 @@ class RowFormatter {
 };
 
 void formatRow(const DetectionRecord& r, const DetectionsFileInfo& info, RowFormatter& out) {
+  // The writer writes the current format only (kDetectionsFormatVersion, with the format 2
+  // columns).
   if (info.key == DetectionsKey::FrameId) {
     out.number(r.frameId);
   } else {
@@ -198,6 +234,12 @@ void formatRow(const DetectionRecord& r, const DetectionsFileInfo& info, RowForm
   }
   out.character(',');
   out.character(r.directionKnown ? '1' : '0');
+  out.character(',');
+  out.character(r.atFrameEdge ? '1' : '0');
+  out.character(',');
+  if (!std::isnan(r.vehicleProbability)) {
+    out.number(r.vehicleProbability);
+  }
   out.character(',');
   out.text(shape::toString(r.topType()));
   for (const float p : r.typeProbabilities) {
@@ -226,8 +268,8 @@ void formatRow(const DetectionRecord& r, const DetectionsFileInfo& info, RowForm
 
 // ---- parsing -------------------------------------------------------------------------------
 
-DetectionRecord parseRow(const RowParser& p, const DetectionsFileInfo& info) {
-  const Layout layout{info.gammaColumns};
+DetectionRecord parseRow(const RowParser& p, const DetectionsFileInfo& info, int formatVersion) {
+  const Layout layout{info.gammaColumns, formatVersion};
   DetectionRecord r;
   if (info.key == DetectionsKey::FrameId) {
     r.frameId = p.integer(Layout::kKey, 0, std::numeric_limits<std::int64_t>::max());
@@ -247,25 +289,35 @@ DetectionRecord parseRow(const RowParser& p, const DetectionsFileInfo& info) {
     p.fail(Layout::kDirection, "expected 0 or 1, got " + quote(direction));
   }
   r.directionKnown = direction == "1";
-  const std::string_view typeName = p.field(Layout::kType);
+  if (layout.hasFormat2Columns()) {
+    const std::string_view edge = p.field(Layout::kFrameEdge);
+    if (edge != "0" && edge != "1") {
+      p.fail(Layout::kFrameEdge, "expected 0 or 1, got " + quote(edge));
+    }
+    r.atFrameEdge = edge == "1";
+    if (!p.field(Layout::kVehicleProbability).empty()) {
+      r.vehicleProbability = p.real<float>(Layout::kVehicleProbability);
+    }
+  }
+  const std::string_view typeName = p.field(layout.type());
   const std::optional<shape::VehicleType> type = shape::vehicleTypeFromString(typeName);
   if (!type || typeName != shape::toString(*type)) {
-    p.fail(Layout::kType, "unknown vehicle type " + quote(typeName) +
+    p.fail(layout.type(), "unknown vehicle type " + quote(typeName) +
                               " (estate, compact, sports, sedan, suv, van, large)");
   }
   for (int t = 0; t < shape::kVehicleTypeCount; ++t) {
-    r.typeProbabilities[static_cast<std::size_t>(t)] = p.real<float>(Layout::kProbabilities + t);
+    r.typeProbabilities[static_cast<std::size_t>(t)] = p.real<float>(layout.probabilities() + t);
   }
   bool gap = false;
   for (int s = 0; s < info.gammaColumns; ++s) {
-    if (p.field(Layout::kGamma + s).empty()) {
+    if (p.field(layout.gamma() + s).empty()) {
       gap = true;
       continue;
     }
     if (gap) {
-      p.fail(Layout::kGamma + s, "value after an empty gamma field");
+      p.fail(layout.gamma() + s, "value after an empty gamma field");
     }
-    r.gamma.gamma[static_cast<std::size_t>(s)] = p.real<float>(Layout::kGamma + s);
+    r.gamma.gamma[static_cast<std::size_t>(s)] = p.real<float>(layout.gamma() + s);
     r.gamma.count = s + 1;
   }
   const std::string_view status = p.field(layout.liftStatus());
@@ -294,17 +346,17 @@ DetectionRecord parseRow(const RowParser& p, const DetectionsFileInfo& info) {
       }
     }
   }
-  if (const std::optional<Problem> problem = checkRecord(r, info.key, info.gammaColumns)) {
+  if (const std::optional<Problem> problem = checkRecord(r, info.key, layout)) {
     p.fail(problem->column,
            std::string(problem->what) + ", got " + quote(p.field(problem->column)));
   }
   // The type column must name a most probable type (any of them when several tie).
   const float top = r.typeProbabilities[static_cast<std::size_t>(r.topType())];
   if (r.typeProbabilities[static_cast<std::size_t>(*type)] != top) {
-    p.fail(Layout::kType,
+    p.fail(layout.type(),
            quote(typeName) + " is not the most probable type (" +
                kProbabilityColumns[static_cast<std::size_t>(r.topType())] + " " +
-               std::string(p.field(Layout::kProbabilities + static_cast<int>(r.topType()))) + ")");
+               std::string(p.field(layout.probabilities() + static_cast<int>(r.topType()))) + ")");
   }
   return r;
 }
@@ -335,9 +387,10 @@ void parseMetadata(const std::string& file, int line, std::string_view text, Det
     if (error != std::errc() || ptr != value.data() + value.size()) {
       throw ReadError{where + "format_version: not an integer " + quote(value)};
     }
-    if (version != kDetectionsFormatVersion) {
+    if (version < kOldestDetectionsFormatVersion || version > kDetectionsFormatVersion) {
       throw ReadError{where + "format_version: " + std::string(value) +
                       " not supported (this reader reads " +
+                      std::to_string(kOldestDetectionsFormatVersion) + " to " +
                       std::to_string(kDetectionsFormatVersion) + ")"};
     }
     out->formatVersion = version;
@@ -355,9 +408,10 @@ void parseMetadata(const std::string& file, int line, std::string_view text, Det
   }
 }
 
-// Reads the header: the key column and the gamma count follow from it.
+// Reads the header: the key column and the gamma count follow from it; without a
+// format_version line, so does the format (the at_frame_edge column is format 2's).
 void parseHeader(const std::string& file, int line, std::string_view text, DetectionsFile* out,
-                 std::vector<std::string>* names) {
+                 std::vector<std::string>* names, bool versionGiven) {
   DetectionsFileInfo& info = out->info;
   const std::string where = csv::location(file, line) + ": header: ";
   if (text.starts_with("frame_id,")) {
@@ -370,16 +424,21 @@ void parseHeader(const std::string& file, int line, std::string_view text, Detec
                     "folders), got " +
                     (text.empty() ? std::string("an empty line") : quote(text))};
   }
+  if (!versionGiven) {
+    out->formatVersion = text.find(",at_frame_edge,") != std::string_view::npos ? 2 : 1;
+  }
+  const int version = out->formatVersion;
   const std::size_t fields =
       static_cast<std::size_t>(std::count(text.begin(), text.end(), ',')) + 1;
-  const int gamma = static_cast<int>(fields) - Layout{0}.count();
+  const int gamma = static_cast<int>(fields) - Layout{0, version}.count();
   if (gamma < 0 || gamma > shape::kMaxShapeComponents) {
-    throw ReadError{where + "expected " + std::to_string(Layout{0}.count()) + " to " +
-                    std::to_string(Layout{shape::kMaxShapeComponents}.count()) +
-                    " columns (0 to 8 gamma columns), got " + std::to_string(fields)};
+    throw ReadError{where + "expected " + std::to_string(Layout{0, version}.count()) + " to " +
+                    std::to_string(Layout{shape::kMaxShapeComponents, version}.count()) +
+                    " columns (0 to 8 gamma columns, format " + std::to_string(version) +
+                    "), got " + std::to_string(fields)};
   }
   info.gammaColumns = gamma;
-  *names = detectionsColumns(info.key, gamma);
+  *names = detectionsColumns(info.key, gamma, version);
   const std::string expected = csv::joinColumns(*names);
   if (text != expected) {
     throw ReadError{where + "expected " + quote(expected) + ", got " + quote(text)};
@@ -425,9 +484,16 @@ shape::VehicleType DetectionRecord::topType() const {
   return static_cast<shape::VehicleType>(best);
 }
 
-std::vector<std::string> detectionsColumns(DetectionsKey key, int gammaColumns) {
+std::vector<std::string> detectionsColumns(DetectionsKey key, int gammaColumns, int formatVersion) {
   std::vector<std::string> names{key == DetectionsKey::FrameId ? "frame_id" : "image"};
-  names.insert(names.end(), kHeadColumns.begin(), kHeadColumns.end());
+  for (std::size_t i = 0; i < kHeadColumns.size(); ++i) {
+    const bool format2Only =
+        i >= static_cast<std::size_t>(Layout::kFrameEdge - Layout::kDetId) &&
+        i < static_cast<std::size_t>(Layout::kFrameEdge - Layout::kDetId + kFormat2Columns);
+    if (formatVersion >= 2 || !format2Only) {
+      names.emplace_back(kHeadColumns[i]);
+    }
+  }
   names.insert(names.end(), kProbabilityColumns.begin(), kProbabilityColumns.end());
   for (int s = 0; s < gammaColumns; ++s) {
     names.push_back("gamma_" + std::to_string(s));
@@ -478,24 +544,9 @@ bool DetectionsFileWriter::writeRow(const DetectionRecord& record, std::string* 
   if (!writer_.isOpen()) {
     return failWith("-", "writer is not open");
   }
-  if (const std::optional<Problem> problem = checkRecord(record, info_.key, info_.gammaColumns)) {
-    const Layout layout{info_.gammaColumns};
-    const int c = problem->column;
-    const char* name = "";
-    if (c == Layout::kKey) {
-      name = info_.key == DetectionsKey::FrameId ? "frame_id" : "image";
-    } else if (c < Layout::kProbabilities) {
-      name = kHeadColumns[static_cast<std::size_t>(c - Layout::kDetId)];
-    } else if (c < Layout::kGamma) {
-      name = kProbabilityColumns[static_cast<std::size_t>(c - Layout::kProbabilities)];
-    } else if (c < layout.liftStatus()) {
-      name = "gamma";
-    } else if (c == layout.liftStatus()) {
-      name = "lift_status";
-    } else {
-      name = kWorldColumns[static_cast<std::size_t>(c - layout.world())];
-    }
-    return failWith(name, problem->what);
+  const Layout layout{info_.gammaColumns};
+  if (const std::optional<Problem> problem = checkRecord(record, info_.key, layout)) {
+    return failWith(layout.name(problem->column, info_.key), problem->what);
   }
   const std::span<char> row = writer_.rowBuffer();
   RowFormatter out(row.data(), row.size());
@@ -527,18 +578,19 @@ bool readDetectionsFile(const std::string& path, DetectionsFile* out, std::strin
     std::set<std::pair<std::string, int>> keys;  // (frame or image, det_id)
     std::optional<std::int64_t> lastFrame;
     bool haveHeader = false;
+    out->formatVersion = kDetectionsFormatVersion;
     const int lines = csv::forEachLine(text, [&](int line, std::string_view row) {
       if (!haveHeader) {
         if (row.starts_with("#")) {
           parseMetadata(path, line, row, out, metadataKeys);
           return;
         }
-        parseHeader(path, line, row, out, &names);
+        parseHeader(path, line, row, out, &names, metadataKeys.contains("format_version"));
         haveHeader = true;
         return;
       }
       const RowParser parser(path, line, row, names);
-      const DetectionRecord record = parseRow(parser, out->info);
+      const DetectionRecord record = parseRow(parser, out->info, out->formatVersion);
       std::string key;
       if (out->info.key == DetectionsKey::FrameId) {
         if (lastFrame && record.frameId < *lastFrame) {

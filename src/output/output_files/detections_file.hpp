@@ -3,11 +3,13 @@
 // format is documented in docs/detections_file.md.
 //
 // Contract: DetectionRecord is a plain fixed-size value (no heap) holding everything a row
-// says: the image rotated box, score, driving-direction flag, the 7 type probabilities, the ASM
-// gamma and, when lifting succeeded (liftStatus Ok), the world pose and size. The writer is
-// made for the real-time loop: open() allocates once (row and pending-row buffers) and checks
-// the path; writeRow() formats a row with std::to_chars into the preallocated buffer and adds
-// it to the pending rows, commit() writes them to the file with one write(2) (the loop commits
+// says: the image rotated box, score, driving-direction flag, whether the box reaches the
+// frame's border and the verifier's vehicle probability, the 7 type probabilities, the ASM
+// gamma and, when lifting succeeded (liftStatus Ok), the world pose and size. The writer
+// writes format 2; the reader also reads format 1 (without the border flag and verifier). The
+// writer is made for the real-time loop: open() allocates once (row and pending-row buffers) and
+// checks the path; writeRow() formats a row with std::to_chars into the preallocated buffer and
+// adds it to the pending rows, commit() writes them to the file with one write(2) (the loop commits
 // every frame, so a kill loses at most the frame being written and never leaves half a row),
 // allocating nothing and returning errors as values when they happen (never throwing);
 // close() commits and reports I/O errors (csv::CsvFileWriter). Numbers are written in the shortest
@@ -21,6 +23,7 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,8 +38,9 @@
 
 namespace vp::output_files {
 
-constexpr int kDetectionsFormatVersion = 1;
-constexpr std::size_t kMaxImageStemChars = 127;  // longest `image` key (file stem), bytes
+constexpr int kDetectionsFormatVersion = 2;        // what the writer writes
+constexpr int kOldestDetectionsFormatVersion = 1;  // the reader reads this one up
+constexpr std::size_t kMaxImageStemChars = 127;    // longest `image` key (file stem), bytes
 
 // What became of lifting a detection to the world; the file writes the word of toString().
 // The same cases as perception::LiftStatus, plus NotLifted for runs without lifting.
@@ -75,7 +79,11 @@ struct DetectionRecord {
   float score = 0.0F;                                // [0, 1]
   geometry::RotatedBox box{};                        // image px, docs/conventions.md
   bool directionKnown = false;                       // box.angle is the driving direction
-  std::array<float, shape::kVehicleTypeCount> typeProbabilities{};  // index = VehicleType
+  // Format 2 (a format 1 file reads as false / NaN):
+  bool atFrameEdge = false;  // the box reaches the frame's border: the vehicle may be cut there
+  float vehicleProbability = std::numeric_limits<float>::quiet_NaN();  // verifier, [0, 1]; NaN:
+                                                                       // none ran (empty field)
+  std::array<float, shape::kVehicleTypeCount> typeProbabilities{};     // index = VehicleType
   shape::ShapeParams gamma{};  // count <= the file's gammaColumns (0 = no shape)
   LiftStatus liftStatus = LiftStatus::NotLifted;
   // Valid when liftStatus == Ok (written as empty fields otherwise):
@@ -92,8 +100,9 @@ struct DetectionRecord {
   shape::VehicleType topType() const;
 };
 
-// The column names of a file with this key and gamma count, in order.
-std::vector<std::string> detectionsColumns(DetectionsKey key, int gammaColumns);
+// The column names of a file with this key, gamma count and format, in order.
+std::vector<std::string> detectionsColumns(DetectionsKey key, int gammaColumns,
+                                           int formatVersion = kDetectionsFormatVersion);
 
 class DetectionsFileWriter {
  public:
@@ -123,7 +132,7 @@ class DetectionsFileWriter {
 
 struct DetectionsFile {
   std::string path;
-  int formatVersion = kDetectionsFormatVersion;
+  int formatVersion = kDetectionsFormatVersion;  // as read: 1 (no frame-edge columns) or 2
   DetectionsFileInfo info{};
   std::vector<DetectionRecord> rows;  // file order
   std::vector<int> lines;             // line of each row in the file (for messages)
