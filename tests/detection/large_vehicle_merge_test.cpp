@@ -1,5 +1,6 @@
 // Parts of one bus or truck become one box: both most likely Large, on one axis, overlapping
-// or touching; cars, gaps, side-by-side vehicles, crossing axes and over-long results stay apart.
+// or touching; cars, gaps, side-by-side vehicles, crossing axes and over-long results stay apart;
+// a kept bus part takes the extent of the longer duplicate the last suppression drops.
 #include "detection/large_vehicle_merge.hpp"
 
 #include <array>
@@ -81,6 +82,39 @@ TEST(LargeVehicleMerge, WhatIsNotOneVehicleStaysApart) {
   std::array<Detection, 2> d{bus, vehicle(200.0, 50.0, 240.0, 50.0, 0.0, 0.8F)};
   EXPECT_EQ(mergeLargeVehicleParts(d, 0.05, off), 2U);
   EXPECT_DOUBLE_EQ(d[0].box.length, 240.0);
+}
+
+// The case of a real bus (CATS Madison 7_13, 4.7 cm/px): the first stage boxed its front part
+// (170 px, the better score, typed Large) and nearly all of it (207 px); the suppression of
+// duplicates keeps the part, which now takes the longer box's extent along its own axis.
+TEST(LargeVehicleMerge, AKeptBusPartAbsorbsItsLongerDuplicate) {
+  Detection part = vehicle(453.8, 265.2, 170.0, 54.2, 4.7147, 0.60F);
+  const Detection longer =
+      vehicle(453.2, 325.5, 206.8, 50.3, 1.4464, 0.56F, shape::VehicleType::Sedan);
+  ASSERT_TRUE(absorbLongerDuplicate(part, longer, 0.047, LargeVehicleMergeOptions{}));
+  // Along the part's axis (pointing up the image): the part spans 265.2 -/+ 85 px in v, the
+  // longer box 325.5 -/+ 103.4: the union is about v 180 .. 429 (the label: 179 .. 434).
+  EXPECT_NEAR(part.box.length, 248.6, 0.5);
+  EXPECT_NEAR(part.box.cy, 304.5, 0.5);
+  EXPECT_DOUBLE_EQ(part.box.angle, 4.7147);  // heading and type stay the part's
+  EXPECT_DOUBLE_EQ(part.box.width, 54.2);
+  EXPECT_FLOAT_EQ(part.score, 0.60F);
+
+  // Only a Large-typed kept box, only a longer duplicate, within the merge's limits.
+  Detection car = vehicle(453.8, 265.2, 170.0, 54.2, 4.7147, 0.60F, shape::VehicleType::Van);
+  EXPECT_FALSE(absorbLongerDuplicate(car, longer, 0.047, LargeVehicleMergeOptions{}));
+  EXPECT_DOUBLE_EQ(car.box.length, 170.0);
+  Detection whole = vehicle(453.2, 325.5, 206.8, 50.3, 1.4464, 0.60F);
+  const Detection shorter = vehicle(453.8, 265.2, 170.0, 54.2, 4.7147, 0.56F);
+  EXPECT_FALSE(absorbLongerDuplicate(whole, shorter, 0.047, LargeVehicleMergeOptions{}));
+  EXPECT_DOUBLE_EQ(whole.box.length, 206.8);
+  Detection tooLong = vehicle(453.8, 265.2, 170.0, 54.2, 4.7147, 0.60F);
+  EXPECT_FALSE(absorbLongerDuplicate(tooLong, longer, 0.2, LargeVehicleMergeOptions{}));  // 50 m
+  LargeVehicleMergeOptions off;
+  off.enabled = false;
+  Detection kept = vehicle(453.8, 265.2, 170.0, 54.2, 4.7147, 0.60F);
+  EXPECT_FALSE(absorbLongerDuplicate(kept, longer, 0.047, off));
+  EXPECT_DOUBLE_EQ(kept.box.length, 170.0);
 }
 
 }  // namespace

@@ -273,7 +273,7 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
   // same car. A last suppression on the refined boxes keeps the better one. Cars do not
   // overlap each other on the ground, so the "contained in" test is safe within a tile too.
   const std::size_t suppressed =
-      secondStage ? suppressRefinedDuplicates(out.first(verified)) : verified;
+      secondStage ? suppressRefinedDuplicates(out.first(verified), stats_.frameGsd_m) : verified;
   stats_.refinedDuplicates = static_cast<int>(verified - suppressed);
   // Parts of one bus or truck become one box; it keeps the better part's front/back (a look at
   // the merged box's ends was tried: the union can reach past the vehicle's end, and the end
@@ -326,8 +326,11 @@ void DetectionStage::markFrameEdge(const preprocess::FrameGeometry& geometry,
   }
 }
 
-std::size_t DetectionStage::suppressRefinedDuplicates(std::span<Detection> detections) const {
-  // Order as the decoder left it (whole before cut, then score): the earlier one wins.
+std::size_t DetectionStage::suppressRefinedDuplicates(std::span<Detection> detections,
+                                                      double gsd_m) const {
+  // Order as the decoder left it (whole before cut, then score): the earlier one wins; a bus
+  // part that wins over the longer box of its bus takes that box's extent
+  // (absorbLongerDuplicate).
   std::size_t kept = 0;
   for (std::size_t i = 0; i < detections.size(); ++i) {
     const geometry::RotatedBox& a = detections[i].box;
@@ -344,6 +347,9 @@ std::size_t DetectionStage::suppressRefinedDuplicates(std::span<Detection> detec
       const double unionArea = areaA + areaB - intersection;
       duplicate = (unionArea > 0.0 && intersection / unionArea > options_.decoder.nmsIou) ||
                   intersection / std::min(areaA, areaB) > options_.decoder.duplicateOverlap;
+      if (duplicate) {
+        absorbLongerDuplicate(detections[k], detections[i], gsd_m, options_.largeMerge);
+      }
     }
     if (!duplicate) {
       detections[kept++] = detections[i];

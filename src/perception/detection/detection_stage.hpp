@@ -131,7 +131,7 @@ class DetectionStage {
 
  private:
   // Removes detections that overlap a better one after the second stage; returns the count kept.
-  std::size_t suppressRefinedDuplicates(std::span<Detection> detections) const;
+  std::size_t suppressRefinedDuplicates(std::span<Detection> detections, double gsd_m) const;
   // The lines a box must stay within (frame px) not to count as reaching the frame's border:
   // the decoder's cut margin inside the frame's edges.
   struct FrameEdgeBounds {

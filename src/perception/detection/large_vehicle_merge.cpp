@@ -54,6 +54,12 @@ bool tryMerge(Detection& into, const Detection& part, double gsd_m,
 
 }  // namespace
 
+bool absorbLongerDuplicate(Detection& kept, const Detection& duplicate, double gsd_m,
+                           const LargeVehicleMergeOptions& options) {
+  return options.enabled && mostLikelyLarge(kept) && duplicate.box.length > kept.box.length &&
+         tryMerge(kept, duplicate, gsd_m, options);
+}
+
 std::size_t mergeLargeVehicleParts(std::span<Detection> detections, double gsd_m,
                                    const LargeVehicleMergeOptions& options) {
   if (!options.enabled) {

@@ -11,6 +11,11 @@
 // to the middle), with the larger width and score; type, shape and heading stay k's. A merge
 // whose length would pass maxLength_m (at gsd_m; no limit when gsd_m is not positive) is not
 // made. Chains of parts merge one after the other. Order is kept. No heap allocation.
+// absorbLongerDuplicate() serves the detection stage's last suppression: where the first stage
+// boxed one bus twice, its front part and nearly all of it, the part (the better score) would
+// win and the longer box go; instead a most-likely-Large kept box is stretched over the longer
+// duplicate with the same geometry and limits (its type need not be Large: the crop network
+// sees only the middle of a long box).
 #pragma once
 
 #include <cstddef>
@@ -32,5 +37,10 @@ struct LargeVehicleMergeOptions {
 // ones of detections).
 std::size_t mergeLargeVehicleParts(std::span<Detection> detections, double gsd_m,
                                    const LargeVehicleMergeOptions& options);
+
+// Stretches kept over duplicate (see contract) when options.enabled, kept is most likely Large
+// and duplicate is the longer box; true when it did (the caller then drops duplicate as before).
+bool absorbLongerDuplicate(Detection& kept, const Detection& duplicate, double gsd_m,
+                           const LargeVehicleMergeOptions& options);
 
 }  // namespace vp::detection
