@@ -280,6 +280,61 @@ TEST_F(EvaluateYolo, MissesOfVehiclesCutByTheImageBorderAreCountedApart) {
             std::string::npos);
 }
 
+// A false box reaching the frame's edge (the detections file's at_frame_edge) is counted apart,
+// with the precision without such boxes; a format 1 file cannot say, and the rows are left out.
+TEST_F(EvaluateYolo, FalseBoxesAtTheFrameEdgeAreCountedApart) {
+  output_files::DetectionsFileInfo info;
+  info.key = output_files::DetectionsKey::Image;
+  info.gammaColumns = 0;
+  output_files::DetectionsFileWriter writer;
+  std::string why;
+  ASSERT_TRUE(writer.open((dir_ / "edge_dets.csv").string(), info, &why)) << why;
+  output_files::DetectionRecord r;
+  r.typeProbabilities.fill(1.0F / 7.0F);
+  r.score = 0.9F;
+  r.setImageStem("a_1");
+  r.box = {31.5, 23.5, 24, 16, kPi / 2};  // a_1's car: a true positive
+  ASSERT_TRUE(writer.writeRow(r, &why)) << why;
+  r.detId = 1;
+  r.score = 0.8F;
+  r.box = {3.5, 40.5, 20, 10, 0.0};  // no label there, reaching the left edge
+  r.atFrameEdge = true;
+  ASSERT_TRUE(writer.writeRow(r, &why)) << why;
+  r.detId = 2;
+  r.score = 0.7F;
+  r.box = {50.5, 8.5, 12, 8, 0.0};  // no label there, inside
+  r.atFrameEdge = false;
+  ASSERT_TRUE(writer.writeRow(r, &why)) << why;
+  ASSERT_TRUE(writer.close(&why)) << why;
+  std::ofstream(dir_ / "val.txt") << "a_1\n";
+  const std::string out = (dir_ / "report").string();
+  const std::string args = "--yolo " + (dir_ / "yolo").string() + " --val-list " +
+                           (dir_ / "val.txt").string() + " --out " + out + " --detections ";
+  CommandResult result = run(args + (dir_ / "edge_dets.csv").string());
+  ASSERT_EQ(result.exitCode, 0) << result.err;
+  YAML::Node report = YAML::LoadFile(out + "/report.json");
+  EXPECT_EQ(report["measures"]["fp"].as<int>(), 2);
+  EXPECT_EQ(report["measures"]["fp_at_frame_edge"].as<int>(), 1);
+  EXPECT_DOUBLE_EQ(report["measures"]["precision"].as<double>(), 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(report["measures"]["precision_inside"].as<double>(), 0.5);
+  EXPECT_NE(readText(out + "/report.md").find("false positives at the frame edge"),
+            std::string::npos);
+
+  // The same rows in format 1: no frame-edge rows in the report.
+  std::ofstream(dir_ / "old_dets.csv")
+      << "# format_version: 1\n"
+         "image,det_id,score,box_cx_px,box_cy_px,box_length_px,box_width_px,box_angle_rad,"
+         "direction_known,type,p_estate,p_compact,p_sports,p_sedan,p_suv,p_van,p_large,"
+         "lift_status,east_m,north_m,up_m,lat_deg,lon_deg,height_m,heading_enu_rad,length_m,"
+         "width_m,height_m_vehicle\n"
+         "a_1,0,0.9,3.5,40.5,20,10,0,0,estate,1,0,0,0,0,0,0,not_lifted,,,,,,,,,,\n";
+  result = run(args + (dir_ / "old_dets.csv").string());
+  ASSERT_EQ(result.exitCode, 0) << result.err;
+  report = YAML::LoadFile(out + "/report.json");
+  EXPECT_EQ(report["measures"]["fp"].as<int>(), 1);
+  EXPECT_FALSE(report["measures"]["fp_at_frame_edge"].IsDefined());
+}
+
 TEST_F(EvaluateYolo, ValidationListSelectsImages) {
   std::ofstream(dir_ / "val.txt") << "# validation stems\na_1\n";
   const std::string out = (dir_ / "report").string();

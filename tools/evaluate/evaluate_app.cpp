@@ -72,6 +72,7 @@ evaluation::PredictedObject toPrediction(const output_files::DetectionRecord& r)
   p.box = r.box;
   p.score = r.score;
   p.directionKnown = r.directionKnown;
+  p.atFrameEdge = r.atFrameEdge;
   p.hasTypeProbabilities = true;
   p.typeProbabilities = r.typeProbabilities;
   p.shape = r.gamma;
@@ -287,6 +288,7 @@ bool loadSequenceImages(const SequenceInput& input, const EvaluateOptions& optio
     return false;
   }
   out->model = detections.info.model;
+  out->formatVersion = detections.formatVersion;
   std::map<std::int64_t, std::size_t> imageOfFrame;
   for (const sequence::FrameRecord& frame : reader.frames()) {
     if (!inFrameRange(options, frame.frameId)) {
@@ -559,6 +561,7 @@ bool loadYoloImages(const EvaluateOptions& options, LoadedInput* out, std::strin
                        "'frame_id')");
     }
     out->model = detections.info.model;
+    out->formatVersion = detections.formatVersion;
     std::map<std::string, std::size_t> indexOfStem;
     for (const std::string& stem : stems) {
       indexOfStem[stem] = out->images.size();
@@ -677,6 +680,7 @@ int runEvaluate(const EvaluateOptions& options, std::ostream& out, std::ostream&
   context.movingSpeed_mps = options.movingSpeed_mps;
   evaluation::Evaluator total(evalOptions);
   std::set<std::string> models;
+  context.frameEdgeKnown = detections;
   for (const SequenceInput& input : options.sequences) {
     if (input.detectionsFile.empty()) {
       continue;
@@ -696,6 +700,7 @@ int runEvaluate(const EvaluateOptions& options, std::ostream& out, std::ostream&
     if (!loaded.model.empty()) {
       models.insert(loaded.model);
     }
+    context.frameEdgeKnown = context.frameEdgeKnown && loaded.formatVersion >= 2;
     context.inputs.push_back(
         {loaded.label, loaded.detectionsFile, loaded.model, loaded.skippedRows, own.summary()});
   }

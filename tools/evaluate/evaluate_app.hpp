@@ -64,7 +64,8 @@ struct ImageData {
 struct LoadedInput {
   std::string label;  // sequence directory or YOLO folder
   std::string detectionsFile;
-  std::string model;  // the detections file's "# model:" line
+  std::string model;      // the detections file's "# model:" line
+  int formatVersion = 0;  // the detections file's (2: with at_frame_edge)
   std::vector<ImageData> images;
   int skippedRows = 0;  // detection rows outside the evaluated frames / validation images
 };

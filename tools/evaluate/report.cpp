@@ -120,6 +120,17 @@ std::vector<Row> measureRows(const ReportContext& context) {
       {"Pose", "position error, MAD", "position_mad_px", s.position_px.mad, Unit::Pixel,
        s.position_px.count},
   };
+  if (context.frameEdgeKnown) {
+    // Sets differ in whether they label vehicles cut by the frame's border: the false boxes
+    // reaching it, apart (the rule's precision stays the one above).
+    const std::vector<Row> edge{
+        {"Detection", "false positives at the frame edge (at_frame_edge)", "fp_at_frame_edge",
+         static_cast<double>(s.falsePositivesAtFrameEdge), Unit::Count},
+        {"Detection", "precision without them", "precision_inside", s.precisionInside,
+         Unit::Percent},
+    };
+    rows.insert(rows.begin() + 6, edge.begin(), edge.end());
+  }
   if (yolo) {
     // YOLO labels stop at the image's edge; the misses among vehicles cut by it, apart.
     rows.push_back({"Detection", "false negatives cut by the image border", "fn_cut_by_border",

@@ -50,8 +50,9 @@ struct ReportContext {
   std::string valList;  // yolo mode
   std::vector<InputSummary> inputs;
   evaluation::EvaluationSummary total;
-  bool hasDetections = true;  // detection sections (inputs with --detections)
-  bool hasTracking = false;   // tracking section (inputs with --tracks)
+  bool hasDetections = true;    // detection sections (inputs with --detections)
+  bool frameEdgeKnown = false;  // every detections file says which boxes reach the frame edge
+  bool hasTracking = false;     // tracking section (inputs with --tracks)
   double trackMatchDistance_m = evaluation::kDefaultTrackMatchDistance_m;
   double movingSpeed_mps = evaluation::kDefaultMovingSpeed_mps;
   std::vector<TrackingInputSummary> trackingInputs;

@@ -85,6 +85,9 @@ MatchResult Evaluator::addImage(std::span<const ReferenceObject> references,
   for (const int r : match.falseNegatives) {
     falseNegativesCutByBorder_ += references[static_cast<std::size_t>(r)].cutByImageBorder ? 1 : 0;
   }
+  for (const int p : match.falsePositives) {
+    falsePositivesAtFrameEdge_ += predictions[static_cast<std::size_t>(p)].atFrameEdge ? 1 : 0;
+  }
   ignoredPredictions_ += static_cast<int>(match.ignoredPredictions.size());
   for (const auto& [p, r] : match.pairs) {
     const auto pi = static_cast<std::size_t>(p);
@@ -178,10 +181,13 @@ EvaluationSummary Evaluator::summary() const {
   s.falsePositives = falsePositives_;
   s.falseNegatives = falseNegatives_;
   s.falseNegativesCutByBorder = falseNegativesCutByBorder_;
+  s.falsePositivesAtFrameEdge = falsePositivesAtFrameEdge_;
   s.ignoredPredictions = ignoredPredictions_;
   // evaluate.py's convention: max(1, denominator), so nothing predicted gives 0, not NaN.
   s.precision = static_cast<double>(truePositives_) / std::max(1, truePositives_ + falsePositives_);
   s.recall = static_cast<double>(truePositives_) / std::max(1, truePositives_ + falseNegatives_);
+  s.precisionInside = static_cast<double>(truePositives_) /
+                      std::max(1, truePositives_ + falsePositives_ - falsePositivesAtFrameEdge_);
   s.f1 =
       s.precision + s.recall > 0.0 ? 2.0 * s.precision * s.recall / (s.precision + s.recall) : 0.0;
   s.meanMatchedIou = iou_.empty() ? kNan

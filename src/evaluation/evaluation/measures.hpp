@@ -67,6 +67,9 @@ struct PredictedObject {
   geometry::RotatedBox box{};  // image px
   float score = 0.0F;
   bool directionKnown = true;
+  // The box reaches the frame's border (the detections file's at_frame_edge, format 2): a false
+  // one is counted apart, for sets that label no vehicle cut by the border.
+  bool atFrameEdge = false;
   bool hasTypeProbabilities = true;
   std::array<float, shape::kVehicleTypeCount> typeProbabilities{};
   shape::ShapeParams shape{};
@@ -106,9 +109,13 @@ struct EvaluationSummary {
   int falsePositives = 0;
   int falseNegatives = 0;
   int falseNegativesCutByBorder = 0;  // of falseNegatives: references with cutByImageBorder
-  int ignoredPredictions = 0;         // matched to / overlapping an ignored reference
-  double precision = 0.0;             // TP / (TP + FP); 0 when nothing was predicted
-  double recall = 0.0;                // TP / (TP + FN)
+  int falsePositivesAtFrameEdge = 0;  // of falsePositives: predictions with atFrameEdge
+  // TP / (TP + FP - falsePositivesAtFrameEdge): the precision of a set whose labels leave out
+  // every vehicle cut by the frame's border (information; the rule's precision is `precision`).
+  double precisionInside = 0.0;
+  int ignoredPredictions = 0;  // matched to / overlapping an ignored reference
+  double precision = 0.0;      // TP / (TP + FP); 0 when nothing was predicted
+  double recall = 0.0;         // TP / (TP + FN)
   double f1 = 0.0;
   double meanMatchedIou = 0.0;  // NaN without pairs
   // pose
@@ -164,6 +171,7 @@ class Evaluator {
   int falsePositives_ = 0;
   int falseNegatives_ = 0;
   int falseNegativesCutByBorder_ = 0;
+  int falsePositivesAtFrameEdge_ = 0;
   int ignoredPredictions_ = 0;
   int directionUnknown_ = 0;
   std::vector<double> iou_;
