@@ -155,6 +155,9 @@ def parse_args(argv=None):
     p.add_argument("--flip-head-only", action="store_true",
                    help="train only the front/back branch (needs --flip-branch, --init-from and "
                         "--crop-only): type, shape, refinement and verifier stay as they are")
+    p.add_argument("--type-head-only", action="store_true",
+                   help="train only the type output layer (needs --init-from and --crop-only): "
+                        "shape, front/back, refinement and verifier stay exactly as they are")
     p.add_argument("--refine-head-only", action="store_true",
                    help="train only the box refinement head (needs --init-from and --crop-only): "
                         "type, shape, front/back and verifier stay exactly as they are")
@@ -712,6 +715,11 @@ def train(args) -> dict:
             raise SystemExit("--refine-head-only needs --init-from and --crop-only")
         for name, prm in crop_net.named_parameters():
             prm.requires_grad = name.startswith("refine.")
+    if args.type_head_only:
+        if not (args.init_from and args.crop_only):
+            raise SystemExit("--type-head-only needs --init-from and --crop-only")
+        for name, prm in crop_net.named_parameters():
+            prm.requires_grad = name.startswith("type_logits.")
     opt_c = torch.optim.AdamW([q for q in crop_net.parameters() if q.requires_grad], lr=args.lr,
                               weight_decay=1e-4) if crop_net else None
     shape_loss = make_shape_loss(args.shape_loss, asm)
@@ -757,7 +765,8 @@ def train(args) -> dict:
     if crop_net:
         # Head only: the frozen layers keep their batch-norm statistics (eval mode), so the
         # other outputs stay exactly what --init-from gave.
-        crop_net.train(not (args.verifier_head_only or args.flip_head_only or args.refine_head_only))
+        crop_net.train(not (args.verifier_head_only or args.flip_head_only or args.refine_head_only
+                            or args.type_head_only))
     last_ckpt = time.monotonic()
     t_run = time.monotonic()
     elapsed0 = elapsed

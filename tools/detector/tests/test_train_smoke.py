@@ -97,6 +97,28 @@ class SmokeTraining(unittest.TestCase):
         self.assertEqual(res2["steps"], 20)
         self.assertEqual(res2["history"], [])
 
+    def test_type_head_only_changes_only_the_type_output(self):
+        """--type-head-only trains the type output layer alone: every other weight and batch-norm
+        statistic of the crop network stays --init-from's, bit for bit."""
+        import torch
+        from contextlib import redirect_stdout
+        import io
+
+        with redirect_stdout(io.StringIO()):
+            train.train(train.parse_args(tiny_run_args(self.seq, self.run, 1) + ["--max-steps", "1"]))
+            second = self.run + "_type"
+            train.train(train.parse_args(
+                tiny_run_args(self.seq, second, 1) + [
+                    "--max-steps", "3", "--crop-only", "--type-head-only",
+                    "--init-from", os.path.join(self.run, "checkpoint.pt")]))
+        before = torch.load(os.path.join(self.run, "checkpoint.pt"))["crop"]
+        after = torch.load(os.path.join(second, "checkpoint.pt"))["crop"]
+        changed = sorted(k for k, v in before.items() if not torch.equal(v, after[k]))
+        self.assertEqual(changed, ["type_logits.bias", "type_logits.weight"])
+        with self.assertRaises(SystemExit) as e:
+            train.train(train.parse_args(tiny_run_args(self.seq, second, 1) + ["--type-head-only"]))
+        self.assertIn("--type-head-only needs", str(e.exception))
+
     def test_batch_stream_is_reproducible_from_its_start(self):
         args = train.parse_args(["--data", self.seq, "--out", self.run, "--batch", "2",
                                  "--tile", "64", "--crop-batch", "3", "--working-width", "128"])
