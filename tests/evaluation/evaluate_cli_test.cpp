@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 #include <opencv2/core.hpp>
@@ -15,6 +16,7 @@
 
 #include "cli_test_support.hpp"
 #include "evaluate_app.hpp"
+#include "geometry/rotated_box.hpp"
 #include "output_files/detections_file.hpp"
 #include "sequence/recorded_sequence.hpp"
 
@@ -240,22 +242,41 @@ class EvaluateYolo : public EvaluateCli {
                                                    "0 0.75 0.75 0.25 0.25\n1 0.5 0.5 0.1 0.1\n";
     // a_1's car: centre (0.5 * 64 - 0.5, 0.5 * 48 - 0.5), 16 x 24 px. The detection stands at
     // 90 degrees (length 24 along v), so its enclosing box is the label's box.
+    writeImageDetections("yolo_dets.csv",
+                         {imageRow("a_1", 0, 0.9F, {31.5, 23.5, 24, 16, kPi / 2}),
+                          // exactly the first car of b_2
+                          imageRow("b_2", 0, 0.9F, {15.5, 11.5, 16, 12, 0.0})},
+                         "yolo-test");
+  }
+
+  // One image-keyed row with uniform type probabilities.
+  static output_files::DetectionRecord imageRow(const char* stem, int detId, float score,
+                                                const geometry::RotatedBox& box,
+                                                bool atFrameEdge = false) {
+    output_files::DetectionRecord r;
+    r.typeProbabilities.fill(1.0F / 7.0F);
+    r.setImageStem(stem);
+    r.detId = detId;
+    r.score = score;
+    r.box = box;
+    r.atFrameEdge = atFrameEdge;
+    return r;
+  }
+
+  // An image-keyed detections file (no gamma columns) of these rows, in dir_.
+  void writeImageDetections(const std::string& name,
+                            const std::vector<output_files::DetectionRecord>& rows,
+                            const std::string& model = "") const {
     output_files::DetectionsFileInfo info;
     info.key = output_files::DetectionsKey::Image;
     info.gammaColumns = 0;
-    info.model = "yolo-test";
+    info.model = model;
     output_files::DetectionsFileWriter writer;
     std::string why;
-    ASSERT_TRUE(writer.open((dir_ / "yolo_dets.csv").string(), info, &why)) << why;
-    output_files::DetectionRecord r;
-    r.typeProbabilities.fill(1.0F / 7.0F);
-    r.score = 0.9F;
-    r.setImageStem("a_1");
-    r.box = {31.5, 23.5, 24, 16, kPi / 2};
-    ASSERT_TRUE(writer.writeRow(r, &why)) << why;
-    r.setImageStem("b_2");
-    r.box = {15.5, 11.5, 16, 12, 0.0};  // exactly the first car of b_2
-    ASSERT_TRUE(writer.writeRow(r, &why)) << why;
+    ASSERT_TRUE(writer.open((dir_ / name).string(), info, &why)) << why;
+    for (const output_files::DetectionRecord& r : rows) {
+      ASSERT_TRUE(writer.writeRow(r, &why)) << why;
+    }
     ASSERT_TRUE(writer.close(&why)) << why;
   }
 };
@@ -283,29 +304,11 @@ TEST_F(EvaluateYolo, MissesOfVehiclesCutByTheImageBorderAreCountedApart) {
 // A false box reaching the frame's edge (the detections file's at_frame_edge) is counted apart,
 // with the precision without such boxes; a format 1 file cannot say, and the rows are left out.
 TEST_F(EvaluateYolo, FalseBoxesAtTheFrameEdgeAreCountedApart) {
-  output_files::DetectionsFileInfo info;
-  info.key = output_files::DetectionsKey::Image;
-  info.gammaColumns = 0;
-  output_files::DetectionsFileWriter writer;
-  std::string why;
-  ASSERT_TRUE(writer.open((dir_ / "edge_dets.csv").string(), info, &why)) << why;
-  output_files::DetectionRecord r;
-  r.typeProbabilities.fill(1.0F / 7.0F);
-  r.score = 0.9F;
-  r.setImageStem("a_1");
-  r.box = {31.5, 23.5, 24, 16, kPi / 2};  // a_1's car: a true positive
-  ASSERT_TRUE(writer.writeRow(r, &why)) << why;
-  r.detId = 1;
-  r.score = 0.8F;
-  r.box = {3.5, 40.5, 20, 10, 0.0};  // no label there, reaching the left edge
-  r.atFrameEdge = true;
-  ASSERT_TRUE(writer.writeRow(r, &why)) << why;
-  r.detId = 2;
-  r.score = 0.7F;
-  r.box = {50.5, 8.5, 12, 8, 0.0};  // no label there, inside
-  r.atFrameEdge = false;
-  ASSERT_TRUE(writer.writeRow(r, &why)) << why;
-  ASSERT_TRUE(writer.close(&why)) << why;
+  writeImageDetections(
+      "edge_dets.csv",
+      {imageRow("a_1", 0, 0.9F, {31.5, 23.5, 24, 16, kPi / 2}),   // a_1's car: a true positive
+       imageRow("a_1", 1, 0.8F, {3.5, 40.5, 20, 10, 0.0}, true),  // no label, reaching the edge
+       imageRow("a_1", 2, 0.7F, {50.5, 8.5, 12, 8, 0.0})});       // no label, inside
   std::ofstream(dir_ / "val.txt") << "a_1\n";
   const std::string out = (dir_ / "report").string();
   const std::string args = "--yolo " + (dir_ / "yolo").string() + " --val-list " +
