@@ -1,5 +1,6 @@
 #include "report.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -129,7 +130,9 @@ std::vector<Row> measureRows(const ReportContext& context) {
         {"Detection", "precision without them", "precision_inside", s.precisionInside,
          Unit::Percent},
     };
-    rows.insert(rows.begin() + 6, edge.begin(), edge.end());
+    const auto afterF1 =
+        std::find_if(rows.begin(), rows.end(), [](const Row& row) { return row.key == "f1"; }) + 1;
+    rows.insert(afterF1, edge.begin(), edge.end());
   }
   if (yolo) {
     // YOLO labels stop at the image's edge; the misses among vehicles cut by it, apart.
