@@ -14,19 +14,24 @@ the image:
   label: the vehicle was boxed in pieces or with a box of the wrong size;
 * **missed**: neither.
 
-Prints the three counts (and --out writes them as JSON with one row per vehicle). The
+Prints the three counts (and --out writes them as JSON with one row per vehicle;
+--list-failures writes the vehicles in parts or missed as a failure list for
+``failure_sheet.py``: the label as a box along its long side, and the detection overlapping it
+most, if any). The
 detections are not matched one to one here: the figure says how long vehicles are boxed, the
 set's precision and recall stay ``vp_evaluate``'s.
 
   tools/detector/eval_large_real.py --root ../shared/data/real/cats-madison --gsd-m 0.047 \\
-      --detections dets.csv [--list split.json] [--out report.json]
+      --detections dets.csv [--list split.json] [--out report.json] [--list-failures left.csv]
 
 Run with Debian's Python (/usr/bin/python3).
 """
 from __future__ import annotations
 
 import argparse
+import csv
 import json
+import math
 import os
 import sys
 from typing import Dict, Optional, Set
@@ -70,19 +75,43 @@ def evaluate(root: str, detections: Dict, gsd_m: float, min_length_m: float, iou
         if (stems is not None and stem not in stems) or not len(sample.boxes):
             continue
         height, width = sample.loaded().image.shape[:2]
-        dets = np.array([enclosing_box(b, width, height)
-                         for _, b in detections.get(stem, [])]).reshape(-1, 4)
+        rotated = [b for _, b in detections.get(stem, [])]
+        dets = np.array([enclosing_box(b, width, height) for b in rotated]).reshape(-1, 4)
         for box in yolo_pixel_boxes(sample.boxes, width, height):
             length_px = max(box[2] - box[0], box[3] - box[1])
             if length_px < min_px:
                 continue
             kind, best = classify(box, dets, iou)
             counts[kind] += 1
-            rows.append({"image": stem, "cx_px": float(box[0] + box[2]) / 2,
-                         "cy_px": float(box[1] + box[3]) / 2, "length_px": float(length_px),
-                         "result": kind, "best_iou": round(float(best), 3)})
+            row = {"image": stem, "cx_px": float(box[0] + box[2]) / 2,
+                   "cy_px": float(box[1] + box[3]) / 2, "length_px": float(length_px),
+                   "width_px": float(min(box[2] - box[0], box[3] - box[1])),
+                   "heading_rad": 0.0 if box[2] - box[0] >= box[3] - box[1] else math.pi / 2,
+                   "result": kind, "best_iou": round(float(best), 3)}
+            overlap = aa_iou(box, dets)
+            if len(overlap) and overlap.max() > 0:
+                row["detection"] = [float(v) for v in rotated[int(overlap.argmax())]]
+            rows.append(row)
     return {"min_length_m": min_length_m, "gsd_m": gsd_m, "iou": iou,
             "vehicles": sum(counts.values()), **counts, "rows": rows}
+
+
+FAILURE_COLUMNS = ["image", "result", "cx_px", "cy_px", "length_px", "width_px", "heading_rad",
+                   "det_cx_px", "det_cy_px", "det_length_px", "det_width_px", "det_angle_rad"]
+
+
+def write_failures(path: str, report: dict) -> None:
+    """The vehicles boxed in parts or missed, as a failure list of failure_sheet.py (label box
+    along the label's long side, no direction; the most overlapping detection, else empty)."""
+    with open(path, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(FAILURE_COLUMNS)
+        for r in report["rows"]:
+            if r["result"] == "whole":
+                continue
+            det = r.get("detection")
+            out.writerow([r["image"], r["result"], r["cx_px"], r["cy_px"], r["length_px"],
+                          r["width_px"], r["heading_rad"]] + (det if det else [""] * 5))
 
 
 def main(argv=None) -> int:
@@ -96,6 +125,8 @@ def main(argv=None) -> int:
     p.add_argument("--iou", type=float, default=0.5, help="IoU from which a box is whole")
     p.add_argument("--list", default=None, help="only these images (split.json or stems)")
     p.add_argument("--out", default=None, help="JSON report with one row per vehicle")
+    p.add_argument("--list-failures", default=None,
+                   help="CSV of the vehicles in parts or missed, for failure_sheet.py")
     a = p.parse_args(argv)
     if not a.gsd_m > 0 or not a.min_length_m > 0:
         p.error("--gsd-m and --min-length-m must be > 0")
@@ -112,6 +143,8 @@ def main(argv=None) -> int:
     if a.out:
         with open(a.out, "w") as f:
             json.dump(report, f, indent=1)
+    if a.list_failures:
+        write_failures(a.list_failures, report)
     return 0
 
 

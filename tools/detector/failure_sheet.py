@@ -2,9 +2,10 @@
 """Contact sheet of detector failures on real images, for the model card.
 
 Reads a failure list that ``eval_rotated_real.py`` wrote (``--list-reversed``, ``--list-false``
-or ``--list-missed``: CSV with an ``image`` column and a label box ``cx_px cy_px length_px
+or ``--list-missed``; or ``eval_large_real.py --list-failures``: CSV with an ``image`` column and a label box ``cx_px cy_px length_px
 width_px heading_rad`` and/or a detection box ``det_cx_px det_cy_px det_length_px det_width_px
-det_angle_rad``, pixels, the project's image convention) and draws one tile per row: the image
+det_angle_rad``, pixels, the project's image convention; a box whose fields are all empty is
+absent from that row) and draws one tile per row: the image
 around the box, the label in green and the detection in red, each with an arrow from its centre
 to its front, and the image's stem below. Tiles are cut around the label box where there is
 one, else around the detection, scaled so that a box fills about half of the tile.
@@ -41,8 +42,8 @@ class SheetError(Exception):
 
 
 def box_of(row: Dict[str, str], keys: Tuple[str, ...], where: str) -> Optional[np.ndarray]:
-    if not all(k in row for k in keys):
-        return None
+    if not all(k in row for k in keys) or all(not row[k] for k in keys):
+        return None  # no such box in this list, or none in this row (all fields empty)
     try:
         box = np.array([float(row[k]) for k in keys])
     except ValueError:

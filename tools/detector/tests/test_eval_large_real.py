@@ -66,6 +66,28 @@ class EvalLargeRealTest(unittest.TestCase):
         self.assertEqual(results[(500, 350)], "parts")
         self.assertEqual(results[(200, 500)], "missed")
 
+    def test_failure_list_draws_with_failure_sheet(self):
+        import csv
+        from detector import failure_sheet
+
+        left = os.path.join(self.tmp.name, "left.csv")
+        self.run_tool([(500, 290, 110, 55, np.pi / 2), (200, 100, 230, 58, 0.0)],
+                      "--list-failures", left)
+        with open(left, newline="") as f:
+            rows = list(csv.DictReader(f))
+        # the whole bus is not listed; the part's bus with its detection, the missed one without
+        self.assertEqual([(r["result"], round(float(r["cy_px"]))) for r in rows],
+                         [("parts", 350), ("missed", 500)])
+        self.assertAlmostEqual(float(rows[0]["heading_rad"]), np.pi / 2)  # along its long side
+        self.assertAlmostEqual(float(rows[0]["length_px"]), 240.0, places=6)
+        self.assertAlmostEqual(float(rows[0]["width_px"]), 60.0, places=6)
+        self.assertEqual(float(rows[0]["det_cy_px"]), 290.0)
+        self.assertEqual(rows[1]["det_cx_px"], "")
+        sheet = os.path.join(self.tmp.name, "left.jpg")
+        self.assertEqual(failure_sheet.main(["--root", self.root, "--list", left, "--out", sheet,
+                                             "--tile-px", "64", "--columns", "2"]), 0)
+        self.assertEqual(cv2.imread(sheet).shape[1], 2 * 64)  # two tiles in one row
+
     def test_min_length_and_list(self):
         report = self.run_tool([(200, 100, 230, 58, 0.0)], "--min-length-m", "13")
         self.assertEqual(report["vehicles"], 0)  # no label is 13 m long
