@@ -130,7 +130,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--root", required=True, help="folder with images/ (the real set)")
-    p.add_argument("--list", required=True, help="failure list CSV from eval_rotated_real.py")
+    p.add_argument("--list", required=True,
+                   help="failure list CSV from eval_rotated_real.py or eval_large_real.py")
     p.add_argument("--out", required=True, help="picture to write (.jpg or .png)")
     p.add_argument("--tile-px", type=int, default=160, help="side of one tile in pixels")
     p.add_argument("--columns", type=int, default=8, help="tiles per row")

@@ -699,27 +699,20 @@ def train(args) -> dict:
             prm.requires_grad = name.split(".")[0] in head_names
     opt_d = torch.optim.AdamW([q for q in det.parameters() if q.requires_grad], lr=args.lr,
                               weight_decay=1e-4)
-    if args.verifier_head_only:
-        if not (args.verifier_samples and args.init_from and args.crop_only):
-            raise SystemExit("--verifier-head-only needs --verifier-samples, --init-from and "
-                             "--crop-only")
+    # Head-only modes: the crop-network parameters that train (every other weight and batch-norm
+    # statistic stays --init-from's), and the options each needs beside --init-from, --crop-only.
+    head_only = {"verifier_head_only": (("vehicle_logit.", "verifier_fc."), ("verifier_samples",)),
+                 "flip_head_only": (("flip_fc.", "flip_logit."), ("flip_branch",)),
+                 "refine_head_only": (("refine.",), ()),
+                 "type_head_only": (("type_logits.",), ())}
+    for mode, (prefixes, needs) in head_only.items():
+        if not getattr(args, mode):
+            continue
+        if not (all(getattr(args, n) for n in needs) and args.init_from and args.crop_only):
+            flags = [f"--{n.replace('_', '-')}" for n in needs] + ["--init-from"]
+            raise SystemExit(f"--{mode.replace('_', '-')} needs {', '.join(flags)} and --crop-only")
         for name, prm in crop_net.named_parameters():
-            prm.requires_grad = name.startswith(("vehicle_logit.", "verifier_fc."))
-    if args.flip_head_only:
-        if not (args.flip_branch and args.init_from and args.crop_only):
-            raise SystemExit("--flip-head-only needs --flip-branch, --init-from and --crop-only")
-        for name, prm in crop_net.named_parameters():
-            prm.requires_grad = name.startswith(("flip_fc.", "flip_logit."))
-    if args.refine_head_only:
-        if not (args.init_from and args.crop_only):
-            raise SystemExit("--refine-head-only needs --init-from and --crop-only")
-        for name, prm in crop_net.named_parameters():
-            prm.requires_grad = name.startswith("refine.")
-    if args.type_head_only:
-        if not (args.init_from and args.crop_only):
-            raise SystemExit("--type-head-only needs --init-from and --crop-only")
-        for name, prm in crop_net.named_parameters():
-            prm.requires_grad = name.startswith("type_logits.")
+            prm.requires_grad = name.startswith(prefixes)
     opt_c = torch.optim.AdamW([q for q in crop_net.parameters() if q.requires_grad], lr=args.lr,
                               weight_decay=1e-4) if crop_net else None
     shape_loss = make_shape_loss(args.shape_loss, asm)
@@ -765,8 +758,7 @@ def train(args) -> dict:
     if crop_net:
         # Head only: the frozen layers keep their batch-norm statistics (eval mode), so the
         # other outputs stay exactly what --init-from gave.
-        crop_net.train(not (args.verifier_head_only or args.flip_head_only or args.refine_head_only
-                            or args.type_head_only))
+        crop_net.train(not any(getattr(args, mode) for mode in head_only))
     last_ckpt = time.monotonic()
     t_run = time.monotonic()
     elapsed0 = elapsed

@@ -485,14 +485,11 @@ shape::VehicleType DetectionRecord::topType() const {
 }
 
 std::vector<std::string> detectionsColumns(DetectionsKey key, int gammaColumns, int formatVersion) {
-  std::vector<std::string> names{key == DetectionsKey::FrameId ? "frame_id" : "image"};
-  for (std::size_t i = 0; i < kHeadColumns.size(); ++i) {
-    const bool format2Only =
-        i >= static_cast<std::size_t>(Layout::kFrameEdge - Layout::kDetId) &&
-        i < static_cast<std::size_t>(Layout::kFrameEdge - Layout::kDetId + kFormat2Columns);
-    if (formatVersion >= 2 || !format2Only) {
-      names.emplace_back(kHeadColumns[i]);
-    }
+  // The key and head columns by the layout's own naming (which knows format 1's gap).
+  const Layout layout{gammaColumns, formatVersion};
+  std::vector<std::string> names;
+  for (int c = Layout::kKey; c < layout.probabilities(); ++c) {
+    names.emplace_back(layout.name(c, key));
   }
   names.insert(names.end(), kProbabilityColumns.begin(), kProbabilityColumns.end());
   for (int s = 0; s < gammaColumns; ++s) {
