@@ -182,6 +182,7 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
       section.number("nominal_car_length_m", kCarLengthRange_m, d.detection.gsd.nominalCarLength_m);
   p.lift.boxHeightShare =
       section.number("lift_height_share", kProbabilityRange, d.lift.boxHeightShare);
+  p.footprintType.enabled = section.boolean("footprint_type", d.footprintType.enabled);
   section.warnUnknownKeys();
 }
 

@@ -106,6 +106,11 @@ bool FramePipeline::init(const PipelineOptions& options, const camera::CameraMod
       *why = "detection lifter: " + detail;
     return false;
   }
+  if (!footprintType_.init(options.footprintType, &detectionLifter_, &detail)) {
+    if (why)
+      *why = "perception.footprint_type: " + detail;
+    return false;
+  }
   // The preprocessor writes a corrected frame of its own when it undistorts or balances;
   // otherwise its output is a view of the caller's frame.
   ownsCorrected_ = preprocessor_.undistorts() || pre.whiteBalance;
@@ -234,6 +239,9 @@ PipelineStatus FramePipeline::finish(DetectedFrame& in) {
   liftSummary_ = detectionLifter_.liftFrame(
       lifter_, in.timestamp_ns, in.camera,
       std::span<const detection::Detection>(in.detections.data(), count), observations_);
+  footprintTypeScreening_ = footprintType_.apply(
+      std::span<VehicleObservation>(observations_.data(), liftSummary_.written), lifter_,
+      liftSummary_.cameraPose);
   footprint_ = planar_ ? frameFootprint(plane_, in.frameWidth_px, in.frameHeight_px)
                        : frameFootprint(lifter_, liftSummary_, in.frameWidth_px, in.frameHeight_px);
   timings_.lift_ms = msSince(liftStart);

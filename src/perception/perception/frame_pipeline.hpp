@@ -10,7 +10,8 @@
 // (Preprocessor::adaptToGsd, when the options ask for it) -> preprocess -> detection, with the
 // second stage's crops cut at the ground sample distance computed from that pose and the DTM at
 // each detection (PoseGsdProvider; without a usable pose the detection stage's own estimate) ->
-// lifting. Every detection is kept as a VehicleObservation, lifted or with the status saying why
+// lifting -> the footprint's size as evidence on each car's type (footprint_type.hpp). Every
+// detection is kept as a VehicleObservation, lifted or with the status saying why
 // not (no/stale/invalid pose, off the DTM, ...); with a camera pose the frame's ground footprint
 // (frameFootprint(): its corners on the DTM) is computed too. process() never throws and performs
 // no heap allocation after init(); a refused frame (wrong size/type, engine failure) returns a
@@ -49,6 +50,7 @@
 #include "lifting/lifting.hpp"
 #include "lifting/plane_lifter.hpp"
 #include "perception/detection_lifter.hpp"
+#include "perception/footprint_type.hpp"
 #include "preprocess/preprocessor.hpp"
 #include "shape/vehicle_model.hpp"
 #include "telemetry/pose_buffer.hpp"
@@ -60,6 +62,7 @@ struct PipelineOptions {
   preprocess::PreprocessOptions preprocess{};
   detection::DetectionStageOptions detection{};
   DetectionLifterOptions lift{};
+  FootprintTypeOptions footprintType{};
 };
 
 // Wall time of each stage of the last processed frame, ms.
@@ -167,6 +170,8 @@ class FramePipeline {
     return {observations_.data(), liftSummary_.written};
   }
   const FrameLiftSummary& liftSummary() const { return liftSummary_; }
+  // What the footprint type evidence did to the last frame's observations.
+  const FootprintTypeScreening& footprintTypeScreening() const { return footprintTypeScreening_; }
   // The ground the last processed frame shows (empty without a camera pose).
   const FrameFootprint& footprint() const { return footprint_; }
   const detection::DetectionStats& detectionStats() const { return detection_.stats(); }
@@ -196,6 +201,7 @@ class FramePipeline {
   lifting::PlaneLifter plane_;
   bool planar_ = false;  // lifting through plane_
   DetectionLifter detectionLifter_;
+  FootprintType footprintType_;
   PoseGsdProvider gsd_;
   lifting::CameraPoseWorld cameraPose_{};
   DetectedFrame serial_{};  // process()'s own
@@ -208,6 +214,7 @@ class FramePipeline {
   double workingScale_ = 0.0;
   std::array<VehicleObservation, detection::kMaxDetectionsPerFrame> observations_{};
   FrameLiftSummary liftSummary_{};
+  FootprintTypeScreening footprintTypeScreening_{};
   FrameFootprint footprint_{};
   PipelineTimings timings_{};
   double frameGsd_m_ = 0.0;
