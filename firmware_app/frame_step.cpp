@@ -314,6 +314,7 @@ void FrameStep::countObservations() {
   LoopCounters& counters = *wiring_.counters;
   const std::span<const perception::VehicleObservation> observations = perception_->observations();
   counters.detections += observations.size();
+  counters.retyped += perception_->retyped();
   for (const perception::VehicleObservation& observation : observations) {
     if (observation.liftStatus == perception::LiftStatus::Ok) {
       ++counters.lifted;

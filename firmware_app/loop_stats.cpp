@@ -65,7 +65,7 @@ int formatStatsLine(std::span<char> out, const LoopCounters& c, const LoopStats&
       out, &length,
       "stats: %.1f fps | frames in %llu processed %llu dropped %llu bad %llu | pose no %llu "
       "stale %llu invalid %llu | detections %llu lifted %llu outside_dtm %llu off_site %llu "
-      "on_deck %llu on_structure %llu lane_turned %llu | "
+      "on_deck %llu on_structure %llu lane_turned %llu retyped %llu | "
       "published "
       "%llu disposed %llu publish_errors %llu | ms median/p99:",
       period_s > 0.0 ? periodFrames / period_s : 0.0, static_cast<unsigned long long>(c.framesIn),
@@ -76,7 +76,7 @@ int formatStatsLine(std::span<char> out, const LoopCounters& c, const LoopStats&
       static_cast<unsigned long long>(c.detections), static_cast<unsigned long long>(c.lifted),
       static_cast<unsigned long long>(c.outsideDtm), static_cast<unsigned long long>(c.offSite),
       static_cast<unsigned long long>(c.onDeck), static_cast<unsigned long long>(c.onStructure),
-      static_cast<unsigned long long>(c.laneTurned),
+      static_cast<unsigned long long>(c.laneTurned), static_cast<unsigned long long>(c.retyped),
       static_cast<unsigned long long>(c.statesPublished),
       static_cast<unsigned long long>(c.tracksDisposed),
       static_cast<unsigned long long>(c.publishErrors));
@@ -113,6 +113,7 @@ int formatSummaryLine(std::span<char> out, const LoopCounters& c, const LoopStat
       "summary: wall_s=%.3f fps=%.2f frames_in=%llu processed=%llu dropped=%llu bad=%llu "
       "no_pose=%llu stale_pose=%llu invalid_pose=%llu pipeline_errors=%llu detections=%llu "
       "lifted=%llu outside_dtm=%llu off_site=%llu on_deck=%llu on_structure=%llu lane_turned=%llu "
+      "retyped=%llu "
       "states_published=%llu tracks_disposed=%llu "
       "publish_errors=%llu output_errors=%llu",
       wall_s, wall_s > 0.0 ? static_cast<double>(c.framesProcessed) / wall_s : 0.0,
@@ -125,7 +126,7 @@ int formatSummaryLine(std::span<char> out, const LoopCounters& c, const LoopStat
       static_cast<unsigned long long>(c.detections), static_cast<unsigned long long>(c.lifted),
       static_cast<unsigned long long>(c.outsideDtm), static_cast<unsigned long long>(c.offSite),
       static_cast<unsigned long long>(c.onDeck), static_cast<unsigned long long>(c.onStructure),
-      static_cast<unsigned long long>(c.laneTurned),
+      static_cast<unsigned long long>(c.laneTurned), static_cast<unsigned long long>(c.retyped),
       static_cast<unsigned long long>(c.statesPublished),
       static_cast<unsigned long long>(c.tracksDisposed),
       static_cast<unsigned long long>(c.publishErrors),

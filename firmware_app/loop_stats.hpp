@@ -57,6 +57,8 @@ struct LoopCounters {
   // With a site's lanes (site.lane_direction_prior): lifted observations turned round to face
   // the way of the lane they stand in.
   std::uint64_t laneTurned = 0;
+  // With perception.footprint_type: lifted cars whose most likely type the footprint changed.
+  std::uint64_t retyped = 0;
   std::uint64_t statesPublished = 0;
   std::uint64_t tracksDisposed = 0;
   std::uint64_t publishErrors = 0;

@@ -43,6 +43,9 @@ class FramePerception {
   // it (perception.working_gsd_m); 0 where the stage has none (the tests' injecting stages).
   virtual double workingScale() const { return 0.0; }
   virtual double frameGsd_m() const { return 0.0; }
+  // Lifted cars of the last frame whose most likely type their footprint changed
+  // (perception.footprint_type); 0 where the stage has none.
+  virtual std::size_t retyped() const { return 0; }
 
   // The two halves (see the contract). Start-up: slots in [1, kMaxHandOffSlots]; false + *why.
   static constexpr std::size_t kMaxHandOffSlots = 2;
@@ -91,6 +94,7 @@ class PipelinePerception final : public FramePerception {
   const char* modelId() const override { return modelId_.c_str(); }
   double workingScale() const override { return pipeline_.workingScale(); }
   double frameGsd_m() const override { return pipeline_.frameGsd_m(); }
+  std::size_t retyped() const override { return pipeline_.footprintTypeScreening().retyped; }
 
   bool prepareHandOff(std::size_t slots, std::string* why) override;
   perception::PipelineStatus detect(std::size_t slot, const cv::Mat& bgrFrame,

@@ -1,7 +1,8 @@
 // perception/frame_pipeline (the app's per-frame chain) on a simulated frame with the shipped
 // models: a refused frame names the problem and the next frame goes on; without a pose every
 // detection is kept image-only with NoPose; with the recorded pose the same detections are
-// lifted (the lift summary and each observation agree); no heap allocation per frame; the two
+// lifted (the lift summary and each observation agree) and their footprints weigh the cars'
+// types; no heap allocation per frame; the two
 // halves (detect, finish) with the next frame detected in between give process()'s results.
 #include <gtest/gtest.h>
 
@@ -81,6 +82,7 @@ TEST_F(FramePipelineTest, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
   for (const VehicleObservation& observation : pipeline.observations()) {
     EXPECT_EQ(observation.liftStatus, LiftStatus::NoPose);
   }
+  EXPECT_EQ(pipeline.footprintTypeScreening().weighed, 0U);  // no footprint without a lift
 
   // The recorded pose: the same detections, lifted where the DTM is.
   telemetry::PoseBuffer poses;
@@ -111,6 +113,17 @@ TEST_F(FramePipelineTest, RefusesABadFrameLiftsWithAPoseAndAllocatesNothing) {
     }
   }
   EXPECT_EQ(lifted, pipeline.liftSummary().lifted);
+  // The footprint weighs the lifted cars' types (perception.footprint_type, on by default); the
+  // observations carry the type their probabilities now put first.
+  const FootprintTypeScreening& weighed = pipeline.footprintTypeScreening();
+  EXPECT_GT(weighed.weighed, 0U);
+  EXPECT_LE(weighed.weighed, lifted);
+  EXPECT_LE(weighed.retyped, weighed.weighed);
+  for (const VehicleObservation& observation : pipeline.observations()) {
+    if (observation.liftStatus == LiftStatus::Ok) {
+      EXPECT_EQ(observation.type, mostLikelyType(observation.detection, nullptr));
+    }
+  }
   EXPECT_GT(pipeline.timings().detector_ms, 0.0);
   std::printf(
       "frame pipeline on a 320 x 256 simulated frame: %zu detections by the shipped "
