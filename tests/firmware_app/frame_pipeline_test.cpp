@@ -2,8 +2,8 @@
 // models: a refused frame names the problem and the next frame goes on; without a pose every
 // detection is kept image-only with NoPose; with the recorded pose the same detections are
 // lifted (the lift summary and each observation agree) and their footprints weigh the cars'
-// types; no heap allocation per frame; the two
-// halves (detect, finish) with the next frame detected in between give process()'s results.
+// types; no heap allocation per frame; the two halves (detect, finish) with the next frame
+// detected in between give process()'s results.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
