@@ -14,7 +14,7 @@ with the evidence off so the probabilities are the crop network's own::
 
   scripts/eval_tracking.sh --build build/ci --set perception.footprint_type=false RUN DATA/tune/*
   tools/detector/fit_footprint_type.py --run RUN --data DATA/tune \\
-      [--check RUN2 --check-data DATA/val ...] [--folds 3]
+      [--check RUN2 --check-data DATA/val ...] [--folds 3] [--types estate,compact,sports,sedan]
 
 Prints the fitted weights as the C++ defaults of FootprintTypeOptions, the matched vehicles and
 the top-1 type accuracy (OA-1) before and after on the fitting runs, on each --check pair, and
@@ -30,7 +30,7 @@ import csv
 import glob
 import os
 import sys
-from typing import List, Tuple
+from typing import List, Sequence, Tuple
 
 import numpy as np
 import torch
@@ -125,23 +125,29 @@ def weighed_logits(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.log(np.clip(x[:, :CARS], 1e-30, 1.0)) + terms(x) @ w.T
 
 
-def fit(x: np.ndarray, y: np.ndarray, l2: float) -> np.ndarray:
-    """Weights [6, 2] minimising the log-loss over the car types plus l2 * |w|^2."""
+def fit(x: np.ndarray, y: np.ndarray, l2: float, types: Sequence[int] = range(CARS)) -> np.ndarray:
+    """Weights [6, 2] minimising the log-loss over the car types plus l2 * |w|^2; only the rows
+    of `types` are fitted, the others stay 0."""
     keep = y < CARS  # a car typed as one of the cars; a Large reference cannot be fixed here
     logp = torch.tensor(np.log(np.clip(x[keep, :CARS], 1e-30, 1.0)), dtype=torch.float64)
     t = torch.tensor(terms(x[keep]), dtype=torch.float64)
     target = torch.tensor(y[keep])
-    w = torch.zeros(CARS, 2, dtype=torch.float64, requires_grad=True)
+    free = torch.tensor(sorted(set(types)), dtype=torch.long)
+    w = torch.zeros(len(free), 2, dtype=torch.float64, requires_grad=True)
     opt = torch.optim.LBFGS([w], max_iter=500, line_search_fn="strong_wolfe")
+
+    def weights() -> torch.Tensor:
+        return torch.zeros(CARS, 2, dtype=torch.float64).index_copy(0, free, w)
 
     def closure():
         opt.zero_grad()
-        loss = torch.nn.functional.cross_entropy(logp + t @ w.T, target) + l2 * (w ** 2).sum()
+        loss = torch.nn.functional.cross_entropy(logp + t @ weights().T, target) + \
+            l2 * (w ** 2).sum()
         loss.backward()
         return loss
 
     opt.step(closure)
-    return w.detach().numpy()
+    return weights().detach().numpy()
 
 
 def accuracy(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> Tuple[float, float]:
@@ -149,14 +155,15 @@ def accuracy(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> Tuple[float, float]
         (weighed_logits(x, w).argmax(1) == y).mean())
 
 
-def fold_gain(x: np.ndarray, y: np.ndarray, seq: np.ndarray, folds: int, l2: float) -> int:
+def fold_gain(x: np.ndarray, y: np.ndarray, seq: np.ndarray, folds: int, l2: float,
+              types: Sequence[int] = range(CARS)) -> int:
     """Vehicles typed right more (or fewer) when each of `folds` sequence folds is weighed
     with the weights fitted on the others."""
     order = np.random.default_rng(0).permutation(np.unique(seq))
     gain = 0
     for part in np.array_split(order, folds):
         test = np.isin(seq, part)
-        w = fit(x[~test], y[~test], l2)
+        w = fit(x[~test], y[~test], l2, types)
         gain += int((weighed_logits(x[test], w).argmax(1) == y[test]).sum()) - int(
             (x[test, :CARS].argmax(1) == y[test]).sum())
     return gain
@@ -182,6 +189,10 @@ def main(argv=None) -> int:
     ap.add_argument("--check-data", action="append", default=[],
                     help="the sequences' folder of the --check at the same position")
     ap.add_argument("--l2", type=float, default=0.01, help="weight penalty (default 0.01)")
+    ap.add_argument("--types", default="estate,compact,sports,sedan",
+                    help="the car types whose weights are fitted, comma-separated (the others "
+                         "stay 0; default estate,compact,sports,sedan: the shipped weights leave "
+                         "suv and van alone, whose boundary the footprint mostly shifts)")
     ap.add_argument("--folds", type=int, default=0,
                     help="also report the gain over this many sequence folds (0: not)")
     a = ap.parse_args(argv)
@@ -189,17 +200,23 @@ def main(argv=None) -> int:
         ap.error("each --run needs one --data and each --check one --check-data")
     if not a.l2 >= 0.0:
         ap.error("--l2 must be >= 0")
+    names = [n.strip() for n in a.types.split(",") if n.strip()]
+    unknown = [n for n in names if n not in TYPES[:CARS]]
+    if unknown or not names:
+        ap.error(f"--types: not car types: {', '.join(unknown) or '(none)'} "
+                 f"(choose from {', '.join(TYPES[:CARS])})")
+    types = [TYPES.index(n) for n in names]
     try:
         parts = [matched_pairs(r, d) for r, d in zip(a.run, a.data)]
         x = np.concatenate([p[0] for p in parts])
         y = np.concatenate([p[1] for p in parts])
         seq = np.concatenate([p[2] + 10000 * i for i, p in enumerate(parts)])
-        w = fit(x, y, a.l2)
+        w = fit(x, y, a.l2, types)
         before, after = accuracy(x, y, w)
         print(f"fitted on {len(y)} lifted car detections: OA-1 {100 * before:.1f} -> "
               f"{100 * after:.1f} %")
         if a.folds > 1:
-            print(f"gain over {a.folds} sequence folds: {fold_gain(x, y, seq, a.folds, a.l2):+d} "
+            print(f"gain over {a.folds} sequence folds: {fold_gain(x, y, seq, a.folds, a.l2, types):+d} "
                   f"of {len(y)} vehicles")
         for r, d in zip(a.check, a.check_data):
             cx, cy, _ = matched_pairs(r, d)
