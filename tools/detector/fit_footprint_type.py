@@ -6,8 +6,8 @@ The application weighs each lifted car's type probabilities by its ground footpr
 over the six car types (Large untouched; clamp to +-2.5). This tool fits a and b for the crop
 network the runs were made with: it matches each run's detections (``<sequence>_detections.csv``,
 docs/detections_file.md: type probabilities and the lifted ``length_m`` / ``width_m``) to the
-sequence's ground truth (``ground_truth/objects.csv``) with seed 000's rule (rotated IoU >= 0.5,
-references more occluded than 0.7 or truncated over 0.5 ignored), leaves out detections at the
+sequence's ground truth (``datasets.read_sequence``: the training's reader and ignore rule) with
+seed 000's rule (rotated IoU >= 0.5), leaves out detections at the
 frame edge and those most likely Large, as the application does, and minimises the multinomial
 log-loss of the weighed probabilities plus --l2 times the weights' squares. Run the application
 with the evidence off so the probabilities are the crop network's own::
@@ -37,10 +37,11 @@ import torch
 
 if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from detector.asm import TYPES  # noqa: E402
+from detector.datasets import DatasetError, read_sequence  # noqa: E402
 from detector.evaluate import match  # noqa: E402
 
-TYPES = ["estate", "compact", "sports", "sedan", "suv", "van", "large"]
-CARS = 6
+CARS = TYPES.index("large")  # the car types come first
 REFERENCE_LENGTH_M, LENGTH_SCALE_M = 4.6, 0.4
 REFERENCE_ASPECT, ASPECT_SCALE = 2.35, 0.1
 MAX_TERM = 2.5
@@ -68,43 +69,37 @@ def _float(row: dict, key: str, path: str, line: int) -> float:
 
 def matched_pairs(run_dir: str, data_dir: str) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(features [N, 9]: 7 probabilities, length_m, width_m; truth type [N]; sequence index [N])
-    of the matched lifted detections inside the frame whose most likely type is a car."""
+    of the matched lifted detections inside the frame whose most likely type is a car. The
+    references and their ignore rule are datasets.read_sequence's (the training's)."""
     paths = sorted(glob.glob(os.path.join(run_dir, "*_detections.csv")))
     if not paths:
         raise FitError(f"{run_dir}: no <sequence>_detections.csv files")
     feats, truth, seqs = [], [], []
     for s, path in enumerate(paths):
         seq = os.path.basename(path)[: -len("_detections.csv")]
-        gt_path = os.path.join(data_dir, seq, "ground_truth", "objects.csv")
+        try:
+            samples = read_sequence(os.path.join(data_dir, seq))
+        except (DatasetError, OSError) as e:
+            raise FitError(str(e)) from None
         by_frame: dict = {}
         for line, r in enumerate(_rows(path), start=2):
             by_frame.setdefault(int(_float(r, "frame_id", path, line)), []).append((line, r))
-        gt_frames: dict = {}
-        for line, r in enumerate(_rows(gt_path), start=2):
-            gt_frames.setdefault(int(_float(r, "frame_id", gt_path, line)), []).append((line, r))
-        for fid, refs in gt_frames.items():
-            dets = by_frame.get(fid, [])
-            if not dets:
+        for sample in samples:
+            dets = by_frame.get(sample.frame_index, [])
+            if not dets or not len(sample):
                 continue
-            g = np.array([[_float(r, k, gt_path, n) for k in BOX] for n, r in refs])
-            ignore = np.array([_float(r, "occlusion", gt_path, n) > 0.7 or
-                               _float(r, "truncation", gt_path, n) > 0.5 for n, r in refs])
             p = np.array([[_float(r, k, path, n) for k in BOX] for n, r in dets])
             score = np.array([_float(r, "score", path, n) for n, r in dets])
-            pairs, _, _ = match(p, score, g, ignore, 0.5)
+            pairs, _, _ = match(p, score, sample.boxes, sample.ignore, 0.5)
             for pi, gi in pairs:
                 line, r = dets[pi]
                 probs = [_float(r, "p_" + t, path, line) for t in TYPES]
-                if r.get("at_frame_edge") == "1" or int(np.argmax(probs)) == CARS:
+                if (r.get("at_frame_edge") == "1" or int(np.argmax(probs)) == CARS
+                        or r.get("lift_status") != "ok"):
                     continue
-                if r.get("lift_status") != "ok":
-                    continue
-                ref_type = refs[gi][1].get("type")
-                if ref_type not in TYPES:
-                    raise FitError(f"{gt_path}: row {refs[gi][0]}: unknown type '{ref_type}'")
                 feats.append(probs + [_float(r, "length_m", path, line),
                                       _float(r, "width_m", path, line)])
-                truth.append(TYPES.index(ref_type))
+                truth.append(int(sample.types[gi]))
                 seqs.append(s)
     if not feats:
         raise FitError(f"{run_dir}: no lifted car detection matched the ground truth of {data_dir}")

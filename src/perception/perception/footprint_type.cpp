@@ -30,11 +30,10 @@ bool FootprintType::init(const FootprintTypeOptions& options, const DetectionLif
     }
     return false;
   };
-  if (!(options.referenceLength_m > 0.0) || !(options.lengthScale_m > 0.0) ||
-      !(options.referenceAspect > 0.0) || !(options.aspectScale > 0.0) ||
-      !(options.maxTerm > 0.0) || !std::isfinite(options.maxTerm) ||
-      !std::isfinite(options.referenceLength_m) || !std::isfinite(options.lengthScale_m) ||
-      !std::isfinite(options.referenceAspect) || !std::isfinite(options.aspectScale)) {
+  const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!positive(options.referenceLength_m) || !positive(options.lengthScale_m) ||
+      !positive(options.referenceAspect) || !positive(options.aspectScale) ||
+      !positive(options.maxTerm)) {
     return fail(
         "footprint type evidence: the reference length and aspect, their scales and "
         "the largest term must be positive and finite");

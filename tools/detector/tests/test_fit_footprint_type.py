@@ -18,9 +18,10 @@ import numpy as np
 import _common  # noqa: F401  (puts tools/ on sys.path)
 
 from detector import fit_footprint_type as fft
+from detector.datasets import OBJECT_COLUMNS_AFTER_GAMMA, OBJECT_COLUMNS_BEFORE_GAMMA
 
-GT_COLUMNS = ["frame_id", "track_id", "type", "box_cx_px", "box_cy_px", "box_length_px",
-              "box_width_px", "box_angle_rad", "truncation", "occlusion"]
+GT_COLUMNS = OBJECT_COLUMNS_BEFORE_GAMMA + ["gamma_0", "gamma_1", "gamma_2"] + \
+    OBJECT_COLUMNS_AFTER_GAMMA
 DET_COLUMNS = ["frame_id", "det_id", "score", "box_cx_px", "box_cy_px", "box_length_px",
                "box_width_px", "box_angle_rad", "at_frame_edge"] + \
     ["p_" + t for t in fft.TYPES] + ["lift_status", "length_m", "width_m"]
@@ -64,7 +65,11 @@ def make_run(root, sequences=4, per_frame=10, frames=3):
                 if k == 8:
                     row.update({"p_large": 0.6, "p_estate": 0.1, "p_compact": 0.2})
                 det.append(row)
+        gt = [{c: row.get(c, 0) for c in GT_COLUMNS} for row in gt]
         write_csv(os.path.join(data, seq, "ground_truth", "objects.csv"), GT_COLUMNS, gt)
+        write_csv(os.path.join(data, seq, "frames.csv"), ["frame_id", "timestamp_ns", "file"],
+                  [{"frame_id": f, "timestamp_ns": f * 100000000, "file": f"frames/{f:06d}.png"}
+                   for f in range(frames)])
         write_csv(os.path.join(run, seq + "_detections.csv"), DET_COLUMNS, det,
                   comment="# format_version: 2\n")
     return run, data
