@@ -301,6 +301,31 @@ TEST(DetectionStage, AVehicleCutByTheFrameBorderKeepsTheDetectorsBox) {
     }
   }
   EXPECT_EQ(edgeVerified, edge);
+
+  // The border's threshold is its own when it is the stricter one too: inside nearly all stay,
+  // of the vehicles cut by the border (those keeping the first stage's box; a refined box that
+  // ends at the border was verified as inside) only those of 0.99 or more.
+  int edgeAll = 0;
+  int edgeBelowStrict = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (find(unrefined, unrefinedCount, out[i]) != nullptr) {
+      ++edgeAll;
+      edgeBelowStrict += out[i].vehicleProbability < 0.99F ? 1 : 0;
+    }
+  }
+  verified.minVehicleProbability = 0.01F;
+  verified.frameEdgeMinVehicleProbability = 0.99F;
+  Out strict{};
+  const std::size_t strictCount = runWith(verified, strict);
+  int edgeStrict = 0;
+  for (std::size_t i = 0; i < strictCount; ++i) {
+    if (find(unrefined, unrefinedCount, strict[i]) != nullptr) {
+      ++edgeStrict;
+      EXPECT_GE(strict[i].vehicleProbability, 0.99F) << "detection " << i;
+    }
+  }
+  EXPECT_GT(edgeBelowStrict, 0);
+  EXPECT_EQ(edgeStrict, edgeAll - edgeBelowStrict);
 }
 
 class FixedGsd : public GsdProvider {

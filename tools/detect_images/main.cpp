@@ -89,10 +89,10 @@ options:
                         keeps the detector's box, as the app's
                         perception.crop_frame_edge_keep_box)
   --edge-min-vehicle-probability P
-                        the verifier's threshold for vehicles cut by the frame's border when
-                        lower than --min-vehicle-probability, [0, 1] (default 0.3, as the app's
-                        perception.crop_frame_edge_min_vehicle_probability; with the kept box
-                        only)
+                        the verifier's threshold for vehicles cut by the frame's border, lower
+                        or higher than --min-vehicle-probability, [0, 1] (default 0.3, as the
+                        app's perception.crop_frame_edge_min_vehicle_probability; with the kept
+                        box only)
   --refine-large-length apply the second stage's length to vehicles most likely large too
                         (default: they keep the first stage's length; the crop shows a part)
   --no-large-vehicle-ends

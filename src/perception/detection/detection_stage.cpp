@@ -253,11 +253,11 @@ DetectionStatus DetectionStage::refine(const cv::Mat& correctedFrame,
   // without a verifier probability stays).
   std::size_t verified = kept;
   const float minVehicle = options_.secondStage.minVehicleProbability;
-  // The border's own threshold can only lower the bar (0 everywhere still keeps all).
-  const float minVehicleAtEdge =
-      options_.secondStage.frameEdgeKeepBox
-          ? std::min(minVehicle, options_.secondStage.frameEdgeMinVehicleProbability)
-          : minVehicle;
+  // A vehicle at the border has its own threshold (higher or lower than inside: the real sets
+  // label cut vehicles differently); minVehicleProbability 0 still turns the verifier off.
+  const float minVehicleAtEdge = options_.secondStage.frameEdgeKeepBox
+                                     ? options_.secondStage.frameEdgeMinVehicleProbability
+                                     : minVehicle;
   if (secondStage && minVehicle > 0.0F && cropper_.hasVerifier()) {
     verified = 0;
     for (std::size_t i = 0; i < kept; ++i) {

@@ -123,9 +123,10 @@ struct SecondStageOptions {
   // in part. The crop network learnt whole vehicles: it stretches such a box to a whole car and
   // shifts it past the border, where the real sets' labels (and the pixels) end. With
   // frameEdgeKeepBox the box stays the first stage's (type, shape and front/back still from the
-  // crops), and the verifier's threshold for it is the lower of frameEdgeMinVehicleProbability
-  // and minVehicleProbability, [0, 1]
-  // (docs/model_card.md, round 21: CATS held-out P/R 97.4/89.8 -> 99.0/91.3 %).
+  // crops), and the verifier's threshold for it is frameEdgeMinVehicleProbability, [0, 1],
+  // lower or higher than minVehicleProbability (the real sets label cut vehicles differently:
+  // docs/model_card.md, round 21: CATS held-out P/R 97.4/89.8 -> 99.0/91.3 %; the border
+  // convention).
   bool frameEdgeKeepBox = true;
   float frameEdgeMinVehicleProbability = 0.3F;
 };
