@@ -543,6 +543,43 @@ TEST(VehicleCropper, LargeVehicleFrontBackFromCropsAtBothEnds) {
   EXPECT_EQ(same.typeProbabilities, car.typeProbabilities);
 }
 
+// The shipped crop network carries a second verifier for vehicles cut by the frame's border
+// (vehicle_logit_edge): classify() with keepBox takes the vehicle probability from it, the one
+// run and every other output unchanged.
+TEST(VehicleCropper, AVehicleCutByTheBorderTakesTheBordersVerifier) {
+  cv::Mat frame = blurredNoise(240, 320, 17);
+  cv::rectangle(frame, cv::Rect(40, 40, 60, 24), cv::Scalar(200, 200, 205), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(200, 60, 64, 26), cv::Scalar(30, 30, 150), cv::FILLED);
+  cv::rectangle(frame, cv::Rect(120, 160, 58, 22), cv::Scalar(70, 80, 70), cv::FILLED);
+  const std::string model = std::string(VP_SOURCE_DIR) + "/models/detector/crop_int8.onnx";
+  for (const bool mirror : {false, true}) {
+    SecondStageOptions options = singleCrop();
+    options.mirrorAverage = mirror;
+    VehicleCropper cropper;
+    std::string why;
+    ASSERT_TRUE(cropper.init(model, {}, options, &why)) << why;
+    ASSERT_TRUE(cropper.hasVerifier());
+    ASSERT_TRUE(cropper.hasEdgeVerifier());
+    int differ = 0;
+    for (const geometry::RotatedBox& box : {geometry::RotatedBox{70.0, 52.0, 70.0, 28.0, 0.0},
+                                            geometry::RotatedBox{232.0, 73.0, 72.0, 30.0, 0.1},
+                                            geometry::RotatedBox{149.0, 171.0, 66.0, 26.0, -0.05},
+                                            geometry::RotatedBox{160.0, 110.0, 70.0, 28.0, 0.7}}) {
+      Detection inside;
+      inside.box = box;
+      Detection atBorder = inside;
+      ASSERT_EQ(cropper.classify(frame, kCropGsd_m, &inside, false), SecondStageStatus::Ok);
+      ASSERT_EQ(cropper.classify(frame, kCropGsd_m, &atBorder, true), SecondStageStatus::Ok);
+      ASSERT_TRUE(std::isfinite(atBorder.vehicleProbability));
+      differ += inside.vehicleProbability != atBorder.vehicleProbability ? 1 : 0;
+      EXPECT_EQ(inside.typeProbabilities, atBorder.typeProbabilities);
+      EXPECT_EQ(inside.flipProbability, atBorder.flipProbability);
+      EXPECT_EQ(atBorder.box.cx, box.cx);  // kept, not refined
+    }
+    EXPECT_GT(differ, 0) << "mirror " << mirror;
+  }
+}
+
 TEST(GroundSampleDistance, MedianBoxIsANominalCar) {
   std::array<Detection, 5> detections{};
   const double lengths[] = {150.0, 160.0, 400.0, 140.0, 155.0};  // a bus among cars

@@ -82,7 +82,7 @@ options:
                         merged into one box, as the app's perception.large_vehicle_merge)
   --min-vehicle-probability P
                         drop detections the crop network's verifier gives a lower vehicle
-                        probability, [0, 1] (default 0.3, as the app's
+                        probability, [0, 1] (default 0.5, as the app's
                         perception.crop_min_vehicle_probability; 0 keeps all; no effect
                         without a verifier)
   --no-edge-keep-box    refine the box of a vehicle cut by the frame's border too (default: it

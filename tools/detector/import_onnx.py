@@ -16,7 +16,8 @@ Contract
 * Conv nodes are matched to the PyTorch model's ``Conv2d`` modules in execution order (a forward
   pass with hooks gives the module order; ONNX keeps the graph in that order), each pair checked
   for kernel shape, groups, stride and padding. The model is ``Detector`` resp. ``CropNet``
-  (with the verifier head when the file has a ``vehicle_logit`` output).
+  (with the verifier head when the file has a ``vehicle_logit`` output, and the border's second
+  verifier head when it has ``vehicle_logit_edge``).
 * Batch norm was folded into the convolutions at export. A Conv2d followed by a BatchNorm2d
   (``ConvBN``) gets the folded weight W and the BN gets running statistics (m, v) of the
   convolution's output W x on the calibration inputs, gamma = sqrt(v + eps), beta = m + b
@@ -232,8 +233,10 @@ def import_files(detector_path: str, crop_path: Optional[str], n_s: int,
                              f"takes {(CROP_H, CROP_W)}")
         outputs = {o.name for o in crop_model.graph.output}
         verifier = "vehicle_logit" in outputs
+        verifier_edge = "vehicle_logit_edge" in outputs  # a second verifier for the border
         n_convs = sum(node.op_type == "Conv" for node in crop_model.graph.node)
-        plain = len(convs_in_order(CropNet(n_s=n_s, verifier=verifier), (CROP_H, CROP_W)))
+        plain = len(convs_in_order(CropNet(n_s=n_s, verifier=verifier,
+                                           verifier_edge=verifier_edge), (CROP_H, CROP_W)))
         # Each branch (front/back, verifier) is one more fully connected Conv of the same shape;
         # with one extra Conv the file's outputs tell which branch it is.
         extra = n_convs - plain
@@ -251,7 +254,8 @@ def import_files(detector_path: str, crop_path: Optional[str], n_s: int,
                              if tuple(w.shape[1:]) == fc_shape)
         for flip_branch, verifier_branch in layouts:
             crop = CropNet(n_s=n_s, verifier=verifier, flip_branch=flip_branch,
-                           verifier_branch=verifier_branch, verifier_width=verifier_width)
+                           verifier_branch=verifier_branch, verifier_width=verifier_width,
+                           verifier_edge=verifier_edge)
             n = load_into(crop, crop_model, (CROP_H, CROP_W), x_crop)
             errs = check_against_file(crop, crop_model, check_x)
             if max(errs.values()) <= MAX_RELATIVE_ERROR:

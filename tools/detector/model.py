@@ -161,17 +161,24 @@ class Detector(nn.Module):
 class CropNet(nn.Module):
     """The second stage. With ``verifier`` it also outputs ``vehicle_logit``: whether the crop
     shows a vehicle at all (the first stage's box may sit on a planter, a shadow or a roof
-    fixture), trained on mined false detections (train.py --verifier-samples)."""
+    fixture), trained on mined false detections (train.py --verifier-samples). With
+    ``verifier_edge`` a second verifier output, ``vehicle_logit_edge``, on the same features:
+    the one the application uses for vehicles cut by the frame's border
+    (verifier_ensemble.py --edge-base)."""
 
     def __init__(self, n_s: int = 3, verifier: bool = False, flip_branch: bool = False,
-                 verifier_branch: bool = False, verifier_width: int = 192):
+                 verifier_branch: bool = False, verifier_width: int = 192,
+                 verifier_edge: bool = False):
         super().__init__()
         if verifier_branch and not verifier:
             raise ValueError("CropNet: verifier_branch needs verifier")
+        if verifier_edge and not verifier:
+            raise ValueError("CropNet: verifier_edge needs verifier")
         self.n_s = n_s
         self.verifier = verifier
         self.flip_branch = flip_branch
         self.verifier_branch = verifier_branch
+        self.verifier_edge = verifier_edge
         self.export_mode = False
         self.body = nn.Sequential(
             ConvBN(3, 24, 3, 2),                       # 24 x 48
@@ -192,6 +199,9 @@ class CropNet(nn.Module):
         if verifier:
             self.vehicle_logit = nn.Conv2d(verifier_width if verifier_branch else 192, 1, 1)
             heads.append(self.vehicle_logit)
+        if verifier_edge:
+            self.vehicle_logit_edge = nn.Conv2d(verifier_width if verifier_branch else 192, 1, 1)
+            heads.append(self.vehicle_logit_edge)
         for m in heads:
             nn.init.normal_(m.weight, std=0.01)
             nn.init.zeros_(m.bias)
@@ -230,6 +240,8 @@ class CropNet(nn.Module):
                "flip_logit": self.flip_logit(flip_in), "refine": self.refine(f)}
         if self.verifier:
             out["vehicle_logit"] = self.vehicle_logit(verifier_in)
+        if self.verifier_edge:
+            out["vehicle_logit_edge"] = self.vehicle_logit_edge(verifier_in)
         return out
 
     @classmethod
@@ -240,13 +252,15 @@ class CropNet(nn.Module):
                   flip_branch="flip_fc.0.weight" in state,
                   verifier_branch="verifier_fc.0.weight" in state,
                   verifier_width=int(state["verifier_fc.0.weight"].shape[0])
-                  if "verifier_fc.0.weight" in state else 192)
+                  if "verifier_fc.0.weight" in state else 192,
+                  verifier_edge="vehicle_logit_edge.weight" in state)
         net.load_state_dict(state)
         return net
 
     def output_names(self):
         return ["type_logits", "shape", "flip_logit", "refine"] + (
-            ["vehicle_logit"] if self.verifier else [])
+            ["vehicle_logit"] if self.verifier else []) + (
+            ["vehicle_logit_edge"] if self.verifier_edge else [])
 
 
 # refine output scaling: raw * REFINE_SCALE = (du_m, dv_m, d_angle_rad, length_m, width_m)

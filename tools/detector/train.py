@@ -676,7 +676,17 @@ def train(args) -> dict:
         if unexpected:
             raise SystemExit(f"--init-from {args.init_from}: unexpected detector weights {unexpected[:4]}")
         if crop_net is not None and ck0.get("crop") is not None:
-            if "vehicle_logit.weight" in ck0["crop"] and not crop_net.verifier:
+            ck_crop = ck0["crop"]
+            width = (int(ck_crop["verifier_fc.0.weight"].shape[0])
+                     if "verifier_fc.0.weight" in ck_crop else 192)
+            if "vehicle_logit_edge.weight" in ck_crop or width != 192:
+                # Two verifiers in one branch, the border's own head (verifier_ensemble.py, v14):
+                # the network takes the checkpoint's layout.
+                crop_net = CropNet(n_s=asm.n_s, verifier=True,
+                                   flip_branch=args.flip_branch or "flip_fc.0.weight" in ck_crop,
+                                   verifier_branch=True, verifier_width=width,
+                                   verifier_edge="vehicle_logit_edge.weight" in ck_crop).to(device)
+            elif "vehicle_logit.weight" in ck_crop and not crop_net.verifier:
                 crop_net = CropNet(n_s=asm.n_s, verifier=True, flip_branch=args.flip_branch).to(device)
             missing_c, unexpected_c = crop_net.load_state_dict(ck0["crop"], strict=False)
             if unexpected_c or any(not k.startswith(("vehicle_logit.", "flip_fc.", "verifier_fc."))

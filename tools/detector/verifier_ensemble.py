@@ -14,8 +14,12 @@ trained with ``train.py --verifier-head-only`` on top of the base does).
 
   verifier_ensemble.py --base A.pt --other B.pt --out AB.pt [--weight W]
 
-``--weight`` is B's share of the mean (default 0.5). The result exports with ``export.py`` like
-any checkpoint (``CropNet.from_state_dict`` reads the branch's width).
+``--weight`` is B's share of the mean (default 0.5). With ``--edge-base`` the network also
+outputs ``vehicle_logit_edge``: A's verifier alone, exactly (a second head over the same branch,
+A's head over A's half and zero over B's), which the application uses for vehicles cut by the
+frame's border — so that the mean decides inside the frame and the border keeps A's decisions.
+The result exports with ``export.py`` like any checkpoint (``CropNet.from_state_dict`` reads the
+branch's width and the second head).
 """
 from __future__ import annotations
 
@@ -41,9 +45,10 @@ def _verifier_parts(crop: Dict[str, torch.Tensor], name: str) -> Tuple[torch.Ten
 
 
 def merge(base: Dict[str, torch.Tensor], other: Dict[str, torch.Tensor],
-          weight: float) -> Dict[str, torch.Tensor]:
+          weight: float, edge_base: bool = False) -> Dict[str, torch.Tensor]:
     """The base crop network's state with a verifier branch holding both verifiers, whose head
-    gives (1 - weight) x base's logit + weight x other's."""
+    gives (1 - weight) x base's logit + weight x other's; with ``edge_base`` also the head
+    ``vehicle_logit_edge`` giving base's logit alone."""
     # Both verifiers must read the same features, the body's (each brings its own fully
     # connected layer into the branch).
     for key in [k for k in base if k.startswith("body.")]:
@@ -60,6 +65,9 @@ def merge(base: Dict[str, torch.Tensor], other: Dict[str, torch.Tensor],
     out["verifier_fc.0.bias"] = torch.cat([ba, bb], dim=0)
     out["vehicle_logit.weight"] = torch.cat([(1.0 - weight) * ha, weight * hb], dim=1)
     out["vehicle_logit.bias"] = (1.0 - weight) * hba + weight * hbb
+    if edge_base:
+        out["vehicle_logit_edge.weight"] = torch.cat([ha, torch.zeros_like(hb)], dim=1)
+        out["vehicle_logit_edge.bias"] = hba.clone()
     return out
 
 
@@ -70,6 +78,9 @@ def main(argv=None) -> int:
     p.add_argument("--other", required=True, help="checkpoint whose verifier joins base's")
     p.add_argument("--out", required=True, help="checkpoint to write")
     p.add_argument("--weight", type=float, default=0.5, help="--other's share of the mean, [0, 1]")
+    p.add_argument("--edge-base", action="store_true",
+                   help="also output --base's verifier alone (vehicle_logit_edge), the one the "
+                        "application uses for vehicles cut by the frame's border")
     a = p.parse_args(argv)
     if not 0.0 <= a.weight <= 1.0:
         raise SystemExit(f"verifier_ensemble.py: --weight must be in [0, 1], got {a.weight}")
@@ -83,10 +94,11 @@ def main(argv=None) -> int:
             raise SystemExit(f"verifier_ensemble.py: {path}: not a checkpoint with a crop network")
         cks.append(ck)
     out = {k: v for k, v in cks[0].items() if not k.startswith("opt_")}
-    out["crop"] = merge(cks[0]["crop"], cks[1]["crop"], a.weight)
+    out["crop"] = merge(cks[0]["crop"], cks[1]["crop"], a.weight, a.edge_base)
     torch.save(out, a.out)
     print(f"verifier_ensemble.py: {a.out}: verifier = {1 - a.weight:g} x {a.base} + "
-          f"{a.weight:g} x {a.other} (branch {out['crop']['verifier_fc.0.weight'].shape[0]} wide)")
+          f"{a.weight:g} x {a.other} (branch {out['crop']['verifier_fc.0.weight'].shape[0]} wide)"
+          + (f"; at the frame's border {a.base}'s alone" if a.edge_base else ""))
     return 0
 
 

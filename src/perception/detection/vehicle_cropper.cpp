@@ -259,20 +259,32 @@ bool VehicleCropper::init(const std::string& cropModelPath,
                            "' (the crop network needs type_logits, shape, flip_logit, refine)");
     }
   }
-  // The verifier output is optional (crop networks before it lack it).
-  hasVerifier_ = false;
-  for (std::size_t i = 0; i < engine_.outputCount(); ++i) {
-    const inference::OutputTensor& out = engine_.output(i);
-    if (out.name != "vehicle_logit") {
-      continue;
+  // The verifier outputs are optional (crop networks before them lack them).
+  auto findScalarOutput = [&](const char* name, std::size_t* index, bool* found) {
+    *found = false;
+    for (std::size_t i = 0; i < engine_.outputCount(); ++i) {
+      const inference::OutputTensor& out = engine_.output(i);
+      if (out.name != name) {
+        continue;
+      }
+      if (out.shape.c != 1 || out.shape.h != 1 || out.shape.w != 1) {
+        return fail(why, cropModelPath + ": output '" + name + "' is " +
+                             std::to_string(out.shape.c) + "x" + std::to_string(out.shape.h) + "x" +
+                             std::to_string(out.shape.w) + ", expected 1 x 1 x 1");
+      }
+      *index = i;
+      *found = true;
     }
-    if (out.shape.c != 1 || out.shape.h != 1 || out.shape.w != 1) {
-      return fail(why, cropModelPath + ": output 'vehicle_logit' is " +
-                           std::to_string(out.shape.c) + "x" + std::to_string(out.shape.h) + "x" +
-                           std::to_string(out.shape.w) + ", expected 1 x 1 x 1");
-    }
-    vehicleIndex_ = i;
-    hasVerifier_ = true;
+    return true;
+  };
+  if (!findScalarOutput("vehicle_logit", &vehicleIndex_, &hasVerifier_) ||
+      !findScalarOutput("vehicle_logit_edge", &edgeVehicleIndex_, &hasEdgeVerifier_)) {
+    return false;
+  }
+  if (hasEdgeVerifier_ && !hasVerifier_) {
+    return fail(why, cropModelPath +
+                         ": output 'vehicle_logit_edge' without 'vehicle_logit' (the border's "
+                         "verifier comes beside the verifier)");
   }
   shapeCount_ = engine_.output(shapeIndex_).shape.c;
   options_ = options;
@@ -335,8 +347,9 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m, D
   outputs.shape = std::span<const float>(shape_.data(), firstShape.size());
   outputs.flipLogit = values(flipIndex_)[0];
   outputs.refine = refine_;
+  verifierIndex_ = keepBox && hasEdgeVerifier_ ? edgeVehicleIndex_ : vehicleIndex_;
   outputs.hasVehicleLogit = hasVerifier_;
-  outputs.vehicleLogit = hasVerifier_ ? values(vehicleIndex_)[0] : 0.0F;
+  outputs.vehicleLogit = hasVerifier_ ? values(verifierIndex_)[0] : 0.0F;
   if (options_.mirrorAverage) {
     const SecondStageStatus status = mirrorAverage(&outputs);
     if (status != SecondStageStatus::Ok) {
@@ -479,7 +492,7 @@ SecondStageStatus VehicleCropper::mirrorAverage(CropNetOutputs* outputs) {
   const std::span<const float> typeLogits = values(typeIndex_);
   const std::span<const float> refine = values(refineIndex_);
   if (hasVerifier_) {  // a mirrored vehicle is still a vehicle: both runs' logits averaged
-    outputs->vehicleLogit = 0.5F * (outputs->vehicleLogit + values(vehicleIndex_)[0]);
+    outputs->vehicleLogit = 0.5F * (outputs->vehicleLogit + values(verifierIndex_)[0]);
   }
   for (std::size_t t = 0; t < typeLogits_.size(); ++t) {
     typeLogits_[t] = 0.5F * (typeLogits_[t] + typeLogits[t]);

@@ -24,7 +24,11 @@
 //    while the first stage saw the whole vehicle.
 //  - An optional output vehicle_logit (1 x 1 x 1, the verifier) gives vehicleProbability =
 //    sigmoid(vehicle_logit); a model without it leaves vehicleProbability NaN. The detection
-//    stage drops detections below SecondStageOptions::minVehicleProbability.
+//    stage drops detections below SecondStageOptions::minVehicleProbability. A second optional
+//    output vehicle_logit_edge (1 x 1 x 1; only beside vehicle_logit) is the verifier for a
+//    vehicle cut by the frame's border: classify() with keepBox takes vehicleProbability from
+//    it instead (the real sets label cut vehicles differently, so a verifier retrained for the
+//    inside of the frame keeps the previous one's decisions at the border).
 //  - With mirrorAverage, classify() runs the network a second time on the crop mirrored across
 //    the vehicle's axis (rows reversed: left and right swapped, front stays front) and averages
 //    the two runs' type logits (and verifier logits) and shape gamma (the ASM's components are
@@ -116,9 +120,10 @@ struct SecondStageOptions {
   // 22: OA-1 87.2 -> 87.7 % there), since the refined box is the better-posed view.
   float turnTypeWeight = 0.8F;
   // Detections whose verifier probability is below this are dropped after the second stage;
-  // 0 keeps all, and so does a crop network without the verifier output. [0, 1]. 0.3: chosen
-  // on the tuning seeds (docs/model_card.md, round 8).
-  float minVehicleProbability = 0.3F;
+  // 0 keeps all, and so does a crop network without the verifier output. [0, 1]. 0.5: v14's
+  // verifier (two averaged), chosen on the tuning seeds (docs/model_card.md, round 27; v6-v13
+  // used 0.3, chosen in round 8).
+  float minVehicleProbability = 0.5F;
   // A vehicle whose first-stage box reaches the frame's border (Detection::atFrameEdge) is seen
   // in part. The crop network learnt whole vehicles: it stretches such a box to a whole car and
   // shifts it past the border, where the real sets' labels (and the pixels) end. With
@@ -152,14 +157,15 @@ class VehicleCropper {
   VehicleCropper& operator=(const VehicleCropper&) = delete;
 
   // Start-up: loads the crop model (input 1 x 3 x 48 x 96; outputs type_logits 7, shape n_s,
-  // flip_logit 1, refine 5 and optionally vehicle_logit 1, each 1 x 1) and checks its
-  // interface; *why names the file and the offending output.
+  // flip_logit 1, refine 5 and optionally vehicle_logit 1 and vehicle_logit_edge 1, each 1 x 1)
+  // and checks its interface; *why names the file and the offending output.
   bool init(const std::string& cropModelPath, const inference::EngineOptions& engineOptions,
             const SecondStageOptions& options, std::string* why = nullptr);
   bool initialised() const { return engine_.loaded(); }
 
   // Real-time: crop at the detection's box with gsd_m, run the network, apply its outputs.
-  // With keepBox the box is not refined (the vehicle is cut by the frame's border).
+  // With keepBox the box is not refined (the vehicle is cut by the frame's border) and the
+  // border's verifier output decides when the model has one.
   SecondStageStatus classify(const cv::Mat& frame, double gsd_m, Detection* detection,
                              bool keepBox = false);
 
@@ -181,6 +187,7 @@ class VehicleCropper {
   const cv::Mat& lastCrop() const { return crop_; }  // diagnostics and tests
   int shapeCount() const { return shapeCount_; }
   bool hasVerifier() const { return hasVerifier_; }
+  bool hasEdgeVerifier() const { return hasEdgeVerifier_; }
 
  private:
   std::span<const float> values(std::size_t outputIndex) const;  // the engine's last run
@@ -203,7 +210,10 @@ class VehicleCropper {
   std::size_t flipIndex_ = 0;
   std::size_t refineIndex_ = 0;
   std::size_t vehicleIndex_ = 0;
+  std::size_t edgeVehicleIndex_ = 0;
+  std::size_t verifierIndex_ = 0;  // this classify()'s verifier output: one of the two above
   bool hasVerifier_ = false;
+  bool hasEdgeVerifier_ = false;
   int shapeCount_ = 0;
 };
 

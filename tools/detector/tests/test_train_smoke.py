@@ -119,6 +119,33 @@ class SmokeTraining(unittest.TestCase):
             train.train(train.parse_args(tiny_run_args(self.seq, second, 1) + ["--type-head-only"]))
         self.assertIn("--type-head-only needs", str(e.exception))
 
+    def test_init_from_two_verifiers_with_the_borders_own(self):
+        """--init-from a checkpoint whose crop network holds two verifiers in one branch and the
+        border's own head (verifier_ensemble.py --edge-base, as v14's import) trains with that
+        layout; the border's head, untrained here, stays as it was."""
+        import torch
+        from contextlib import redirect_stdout
+        import io
+        from detector.model import CropNet
+
+        with redirect_stdout(io.StringIO()):
+            train.train(train.parse_args(tiny_run_args(self.seq, self.run, 1) + ["--max-steps", "1"]))
+        ck = torch.load(os.path.join(self.run, "checkpoint.pt"))
+        wide = CropNet(n_s=ck["n_s"], verifier=True, verifier_branch=True, verifier_width=384,
+                       verifier_edge=True).state_dict()
+        wide.update(ck["crop"])
+        ck["crop"] = wide
+        start = os.path.join(self.run, "two_verifiers.pt")
+        torch.save(ck, start)
+        second = self.run + "_two"
+        with redirect_stdout(io.StringIO()):
+            train.train(train.parse_args(tiny_run_args(self.seq, second, 1) + [
+                "--max-steps", "2", "--crop-only", "--type-head-only", "--init-from", start]))
+        after = torch.load(os.path.join(second, "checkpoint.pt"))["crop"]
+        self.assertEqual(tuple(after["verifier_fc.0.weight"].shape[:2]), (384, 128))
+        for k in ("vehicle_logit_edge.weight", "vehicle_logit_edge.bias"):
+            self.assertTrue(torch.equal(after[k], wide[k]), k)
+
     def test_batch_stream_is_reproducible_from_its_start(self):
         args = train.parse_args(["--data", self.seq, "--out", self.run, "--batch", "2",
                                  "--tile", "64", "--crop-batch", "3", "--working-width", "128"])

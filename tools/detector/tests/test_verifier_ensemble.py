@@ -50,6 +50,22 @@ class VerifierEnsemble(unittest.TestCase):
         # The two verifiers differ on these inputs, so the mean is neither of them.
         self.assertGreater((a["vehicle_logit"] - b["vehicle_logit"]).abs().max().item(), 1e-3)
 
+    def test_edge_head_is_the_base_verifier_alone(self):
+        state = verifier_ensemble.merge(_checkpoint(self.shared)["crop"],
+                                        _checkpoint(self.branched)["crop"], 0.5, edge_base=True)
+        net = CropNet.from_state_dict(state, n_s=3).eval()
+        self.assertTrue(net.verifier_edge)
+        self.assertEqual(net.output_names()[-2:], ["vehicle_logit", "vehicle_logit_edge"])
+        with torch.no_grad():
+            m, a, b = net(self.x), self.shared(self.x), self.branched(self.x)
+            torch.testing.assert_close(m["vehicle_logit_edge"], a["vehicle_logit"], atol=1e-5,
+                                       rtol=0)
+            torch.testing.assert_close(m["vehicle_logit"],
+                                       0.5 * (a["vehicle_logit"] + b["vehicle_logit"]),
+                                       atol=1e-5, rtol=0)
+        # Without the option there is no second head.
+        self.assertFalse(self._merged(0.5).verifier_edge)
+
     def test_branch_is_twice_as_wide(self):
         self.assertEqual(self._merged(0.5).verifier_fc[0].out_channels, 384)
 
