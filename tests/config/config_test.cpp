@@ -157,6 +157,7 @@ perception:
   crop_min_vehicle_probability: 0.25
   crop_frame_edge_keep_box: false
   crop_frame_edge_min_vehicle_probability: 0.15
+  crop_frame_edge_own_verifier: false
   fixed_gsd_m: 0.03
   nominal_car_length_m: 4.4
   lift_height_share: 0.4
@@ -811,6 +812,8 @@ const MalformedCase kMalformedCases[] = {
      "perception.crop_min_vehicle_probability", "must be in [0, 1], got 1.5"},
     {"crop_frame_edge_keep_box: false", "crop_frame_edge_keep_box: maybe",
      "perception.crop_frame_edge_keep_box", "expected true or false, got 'maybe'"},
+    {"crop_frame_edge_own_verifier: false", "crop_frame_edge_own_verifier: inside",
+     "perception.crop_frame_edge_own_verifier", "expected true or false, got 'inside'"},
     {"crop_frame_edge_min_vehicle_probability: 0.15",
      "crop_frame_edge_min_vehicle_probability: -0.2",
      "perception.crop_frame_edge_min_vehicle_probability", "must be in [0, 1], got -0.2"},
@@ -1143,6 +1146,7 @@ TEST(ConfigMalformed, TableCoversEveryKeyOfTheSchema) {
                                                "perception.crop_min_vehicle_probability",
                                                "perception.crop_frame_edge_keep_box",
                                                "perception.crop_frame_edge_min_vehicle_probability",
+                                               "perception.crop_frame_edge_own_verifier",
                                                "perception.fixed_gsd_m",
                                                "perception.nominal_car_length_m",
                                                "perception.lift_height_share",
@@ -1673,6 +1677,7 @@ TEST(ConfigLoop, FullSectionsReadEveryKey) {
   EXPECT_FLOAT_EQ(det.secondStage.minVehicleProbability, 0.25F);
   EXPECT_FALSE(det.secondStage.frameEdgeKeepBox);
   EXPECT_FLOAT_EQ(det.secondStage.frameEdgeMinVehicleProbability, 0.15F);
+  EXPECT_FALSE(det.secondStage.frameEdgeOwnVerifier);
   EXPECT_DOUBLE_EQ(det.gsd.fixedGsd_m, 0.03);
   EXPECT_DOUBLE_EQ(det.gsd.nominalCarLength_m, 4.4);
   EXPECT_DOUBLE_EQ(config.perception.lift.boxHeightShare, 0.4);

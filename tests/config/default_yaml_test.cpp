@@ -82,6 +82,9 @@ TEST(DefaultYaml, PerceptionIsThePipelinesDefaults) {
   EXPECT_EQ(second.mirrorRefine, secondCode.mirrorRefine);
   EXPECT_EQ(second.largeVehicleEnds, secondCode.largeVehicleEnds);
   EXPECT_EQ(second.minVehicleProbability, secondCode.minVehicleProbability);
+  EXPECT_EQ(second.frameEdgeKeepBox, secondCode.frameEdgeKeepBox);
+  EXPECT_EQ(second.frameEdgeMinVehicleProbability, secondCode.frameEdgeMinVehicleProbability);
+  EXPECT_EQ(second.frameEdgeOwnVerifier, secondCode.frameEdgeOwnVerifier);
   EXPECT_EQ(det.gsd.fixedGsd_m, detCode.gsd.fixedGsd_m);
   EXPECT_EQ(det.gsd.nominalCarLength_m, detCode.gsd.nominalCarLength_m);
   EXPECT_EQ(det.gsd.minGsd_m, detCode.gsd.minGsd_m);

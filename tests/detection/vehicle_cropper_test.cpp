@@ -577,6 +577,17 @@ TEST(VehicleCropper, AVehicleCutByTheBorderTakesTheBordersVerifier) {
       EXPECT_EQ(atBorder.box.cx, box.cx);  // kept, not refined
     }
     EXPECT_GT(differ, 0) << "mirror " << mirror;
+
+    // frameEdgeOwnVerifier false: the border takes the inside verifier, value for value.
+    options.frameEdgeOwnVerifier = false;
+    VehicleCropper insideOnly;
+    ASSERT_TRUE(insideOnly.init(model, {}, options, &why)) << why;
+    Detection inside;
+    inside.box = {232.0, 73.0, 72.0, 30.0, 0.1};
+    Detection atBorder = inside;
+    ASSERT_EQ(insideOnly.classify(frame, kCropGsd_m, &inside, false), SecondStageStatus::Ok);
+    ASSERT_EQ(insideOnly.classify(frame, kCropGsd_m, &atBorder, true), SecondStageStatus::Ok);
+    EXPECT_EQ(inside.vehicleProbability, atBorder.vehicleProbability) << "mirror " << mirror;
   }
 }
 

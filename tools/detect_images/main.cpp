@@ -93,6 +93,10 @@ options:
                         or higher than --min-vehicle-probability, [0, 1] (default 0.3, as the
                         app's perception.crop_frame_edge_min_vehicle_probability; with the kept
                         box only)
+  --edge-inside-verifier
+                        decide vehicles cut by the frame's border with the verifier used inside
+                        the frame, not the crop network's border verifier (vehicle_logit_edge,
+                        v14's; as the app's perception.crop_frame_edge_own_verifier: false)
   --refine-large-length apply the second stage's length to vehicles most likely large too
                         (default: they keep the first stage's length; the crop shows a part)
   --no-large-vehicle-ends
@@ -170,6 +174,7 @@ Options parseArguments(int argc, char** argv) {
                     {"--no-refine", &second.applyRefine, false},
                     {"--no-refine-size", &second.refineSize, false},
                     {"--no-edge-keep-box", &second.frameEdgeKeepBox, false},
+                    {"--edge-inside-verifier", &second.frameEdgeOwnVerifier, false},
                     {"--no-mirror", &second.mirrorAverage, false},
                     {"--no-mirror-refine", &second.mirrorRefine, false},
                     {"--no-turn", &second.turnAverage, false},

@@ -173,6 +173,8 @@ void readPerception(MapReader section, const std::string& baseDir, AppConfig& co
   second.frameEdgeMinVehicleProbability = static_cast<float>(
       section.number("crop_frame_edge_min_vehicle_probability", kProbabilityRange,
                      secondDefaults.frameEdgeMinVehicleProbability));
+  second.frameEdgeOwnVerifier =
+      section.boolean("crop_frame_edge_own_verifier", secondDefaults.frameEdgeOwnVerifier);
   detection::LargeVehicleMergeOptions& merge = det.largeMerge;
   merge.enabled = section.boolean("large_vehicle_merge", d.detection.largeMerge.enabled);
   merge.maxLength_m = section.number("large_vehicle_max_length_m", kLargeVehicleLengthRange_m,

@@ -347,7 +347,8 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m, D
   outputs.shape = std::span<const float>(shape_.data(), firstShape.size());
   outputs.flipLogit = values(flipIndex_)[0];
   outputs.refine = refine_;
-  verifierIndex_ = keepBox && hasEdgeVerifier_ ? edgeVehicleIndex_ : vehicleIndex_;
+  verifierIndex_ = keepBox && hasEdgeVerifier_ && options_.frameEdgeOwnVerifier ? edgeVehicleIndex_
+                                                                                : vehicleIndex_;
   outputs.hasVehicleLogit = hasVerifier_;
   outputs.vehicleLogit = hasVerifier_ ? values(verifierIndex_)[0] : 0.0F;
   if (options_.mirrorAverage) {

@@ -134,6 +134,12 @@ struct SecondStageOptions {
   // convention).
   bool frameEdgeKeepBox = true;
   float frameEdgeMinVehicleProbability = 0.3F;
+  // With frameEdgeKeepBox and a crop network that has the border's own verifier output
+  // (vehicle_logit_edge, v14: v13's verifier), that output decides at the border (true) or the
+  // one inside the frame does (false: with a low frameEdgeMinVehicleProbability, the convention
+  // of a data set that labels the visible part of cut vehicles; docs/model_card.md, the border
+  // convention).
+  bool frameEdgeOwnVerifier = true;
 };
 
 enum class SecondStageStatus {
