@@ -12,7 +12,7 @@ each verifier's head over its half. Everything else (both stages' other weights)
 ``--base`` checkpoint's; the two verifiers must sit on the same crop-network body (a branch
 trained with ``train.py --verifier-head-only`` on top of the base does).
 
-  verifier_ensemble.py --base A.pt --other B.pt --out AB.pt [--weight W]
+  verifier_ensemble.py --base A.pt --other B.pt --out AB.pt [--weight W] [--edge-base]
 
 ``--weight`` is B's share of the mean (default 0.5). With ``--edge-base`` the network also
 outputs ``vehicle_logit_edge``: A's verifier alone, exactly (a second head over the same branch,
