@@ -222,17 +222,22 @@ bool VehicleCropper::init(const std::string& cropModelPath,
                          ", the crop network needs 3x" + std::to_string(kCropHeight_px) + "x" +
                          std::to_string(kCropWidth_px));
   }
+  // The verifier outputs are optional (crop networks before them lack them): `present` says
+  // whether the model has one; a required output has none.
   struct Wanted {
     const char* name;
     std::size_t* index;
     int minChannels;
     int maxChannels;
+    bool* present;
   };
   const Wanted wanted[] = {
-      {"type_logits", &typeIndex_, shape::kVehicleTypeCount, shape::kVehicleTypeCount},
-      {"shape", &shapeIndex_, 0, shape::kMaxShapeComponents},
-      {"flip_logit", &flipIndex_, 1, 1},
-      {"refine", &refineIndex_, kRefineCount, kRefineCount},
+      {"type_logits", &typeIndex_, shape::kVehicleTypeCount, shape::kVehicleTypeCount, nullptr},
+      {"shape", &shapeIndex_, 0, shape::kMaxShapeComponents, nullptr},
+      {"flip_logit", &flipIndex_, 1, 1, nullptr},
+      {"refine", &refineIndex_, kRefineCount, kRefineCount, nullptr},
+      {"vehicle_logit", &vehicleIndex_, 1, 1, &hasVerifier_},
+      {"vehicle_logit_edge", &edgeVehicleIndex_, 1, 1, &hasEdgeVerifier_},
   };
   for (const Wanted& w : wanted) {
     bool found = false;
@@ -254,32 +259,12 @@ bool VehicleCropper::init(const std::string& cropModelPath,
       *w.index = i;
       found = true;
     }
-    if (!found) {
+    if (w.present != nullptr) {
+      *w.present = found;
+    } else if (!found) {
       return fail(why, cropModelPath + ": no output named '" + w.name +
                            "' (the crop network needs type_logits, shape, flip_logit, refine)");
     }
-  }
-  // The verifier outputs are optional (crop networks before them lack them).
-  auto findScalarOutput = [&](const char* name, std::size_t* index, bool* found) {
-    *found = false;
-    for (std::size_t i = 0; i < engine_.outputCount(); ++i) {
-      const inference::OutputTensor& out = engine_.output(i);
-      if (out.name != name) {
-        continue;
-      }
-      if (out.shape.c != 1 || out.shape.h != 1 || out.shape.w != 1) {
-        return fail(why, cropModelPath + ": output '" + name + "' is " +
-                             std::to_string(out.shape.c) + "x" + std::to_string(out.shape.h) + "x" +
-                             std::to_string(out.shape.w) + ", expected 1 x 1 x 1");
-      }
-      *index = i;
-      *found = true;
-    }
-    return true;
-  };
-  if (!findScalarOutput("vehicle_logit", &vehicleIndex_, &hasVerifier_) ||
-      !findScalarOutput("vehicle_logit_edge", &edgeVehicleIndex_, &hasEdgeVerifier_)) {
-    return false;
   }
   if (hasEdgeVerifier_ && !hasVerifier_) {
     return fail(why, cropModelPath +
@@ -347,12 +332,14 @@ SecondStageStatus VehicleCropper::classify(const cv::Mat& frame, double gsd_m, D
   outputs.shape = std::span<const float>(shape_.data(), firstShape.size());
   outputs.flipLogit = values(flipIndex_)[0];
   outputs.refine = refine_;
-  verifierIndex_ = keepBox && hasEdgeVerifier_ && options_.frameEdgeOwnVerifier ? edgeVehicleIndex_
-                                                                                : vehicleIndex_;
+  // A vehicle cut by the border takes the border's own verifier where the model has one.
+  const std::size_t verifierIndex = keepBox && hasEdgeVerifier_ && options_.frameEdgeOwnVerifier
+                                        ? edgeVehicleIndex_
+                                        : vehicleIndex_;
   outputs.hasVehicleLogit = hasVerifier_;
-  outputs.vehicleLogit = hasVerifier_ ? values(verifierIndex_)[0] : 0.0F;
+  outputs.vehicleLogit = hasVerifier_ ? values(verifierIndex)[0] : 0.0F;
   if (options_.mirrorAverage) {
-    const SecondStageStatus status = mirrorAverage(&outputs);
+    const SecondStageStatus status = mirrorAverage(verifierIndex, &outputs);
     if (status != SecondStageStatus::Ok) {
       return status;
     }
@@ -483,7 +470,8 @@ std::span<const float> VehicleCropper::values(std::size_t index) const {
   return {out.data, out.shape.elements()};
 }
 
-SecondStageStatus VehicleCropper::mirrorAverage(CropNetOutputs* outputs) {
+SecondStageStatus VehicleCropper::mirrorAverage(std::size_t verifierIndex,
+                                                CropNetOutputs* outputs) {
   cv::flip(crop_, mirrored_, 0);
   const inference::ImageView mirroredView{mirrored_.data, mirrored_.cols, mirrored_.rows,
                                           mirrored_.step[0]};
@@ -493,7 +481,7 @@ SecondStageStatus VehicleCropper::mirrorAverage(CropNetOutputs* outputs) {
   const std::span<const float> typeLogits = values(typeIndex_);
   const std::span<const float> refine = values(refineIndex_);
   if (hasVerifier_) {  // a mirrored vehicle is still a vehicle: both runs' logits averaged
-    outputs->vehicleLogit = 0.5F * (outputs->vehicleLogit + values(verifierIndex_)[0]);
+    outputs->vehicleLogit = 0.5F * (outputs->vehicleLogit + values(verifierIndex)[0]);
   }
   for (std::size_t t = 0; t < typeLogits_.size(); ++t) {
     typeLogits_[t] = 0.5F * (typeLogits_[t] + typeLogits[t]);

@@ -197,8 +197,9 @@ class VehicleCropper {
 
  private:
   std::span<const float> values(std::size_t outputIndex) const;  // the engine's last run
-  // Runs the mirrored crop and averages into the first run's copies (contract).
-  SecondStageStatus mirrorAverage(CropNetOutputs* outputs);
+  // Runs the mirrored crop and averages into the first run's copies (contract); the verifier
+  // logit from output verifierIndex, as the first run's.
+  SecondStageStatus mirrorAverage(std::size_t verifierIndex, CropNetOutputs* outputs);
   // cutCrop() and then the frame gain.
   bool cut(const cv::Mat& frame, const CropMap& map, cv::Mat& crop) const;
 
@@ -217,7 +218,6 @@ class VehicleCropper {
   std::size_t refineIndex_ = 0;
   std::size_t vehicleIndex_ = 0;
   std::size_t edgeVehicleIndex_ = 0;
-  std::size_t verifierIndex_ = 0;  // this classify()'s verifier output: one of the two above
   bool hasVerifier_ = false;
   bool hasEdgeVerifier_ = false;
   int shapeCount_ = 0;
